@@ -1,0 +1,217 @@
+//! Discovery of polynomial Casimirs by exact linear algebra.
+//!
+//! A polynomial `C` is a Casimir iff `{C, mu_j} = 0` for every coordinate.
+//! The bracket with a linear function preserves the degree, so homogeneous
+//! components of a Casimir are Casimirs and the search runs degree by degree:
+//! the unknowns are the coefficients of the degree-`d` monomials and every
+//! coefficient of every `{C, mu_j}` is one linear equation. Solutions that are
+//! products of Casimirs found at lower degree are dropped, so what is returned
+//! generates the Casimirs up to the degree searched.
+
+use crate::bracket::lie_poisson_bracket;
+use algebra::LieAlgebra;
+use exact::{monomials_of_degree, Matrix, Monomial, Poly, Rational};
+use num_traits::Zero;
+use std::collections::BTreeMap;
+
+/// What a discovery run found and how far it looked.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DiscoveryReport {
+    /// Generators found, lowest degree first.
+    pub casimirs: Vec<Poly>,
+    /// Highest degree fully searched.
+    pub degree_searched: u32,
+    /// Degrees skipped because they needed more unknowns than allowed.
+    pub skipped_degrees: Vec<u32>,
+}
+
+/// Sparse row reduction: keep rows in echelon form keyed by leading column.
+///
+/// Written by hand because the equation rows are very sparse (a handful of
+/// structure constants each) and exact, which dense float libraries cannot
+/// exploit or provide.
+struct Echelon {
+    rows: BTreeMap<usize, BTreeMap<usize, Rational>>,
+}
+
+impl Echelon {
+    fn new() -> Self {
+        Echelon { rows: BTreeMap::new() }
+    }
+
+    fn insert(&mut self, mut row: BTreeMap<usize, Rational>) {
+        loop {
+            let Some((&lead, lead_value)) = row.iter().next() else { return };
+            let lead_value = lead_value.clone();
+            match self.rows.get(&lead) {
+                Some(pivot) => {
+                    let factor = &lead_value / &pivot[&lead];
+                    for (c, v) in pivot {
+                        let entry = row.entry(*c).or_insert_with(Rational::zero);
+                        *entry -= &factor * v;
+                        if entry.is_zero() {
+                            row.remove(c);
+                        }
+                    }
+                }
+                None => {
+                    self.rows.insert(lead, row);
+                    return;
+                }
+            }
+        }
+    }
+
+    /// Basis of the null space of the inserted rows over `ncols` unknowns.
+    fn null_space(&self, ncols: usize) -> Vec<Vec<Rational>> {
+        let m = Matrix::from_rows(
+            &self
+                .rows
+                .values()
+                .map(|r| {
+                    let mut dense = vec![Rational::zero(); ncols];
+                    for (c, v) in r {
+                        dense[*c] = v.clone();
+                    }
+                    dense
+                })
+                .collect::<Vec<_>>(),
+        );
+        if self.rows.is_empty() {
+            return Matrix::identity(ncols).to_rows();
+        }
+        m.null_space()
+    }
+}
+
+/// Discover polynomial Casimirs of degree `1..=max_degree`.
+///
+/// Degrees needing more than `max_unknowns` monomials are skipped (and
+/// reported), so the run time stays bounded on large algebras.
+///
+/// ```
+/// use algebra::builtin;
+/// use casimir::discover_casimirs;
+/// use exact::{parse_expression, Symbols};
+/// let so3 = builtin("so3").unwrap().algebra;
+/// let report = discover_casimirs(&so3, 4, 1000);
+/// // Exactly one generator, |Pi|^2 (up to scale); |Pi|^4 is a product.
+/// assert_eq!(report.casimirs.len(), 1);
+/// let s = Symbols::new(so3.coordinates());
+/// let expected = parse_expression("Pi1^2 + Pi2^2 + Pi3^2", &s).unwrap();
+/// let c = &report.casimirs[0];
+/// let ratio = c.coefficient(&[2, 0, 0]);
+/// assert_eq!(c, &expected.scale(&ratio));
+/// ```
+pub fn discover_casimirs(algebra: &LieAlgebra, max_degree: u32, max_unknowns: usize) -> DiscoveryReport {
+    let n = algebra.dim();
+    let mut found: Vec<Poly> = Vec::new();
+    let mut skipped = Vec::new();
+    let mut degree_searched = 0;
+    for d in 1..=max_degree {
+        let monomials = monomials_of_degree(n, d as u16);
+        if monomials.len() > max_unknowns {
+            skipped.push(d);
+            continue;
+        }
+        // Column j: the brackets {x^m_j, mu_i} for all i; equation rows are
+        // indexed by (i, monomial of the result).
+        let mut rows: BTreeMap<(usize, Monomial), BTreeMap<usize, Rational>> = BTreeMap::new();
+        for (j, m) in monomials.iter().enumerate() {
+            let xm = Poly::monomial(Rational::from_integer(1.into()), m.clone());
+            for i in 0..n {
+                let b = lie_poisson_bracket(algebra, &xm, &Poly::var(n, i));
+                for (mono, c) in b.terms() {
+                    rows.entry((i, mono.clone())).or_default().insert(j, c.clone());
+                }
+            }
+        }
+        let mut echelon = Echelon::new();
+        for (_, row) in rows {
+            echelon.insert(row);
+        }
+        let solutions = echelon.null_space(monomials.len());
+        if !solutions.is_empty() {
+            // Products of earlier generators of total degree d.
+            let products = products_of_degree(&found, d);
+            let coords = |p: &Poly| -> Vec<Rational> { monomials.iter().map(|m| p.coefficient(m)).collect() };
+            let mut span: Vec<Vec<Rational>> = products.iter().map(coords).collect();
+            let mut rank = Matrix::from_rows(&span).rank_or_zero();
+            for v in solutions {
+                span.push(v.clone());
+                let new_rank = Matrix::from_rows(&span).rank_or_zero();
+                if new_rank > rank {
+                    rank = new_rank;
+                    let mut p = Poly::zero(n);
+                    for (m, c) in monomials.iter().zip(&v) {
+                        if !c.is_zero() {
+                            p = p.add(&Poly::monomial(c.clone(), m.clone()));
+                        }
+                    }
+                    found.push(normalise(p));
+                } else {
+                    span.pop();
+                }
+            }
+        }
+        degree_searched = d;
+    }
+    DiscoveryReport { casimirs: found, degree_searched, skipped_degrees: skipped }
+}
+
+/// Scale so that coefficients are coprime integers with a positive leading one.
+fn normalise(p: Poly) -> Poly {
+    use num_integer::Integer;
+    let mut lcm_den = num_bigint::BigInt::from(1);
+    let mut gcd_num = num_bigint::BigInt::from(0);
+    for (_, c) in p.terms() {
+        lcm_den = lcm_den.lcm(c.denom());
+        gcd_num = gcd_num.gcd(c.numer());
+    }
+    let first_negative = p.terms().next().is_some_and(|(_, c)| c < &Rational::zero());
+    let mut s = Rational::new(lcm_den, if gcd_num.is_zero() { 1.into() } else { gcd_num });
+    if first_negative {
+        s = -s;
+    }
+    p.scale(&s)
+}
+
+fn products_of_degree(generators: &[Poly], d: u32) -> Vec<Poly> {
+    // All products of generators (with repetition) of total degree exactly d.
+    fn rec(gens: &[(Poly, u32)], start: usize, remaining: u32, cur: Poly, out: &mut Vec<Poly>) {
+        if remaining == 0 {
+            out.push(cur);
+            return;
+        }
+        for i in start..gens.len() {
+            let (g, deg) = &gens[i];
+            if *deg <= remaining && *deg > 0 {
+                rec(gens, i, remaining - deg, cur.mul(g), out);
+            }
+        }
+    }
+    let Some(first) = generators.first() else { return Vec::new() };
+    let n = first.nvars();
+    let gens: Vec<(Poly, u32)> = generators.iter().map(|g| (g.clone(), g.total_degree())).collect();
+    let mut out = Vec::new();
+    rec(&gens, 0, d, Poly::constant(n, Rational::from_integer(1.into())), &mut out);
+    // A product equal to a single generator of degree d is the generator
+    // itself: only genuine products (two or more factors) are wanted, and the
+    // recursion produces a single factor only when a generator has degree d,
+    // which cannot happen because generators of degree d are being searched.
+    out
+}
+
+trait RankOrZero {
+    fn rank_or_zero(&self) -> usize;
+}
+
+impl RankOrZero for Matrix {
+    fn rank_or_zero(&self) -> usize {
+        if self.nrows() == 0 {
+            0
+        } else {
+            self.rank()
+        }
+    }
+}

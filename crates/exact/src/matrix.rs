@@ -1,0 +1,466 @@
+//! Dense matrices of exact rationals with Gaussian elimination.
+//!
+//! The engine's matrices are small (the dimension of the Lie algebra), so a
+//! dense row-major `Vec` is the right shape; what matters is exactness, which
+//! floating-point libraries such as nalgebra cannot give. That is why this
+//! small hand-written module exists.
+
+use crate::number::{rational_to_f64, Rational};
+use num_traits::{One, Signed, Zero};
+use std::fmt;
+
+/// A dense `rows × cols` matrix of rationals, row-major.
+#[derive(Clone, PartialEq, Eq)]
+pub struct Matrix {
+    rows: usize,
+    cols: usize,
+    data: Vec<Rational>,
+}
+
+/// The solution set `{x0 + N t}` of a linear system `A x = b`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AffineSolution {
+    /// One particular solution (free variables set to zero).
+    pub particular: Vec<Rational>,
+    /// A basis of the null space of `A`, one vector per free direction.
+    pub directions: Vec<Vec<Rational>>,
+}
+
+impl fmt::Debug for Matrix {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "Matrix {}x{} [", self.rows, self.cols)?;
+        for i in 0..self.rows {
+            let row: Vec<String> = (0..self.cols).map(|j| self[(i, j)].to_string()).collect();
+            writeln!(f, "  [{}]", row.join(", "))?;
+        }
+        write!(f, "]")
+    }
+}
+
+impl std::ops::Index<(usize, usize)> for Matrix {
+    type Output = Rational;
+    fn index(&self, (i, j): (usize, usize)) -> &Rational {
+        &self.data[i * self.cols + j]
+    }
+}
+
+impl std::ops::IndexMut<(usize, usize)> for Matrix {
+    fn index_mut(&mut self, (i, j): (usize, usize)) -> &mut Rational {
+        &mut self.data[i * self.cols + j]
+    }
+}
+
+impl Matrix {
+    /// The zero matrix.
+    pub fn zeros(rows: usize, cols: usize) -> Self {
+        Matrix { rows, cols, data: vec![Rational::zero(); rows * cols] }
+    }
+
+    /// The identity matrix.
+    pub fn identity(n: usize) -> Self {
+        let mut m = Self::zeros(n, n);
+        for i in 0..n {
+            m[(i, i)] = Rational::one();
+        }
+        m
+    }
+
+    /// Build from rows; all rows must have the same length.
+    ///
+    /// # Panics
+    /// If the rows have different lengths (a programming error, not input).
+    pub fn from_rows(rows: &[Vec<Rational>]) -> Self {
+        let r = rows.len();
+        let c = rows.first().map_or(0, |x| x.len());
+        assert!(rows.iter().all(|x| x.len() == c), "ragged rows");
+        Matrix { rows: r, cols: c, data: rows.iter().flatten().cloned().collect() }
+    }
+
+    /// Build a matrix whose columns are the given vectors (`n` rows).
+    pub fn from_columns(n: usize, columns: &[Vec<Rational>]) -> Self {
+        let mut m = Self::zeros(n, columns.len());
+        for (j, col) in columns.iter().enumerate() {
+            assert_eq!(col.len(), n, "column length");
+            for i in 0..n {
+                m[(i, j)] = col[i].clone();
+            }
+        }
+        m
+    }
+
+    /// Build from a function of the indices.
+    pub fn from_fn(rows: usize, cols: usize, mut f: impl FnMut(usize, usize) -> Rational) -> Self {
+        let mut data = Vec::with_capacity(rows * cols);
+        for i in 0..rows {
+            for j in 0..cols {
+                data.push(f(i, j));
+            }
+        }
+        Matrix { rows, cols, data }
+    }
+
+    /// Number of rows.
+    pub fn nrows(&self) -> usize {
+        self.rows
+    }
+
+    /// Number of columns.
+    pub fn ncols(&self) -> usize {
+        self.cols
+    }
+
+    /// Row `i` as a vector.
+    pub fn row(&self, i: usize) -> Vec<Rational> {
+        self.data[i * self.cols..(i + 1) * self.cols].to_vec()
+    }
+
+    /// Column `j` as a vector.
+    pub fn column(&self, j: usize) -> Vec<Rational> {
+        (0..self.rows).map(|i| self[(i, j)].clone()).collect()
+    }
+
+    /// All rows.
+    pub fn to_rows(&self) -> Vec<Vec<Rational>> {
+        (0..self.rows).map(|i| self.row(i)).collect()
+    }
+
+    /// The transpose.
+    pub fn transpose(&self) -> Self {
+        Self::from_fn(self.cols, self.rows, |i, j| self[(j, i)].clone())
+    }
+
+    /// Whether every entry is zero.
+    pub fn is_zero(&self) -> bool {
+        self.data.iter().all(Zero::is_zero)
+    }
+
+    /// Whether the matrix equals its transpose.
+    pub fn is_symmetric(&self) -> bool {
+        self.rows == self.cols
+            && (0..self.rows).all(|i| (0..i).all(|j| self[(i, j)] == self[(j, i)]))
+    }
+
+    /// `(self + selfᵀ)/2`.
+    pub fn symmetric_part(&self) -> Self {
+        assert_eq!(self.rows, self.cols);
+        let half = Rational::new(1.into(), 2.into());
+        Self::from_fn(self.rows, self.cols, |i, j| (&self[(i, j)] + &self[(j, i)]) * &half)
+    }
+
+    /// Matrix product.
+    ///
+    /// # Panics
+    /// On a dimension mismatch.
+    pub fn mul(&self, other: &Matrix) -> Matrix {
+        assert_eq!(self.cols, other.rows, "dimension mismatch in product");
+        let mut out = Matrix::zeros(self.rows, other.cols);
+        for i in 0..self.rows {
+            for k in 0..self.cols {
+                let a = &self[(i, k)];
+                if a.is_zero() {
+                    continue;
+                }
+                for j in 0..other.cols {
+                    let b = &other[(k, j)];
+                    if !b.is_zero() {
+                        out[(i, j)] += a * b;
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Matrix–vector product.
+    pub fn mul_vec(&self, v: &[Rational]) -> Vec<Rational> {
+        assert_eq!(self.cols, v.len());
+        (0..self.rows)
+            .map(|i| {
+                let mut s = Rational::zero();
+                for j in 0..self.cols {
+                    let a = &self[(i, j)];
+                    if !a.is_zero() && !v[j].is_zero() {
+                        s += a * &v[j];
+                    }
+                }
+                s
+            })
+            .collect()
+    }
+
+    /// Entrywise sum.
+    pub fn add(&self, other: &Matrix) -> Matrix {
+        assert_eq!((self.rows, self.cols), (other.rows, other.cols));
+        Matrix {
+            rows: self.rows,
+            cols: self.cols,
+            data: self.data.iter().zip(&other.data).map(|(a, b)| a + b).collect(),
+        }
+    }
+
+    /// Entrywise difference.
+    pub fn sub(&self, other: &Matrix) -> Matrix {
+        assert_eq!((self.rows, self.cols), (other.rows, other.cols));
+        Matrix {
+            rows: self.rows,
+            cols: self.cols,
+            data: self.data.iter().zip(&other.data).map(|(a, b)| a - b).collect(),
+        }
+    }
+
+    /// Multiply every entry by `s`.
+    pub fn scale(&self, s: &Rational) -> Matrix {
+        Matrix { rows: self.rows, cols: self.cols, data: self.data.iter().map(|a| a * s).collect() }
+    }
+
+    /// `self += s * other`.
+    pub fn add_scaled_assign(&mut self, s: &Rational, other: &Matrix) {
+        assert_eq!((self.rows, self.cols), (other.rows, other.cols));
+        if s.is_zero() {
+            return;
+        }
+        for (a, b) in self.data.iter_mut().zip(&other.data) {
+            if !b.is_zero() {
+                *a += s * b;
+            }
+        }
+    }
+
+    /// Largest absolute value of an entry, as a double.
+    pub fn max_abs_f64(&self) -> f64 {
+        self.data.iter().map(|a| rational_to_f64(a).abs()).fold(0.0, f64::max)
+    }
+
+    /// The nearest double of each entry, row-major.
+    pub fn to_f64_vec(&self) -> Vec<f64> {
+        self.data.iter().map(rational_to_f64).collect()
+    }
+
+    /// As an nalgebra matrix of doubles.
+    pub fn to_dmatrix(&self) -> nalgebra::DMatrix<f64> {
+        nalgebra::DMatrix::from_row_slice(self.rows, self.cols, &self.to_f64_vec())
+    }
+
+    /// Entries as strings (`"p/q"`), row by row, for certificates.
+    pub fn to_string_rows(&self) -> Vec<Vec<String>> {
+        (0..self.rows).map(|i| (0..self.cols).map(|j| self[(i, j)].to_string()).collect()).collect()
+    }
+
+    /// Reduced row echelon form; returns the pivot columns.
+    fn rref_in_place(&mut self) -> Vec<usize> {
+        let mut pivots = Vec::new();
+        let mut r = 0;
+        for c in 0..self.cols {
+            if r == self.rows {
+                break;
+            }
+            let Some(p) = (r..self.rows).find(|&i| !self[(i, c)].is_zero()) else {
+                continue;
+            };
+            if p != r {
+                for j in 0..self.cols {
+                    self.data.swap(p * self.cols + j, r * self.cols + j);
+                }
+            }
+            let inv = self[(r, c)].recip();
+            for j in c..self.cols {
+                let v = &self[(r, j)] * &inv;
+                self[(r, j)] = v;
+            }
+            for i in 0..self.rows {
+                if i == r || self[(i, c)].is_zero() {
+                    continue;
+                }
+                let f = self[(i, c)].clone();
+                for j in c..self.cols {
+                    if !self[(r, j)].is_zero() {
+                        let v = &self[(r, j)] * &f;
+                        self[(i, j)] -= v;
+                    }
+                }
+            }
+            pivots.push(c);
+            r += 1;
+        }
+        pivots
+    }
+
+    /// The rank.
+    ///
+    /// ```
+    /// use exact::{Matrix, Rational};
+    /// let q = |n: i64| Rational::from_integer(n.into());
+    /// let m = Matrix::from_rows(&[vec![q(1), q(2)], vec![q(2), q(4)]]);
+    /// assert_eq!(m.rank(), 1);
+    /// ```
+    pub fn rank(&self) -> usize {
+        self.clone().rref_in_place().len()
+    }
+
+    /// Indices of a maximal set of linearly independent columns (the pivot
+    /// columns of the row echelon form), in increasing order.
+    pub fn pivot_columns(&self) -> Vec<usize> {
+        self.clone().rref_in_place()
+    }
+
+    /// A basis of the null space `{x : A x = 0}`.
+    pub fn null_space(&self) -> Vec<Vec<Rational>> {
+        let mut m = self.clone();
+        let pivots = m.rref_in_place();
+        let free: Vec<usize> = (0..self.cols).filter(|c| !pivots.contains(c)).collect();
+        free.iter()
+            .map(|&f| {
+                let mut v = vec![Rational::zero(); self.cols];
+                v[f] = Rational::one();
+                for (r, &pc) in pivots.iter().enumerate() {
+                    v[pc] = -m[(r, f)].clone();
+                }
+                v
+            })
+            .collect()
+    }
+
+    /// All solutions of `A x = b`, or `None` when the system is inconsistent.
+    ///
+    /// ```
+    /// use exact::{Matrix, Rational};
+    /// let q = |n: i64| Rational::from_integer(n.into());
+    /// // x + y = 2 has the solutions (2, 0) + t (-1, 1).
+    /// let a = Matrix::from_rows(&[vec![q(1), q(1)]]);
+    /// let s = a.solve_affine(&[q(2)]).unwrap();
+    /// assert_eq!(s.particular, vec![q(2), q(0)]);
+    /// assert_eq!(s.directions, vec![vec![q(-1), q(1)]]);
+    /// ```
+    pub fn solve_affine(&self, b: &[Rational]) -> Option<AffineSolution> {
+        assert_eq!(b.len(), self.rows);
+        let mut aug = Matrix::zeros(self.rows, self.cols + 1);
+        for i in 0..self.rows {
+            for j in 0..self.cols {
+                aug[(i, j)] = self[(i, j)].clone();
+            }
+            aug[(i, self.cols)] = b[i].clone();
+        }
+        let pivots = aug.rref_in_place();
+        if pivots.contains(&self.cols) {
+            return None;
+        }
+        let mut particular = vec![Rational::zero(); self.cols];
+        for (r, &pc) in pivots.iter().enumerate() {
+            particular[pc] = aug[(r, self.cols)].clone();
+        }
+        Some(AffineSolution { particular, directions: self.null_space() })
+    }
+
+    /// Inverse of a square matrix, or `None` if singular.
+    pub fn inverse(&self) -> Option<Matrix> {
+        assert_eq!(self.rows, self.cols);
+        let n = self.rows;
+        let mut aug = Matrix::zeros(n, 2 * n);
+        for i in 0..n {
+            for j in 0..n {
+                aug[(i, j)] = self[(i, j)].clone();
+            }
+            aug[(i, n + i)] = Rational::one();
+        }
+        let pivots = aug.rref_in_place();
+        if pivots.len() < n || pivots[n - 1] != n - 1 {
+            return None;
+        }
+        Some(Matrix::from_fn(n, n, |i, j| aug[(i, n + j)].clone()))
+    }
+
+    /// Exact symmetric LDLᵀ inertia test: `Some(+1)` if positive definite,
+    /// `Some(-1)` if negative definite, `None` otherwise.
+    ///
+    /// Uses exact Gaussian elimination without pivoting: a symmetric matrix is
+    /// positive definite iff all its leading pivots are positive (Sylvester's
+    /// criterion in its elimination form); negative definite iff `-A` is
+    /// positive definite.
+    ///
+    /// ```
+    /// use exact::{Matrix, Rational};
+    /// let q = |n: i64| Rational::from_integer(n.into());
+    /// let a = Matrix::from_rows(&[vec![q(2), q(1)], vec![q(1), q(2)]]);
+    /// assert_eq!(a.definiteness(), Some(1));
+    /// assert_eq!(a.scale(&q(-1)).definiteness(), Some(-1));
+    /// let b = Matrix::from_rows(&[vec![q(1), q(2)], vec![q(2), q(1)]]);
+    /// assert_eq!(b.definiteness(), None);
+    /// ```
+    pub fn definiteness(&self) -> Option<i8> {
+        assert!(self.is_symmetric(), "definiteness of a non-symmetric matrix");
+        if self.rows == 0 {
+            return None;
+        }
+        if positive_definite_exact(self) {
+            Some(1)
+        } else if positive_definite_exact(&self.scale(&-Rational::one())) {
+            Some(-1)
+        } else {
+            None
+        }
+    }
+}
+
+fn positive_definite_exact(a: &Matrix) -> bool {
+    let n = a.rows;
+    let mut m = a.clone();
+    for k in 0..n {
+        let pivot = m[(k, k)].clone();
+        if !pivot.is_positive() {
+            return false;
+        }
+        for i in (k + 1)..n {
+            if m[(i, k)].is_zero() {
+                continue;
+            }
+            let f = &m[(i, k)] / &pivot;
+            for j in (k + 1)..n {
+                if !m[(k, j)].is_zero() {
+                    let v = &f * &m[(k, j)];
+                    m[(i, j)] -= v;
+                }
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q(n: i64) -> Rational {
+        Rational::from_integer(n.into())
+    }
+
+    #[test]
+    fn null_space_vectors_are_annihilated() {
+        let a = Matrix::from_rows(&[vec![q(1), q(2), q(3)], vec![q(2), q(4), q(6)], vec![q(0), q(1), q(1)]]);
+        let ns = a.null_space();
+        assert_eq!(ns.len(), 1);
+        for v in &ns {
+            assert!(a.mul_vec(v).iter().all(Zero::is_zero));
+        }
+    }
+
+    #[test]
+    fn inconsistent_system_has_no_solution() {
+        let a = Matrix::from_rows(&[vec![q(1), q(1)], vec![q(1), q(1)]]);
+        assert!(a.solve_affine(&[q(1), q(2)]).is_none());
+    }
+
+    #[test]
+    fn inverse_times_matrix_is_identity() {
+        let a = Matrix::from_rows(&[vec![q(2), q(1)], vec![q(7), q(4)]]);
+        let inv = a.inverse().unwrap();
+        assert_eq!(a.mul(&inv), Matrix::identity(2));
+        let singular = Matrix::from_rows(&[vec![q(1), q(2)], vec![q(2), q(4)]]);
+        assert!(singular.inverse().is_none());
+    }
+
+    #[test]
+    fn semidefinite_is_not_definite() {
+        let a = Matrix::from_rows(&[vec![q(1), q(0)], vec![q(0), q(0)]]);
+        assert_eq!(a.definiteness(), None);
+    }
+}

@@ -1,0 +1,288 @@
+//! Exact rational numbers and their exact parsing from text.
+
+use num_bigint::BigInt;
+use num_traits::{One, Signed, ToPrimitive, Zero};
+
+/// The engine's exact number type: an arbitrary-precision rational.
+pub type Rational = num_rational::BigRational;
+
+/// Largest decimal exponent accepted in a literal such as `1e300`.
+///
+/// Bounded so that a literal like `1e999999999` cannot make the parser build
+/// a gigantic integer (a hang on bad input); 10^400 is already far outside the
+/// range of `f64`, so nothing physical is lost.
+pub const MAX_DECIMAL_EXPONENT: i64 = 400;
+
+/// Why a piece of text is not an exact number.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NumberError {
+    /// The text is empty.
+    #[error("empty number")]
+    Empty,
+    /// The text is not an integer, a decimal literal or `p/q`.
+    #[error("'{text}' is not a number (expected an integer, a decimal such as 0.3 or 1e-3, or a rational such as 3/10)")]
+    Malformed {
+        /// The offending text.
+        text: String,
+    },
+    /// `p/0`.
+    #[error("'{text}' has a zero denominator")]
+    ZeroDenominator {
+        /// The offending text.
+        text: String,
+    },
+    /// `nan`, `inf`, or an exponent so large that the value is not a finite double.
+    #[error("'{text}' is not a finite number")]
+    NotFinite {
+        /// The offending text.
+        text: String,
+    },
+}
+
+/// Parse an integer, a decimal literal (with optional exponent) or a rational
+/// `p/q` into an exact [`Rational`].
+///
+/// Decimal literals are read exactly: `0.3` is `3/10`, not the double nearest
+/// to it. Values whose magnitude does not fit a finite `f64` are rejected,
+/// because every number the engine certifies must also be usable in floating
+/// point.
+///
+/// ```
+/// use exact::{parse_number, Rational};
+/// assert_eq!(parse_number("0.3").unwrap(), Rational::new(3.into(), 10.into()));
+/// assert_eq!(parse_number("-3/6").unwrap(), Rational::new((-1).into(), 2.into()));
+/// assert_eq!(parse_number("2.5e-1").unwrap(), Rational::new(1.into(), 4.into()));
+/// assert!(parse_number("1e999").is_err());
+/// assert!(parse_number("NaN").is_err());
+/// ```
+pub fn parse_number(text: &str) -> Result<Rational, NumberError> {
+    let t = text.trim();
+    if t.is_empty() {
+        return Err(NumberError::Empty);
+    }
+    let lower = t.to_ascii_lowercase();
+    let stripped = lower.trim_start_matches(['+', '-']);
+    if stripped.starts_with("nan") || stripped.starts_with("inf") {
+        return Err(NumberError::NotFinite { text: t.to_string() });
+    }
+    let value = if let Some((num, den)) = t.split_once('/') {
+        let n = parse_decimal(num.trim(), t)?;
+        let d = parse_decimal(den.trim(), t)?;
+        if d.is_zero() {
+            return Err(NumberError::ZeroDenominator { text: t.to_string() });
+        }
+        n / d
+    } else {
+        parse_decimal(t, t)?
+    };
+    if !rational_to_f64(&value).is_finite() {
+        return Err(NumberError::NotFinite { text: t.to_string() });
+    }
+    Ok(value)
+}
+
+/// Parse `[+-]digits[.digits][(e|E)[+-]digits]` exactly.
+fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
+    let malformed = || NumberError::Malformed { text: whole.to_string() };
+    let bytes = s.as_bytes();
+    let mut i = 0;
+    let mut negative = false;
+    if i < bytes.len() && (bytes[i] == b'+' || bytes[i] == b'-') {
+        negative = bytes[i] == b'-';
+        i += 1;
+    }
+    let int_start = i;
+    while i < bytes.len() && bytes[i].is_ascii_digit() {
+        i += 1;
+    }
+    let int_digits = &s[int_start..i];
+    let mut frac_digits = "";
+    if i < bytes.len() && bytes[i] == b'.' {
+        i += 1;
+        let frac_start = i;
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+        frac_digits = &s[frac_start..i];
+    }
+    if int_digits.is_empty() && frac_digits.is_empty() {
+        return Err(malformed());
+    }
+    let mut exponent: i64 = 0;
+    if i < bytes.len() && (bytes[i] == b'e' || bytes[i] == b'E') {
+        i += 1;
+        let mut exp_negative = false;
+        if i < bytes.len() && (bytes[i] == b'+' || bytes[i] == b'-') {
+            exp_negative = bytes[i] == b'-';
+            i += 1;
+        }
+        let exp_start = i;
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+        let exp_digits = &s[exp_start..i];
+        if exp_digits.is_empty() {
+            return Err(malformed());
+        }
+        // Long digit strings are rejected before conversion, so no overflow.
+        if exp_digits.trim_start_matches('0').len() > 6 {
+            return Err(NumberError::NotFinite { text: whole.to_string() });
+        }
+        exponent = exp_digits.parse::<i64>().map_err(|_| malformed())?;
+        if exp_negative {
+            exponent = -exponent;
+        }
+    }
+    if i != bytes.len() {
+        return Err(malformed());
+    }
+    let digits = format!("{int_digits}{frac_digits}");
+    let mantissa: BigInt = digits.parse().map_err(|_| malformed())?;
+    if mantissa.is_zero() {
+        return Ok(Rational::zero());
+    }
+    let total_exponent = exponent - frac_digits.len() as i64;
+    // The decimal point position plus the digit count bounds the magnitude.
+    let magnitude = total_exponent + digits.trim_start_matches('0').len() as i64;
+    if !(-MAX_DECIMAL_EXPONENT..=MAX_DECIMAL_EXPONENT).contains(&magnitude) {
+        return Err(NumberError::NotFinite { text: whole.to_string() });
+    }
+    let ten = BigInt::from(10);
+    let value = if total_exponent >= 0 {
+        Rational::from_integer(mantissa * num_traits::pow(ten, total_exponent as usize))
+    } else {
+        Rational::new(mantissa, num_traits::pow(ten, (-total_exponent) as usize))
+    };
+    Ok(if negative { -value } else { value })
+}
+
+/// The double nearest to a rational (correctly rounded for moderate sizes).
+///
+/// ```
+/// use exact::{rational_to_f64, Rational};
+/// assert_eq!(rational_to_f64(&Rational::new(1.into(), 3.into())), 1.0 / 3.0);
+/// ```
+pub fn rational_to_f64(r: &Rational) -> f64 {
+    if let Some(v) = r.to_f64() {
+        return v;
+    }
+    // num-rational returns None only in corner cases; fall back to a ratio of
+    // scaled integers.
+    let n = r.numer();
+    let d = r.denom();
+    let nb = n.bits() as i64;
+    let db = d.bits() as i64;
+    let shift = nb - db;
+    let scaled = if shift > 60 {
+        Rational::new(n.clone(), d.clone() << (shift - 60) as usize)
+    } else {
+        r.clone()
+    };
+    let v = scaled.to_f64().unwrap_or(if r.is_negative() { f64::NEG_INFINITY } else { f64::INFINITY });
+    if shift > 60 {
+        v * 2f64.powi((shift - 60) as i32)
+    } else {
+        v
+    }
+}
+
+/// The exact rational value of a finite double, or `None` for NaN/infinity.
+///
+/// ```
+/// use exact::{rational_from_f64, Rational};
+/// assert_eq!(rational_from_f64(0.25).unwrap(), Rational::new(1.into(), 4.into()));
+/// assert!(rational_from_f64(f64::NAN).is_none());
+/// ```
+pub fn rational_from_f64(x: f64) -> Option<Rational> {
+    if !x.is_finite() {
+        return None;
+    }
+    Rational::from_float(x)
+}
+
+/// A short decimal approximation with a rational's exact value chosen to be
+/// simple: the best rational approximation with denominator at most
+/// `max_denominator` (continued fractions).
+///
+/// Used to round numerically chosen free parameters to rationals that are
+/// pleasant to read in a certificate.
+pub fn best_rational_approximation(x: f64, max_denominator: u64) -> Option<Rational> {
+    if !x.is_finite() {
+        return None;
+    }
+    let negative = x < 0.0;
+    let mut v = x.abs();
+    let (mut p0, mut q0, mut p1, mut q1): (u128, u128, u128, u128) = (0, 1, 1, 0);
+    for _ in 0..64 {
+        let a = v.floor();
+        if a > 1e18 {
+            break;
+        }
+        let a_int = a as u128;
+        let p2 = a_int.checked_mul(p1)?.checked_add(p0)?;
+        let q2 = a_int.checked_mul(q1)?.checked_add(q0)?;
+        if q2 > max_denominator as u128 {
+            break;
+        }
+        p0 = p1;
+        q0 = q1;
+        p1 = p2;
+        q1 = q2;
+        let frac = v - a;
+        if frac < 1e-15 {
+            break;
+        }
+        v = 1.0 / frac;
+    }
+    if q1 == 0 {
+        return None;
+    }
+    let r = Rational::new(BigInt::from(p1), BigInt::from(q1));
+    Some(if negative { -r } else { r })
+}
+
+/// `1` as a rational (convenience).
+pub(crate) fn one() -> Rational {
+    Rational::one()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q(n: i64, d: i64) -> Rational {
+        Rational::new(n.into(), d.into())
+    }
+
+    #[test]
+    fn decimal_literals_are_exact() {
+        assert_eq!(parse_number("0.3").unwrap(), q(3, 10));
+        assert_eq!(parse_number("-.5").unwrap(), q(-1, 2));
+        assert_eq!(parse_number("12").unwrap(), q(12, 1));
+        assert_eq!(parse_number("1e-3").unwrap(), q(1, 1000));
+        assert_eq!(parse_number("1.25E+2").unwrap(), q(125, 1));
+        assert_eq!(parse_number("3/10").unwrap(), q(3, 10));
+        assert_eq!(parse_number(" 0.5/0.25 ").unwrap(), q(2, 1));
+    }
+
+    #[test]
+    fn bad_numbers_are_rejected_with_reason() {
+        assert!(matches!(parse_number(""), Err(NumberError::Empty)));
+        assert!(matches!(parse_number("abc"), Err(NumberError::Malformed { .. })));
+        assert!(matches!(parse_number("1/0"), Err(NumberError::ZeroDenominator { .. })));
+        assert!(matches!(parse_number("inf"), Err(NumberError::NotFinite { .. })));
+        assert!(matches!(parse_number("-Infinity"), Err(NumberError::NotFinite { .. })));
+        assert!(matches!(parse_number("1e400"), Err(NumberError::NotFinite { .. })));
+        assert!(matches!(parse_number("1e99999999999999"), Err(NumberError::NotFinite { .. })));
+        assert!(matches!(parse_number("1.2.3"), Err(NumberError::Malformed { .. })));
+        assert!(matches!(parse_number("e5"), Err(NumberError::Malformed { .. })));
+    }
+
+    #[test]
+    fn continued_fraction_rounding() {
+        assert_eq!(best_rational_approximation(0.333333333333, 1000).unwrap(), q(1, 3));
+        assert_eq!(best_rational_approximation(-2.5, 10).unwrap(), q(-5, 2));
+        assert_eq!(best_rational_approximation(3.141592653589793, 1000).unwrap(), q(355, 113));
+    }
+}

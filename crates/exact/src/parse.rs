@@ -1,0 +1,512 @@
+//! The spec's expression language, parsed straight into exact polynomials.
+//!
+//! Grammar (usual precedence, `^` binds tightest and is right-associative,
+//! unary minus binds looser than `^`, so `-x^2 = -(x^2)`):
+//!
+//! ```text
+//! expr   := term (('+' | '-') term)*
+//! term   := unary (('*' | '/') unary)*
+//! unary  := ('+' | '-') unary | power
+//! power  := atom ('^' unary)?
+//! atom   := number | identifier | '(' expr ')'
+//! ```
+//!
+//! Identifiers are coordinates (the polynomial's variables) or parameters
+//! (substituted by their exact rational values). Division is allowed only by
+//! a nonzero constant and powers only with constant integer exponents (a
+//! negative exponent only on a constant), so that every expression is a
+//! polynomial with rational coefficients; anything else is rejected with the
+//! position and the reason.
+
+use crate::number::{parse_number, Rational};
+use crate::poly::Poly;
+use num_traits::{Signed, ToPrimitive, Zero};
+use std::collections::BTreeMap;
+
+/// The names an expression may use: coordinates (variables) and parameters
+/// (known rational constants).
+#[derive(Clone, Debug, Default)]
+pub struct Symbols {
+    coordinates: Vec<String>,
+    parameters: BTreeMap<String, Rational>,
+    limits: Limits,
+}
+
+/// Size limits that keep parsing fast on hostile input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Largest exponent allowed in `^` (default 64).
+    pub max_exponent: u32,
+    /// Largest total degree of any intermediate polynomial (default 64).
+    pub max_degree: u32,
+    /// Largest number of terms of any intermediate polynomial (default 20,000).
+    pub max_terms: usize,
+    /// Deepest nesting of parentheses and unary operators (default 200).
+    pub max_depth: usize,
+    /// Longest expression text in bytes (default 100,000).
+    pub max_length: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits { max_exponent: 64, max_degree: 64, max_terms: 20_000, max_depth: 200, max_length: 100_000 }
+    }
+}
+
+impl Symbols {
+    /// Symbols with the given coordinate names and no parameters.
+    pub fn new<S: AsRef<str>>(coordinates: &[S]) -> Self {
+        Symbols {
+            coordinates: coordinates.iter().map(|s| s.as_ref().to_string()).collect(),
+            parameters: BTreeMap::new(),
+            limits: Limits::default(),
+        }
+    }
+
+    /// Define (or redefine) a parameter.
+    pub fn set_parameter(&mut self, name: &str, value: Rational) {
+        self.parameters.insert(name.to_string(), value);
+    }
+
+    /// Replace the size limits.
+    pub fn with_limits(mut self, limits: Limits) -> Self {
+        self.limits = limits;
+        self
+    }
+
+    /// The coordinate names.
+    pub fn coordinates(&self) -> &[String] {
+        &self.coordinates
+    }
+
+    /// The parameters.
+    pub fn parameters(&self) -> &BTreeMap<String, Rational> {
+        &self.parameters
+    }
+
+    fn known_names(&self) -> Vec<String> {
+        self.coordinates.iter().cloned().chain(self.parameters.keys().cloned()).collect()
+    }
+}
+
+/// What went wrong in an expression.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ParseErrorKind {
+    /// A character that is not part of the grammar.
+    #[error("unexpected character '{0}'")]
+    UnexpectedChar(char),
+    /// The text ended where more was expected.
+    #[error("unexpected end of expression")]
+    UnexpectedEnd,
+    /// A token in the wrong place.
+    #[error("unexpected '{0}'")]
+    UnexpectedToken(String),
+    /// An identifier that is neither a coordinate nor a parameter.
+    #[error("unknown symbol '{name}' (known: {})", known.join(", "))]
+    UnknownSymbol {
+        /// The unknown name.
+        name: String,
+        /// The names that are defined.
+        known: Vec<String>,
+    },
+    /// A function call: only polynomials are allowed here.
+    #[error("'{0}(...)' is a function call; expressions here must be polynomials (use only + - * / ^ and parentheses)")]
+    FunctionCall(String),
+    /// Division by something that is not a constant.
+    #[error("division by a polynomial that is not a constant; expressions must be polynomials")]
+    DivisionByPolynomial,
+    /// Division by zero.
+    #[error("division by zero")]
+    DivisionByZero,
+    /// An exponent that is not a constant integer.
+    #[error("the exponent must be a constant integer")]
+    NonIntegerExponent,
+    /// A negative power of a non-constant polynomial.
+    #[error("negative power of a non-constant polynomial; expressions must be polynomials")]
+    NegativePowerOfPolynomial,
+    /// Zero to a negative power.
+    #[error("zero raised to a negative power")]
+    ZeroToNegativePower,
+    /// An exponent above the limit.
+    #[error("exponent {0} is too large (limit {1})")]
+    ExponentTooLarge(String, u32),
+    /// A number literal that is not a finite number.
+    #[error("{0}")]
+    BadNumber(String),
+    /// The polynomial grew beyond the size limits.
+    #[error("the expression expands to a polynomial beyond the size limits (degree {degree} > {max_degree} or {terms} > {max_terms} terms)")]
+    TooLarge {
+        /// Degree reached.
+        degree: u32,
+        /// Degree limit.
+        max_degree: u32,
+        /// Terms reached.
+        terms: usize,
+        /// Term limit.
+        max_terms: usize,
+    },
+    /// Nesting beyond the depth limit.
+    #[error("expression nested too deeply (limit {0})")]
+    TooDeep(usize),
+    /// Text beyond the length limit.
+    #[error("expression longer than {0} bytes")]
+    TooLong(usize),
+    /// An empty expression.
+    #[error("empty expression")]
+    Empty,
+}
+
+/// An expression error with the character position where it was found.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{kind} (at character {position})")]
+pub struct ParseError {
+    /// What went wrong.
+    pub kind: ParseErrorKind,
+    /// 0-based character offset into the expression.
+    pub position: usize,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Token {
+    Number(String),
+    Ident(String),
+    Op(char),
+}
+
+fn tokenize(text: &str) -> Result<Vec<(Token, usize)>, ParseError> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c.is_whitespace() {
+            i += 1;
+        } else if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(|d| d.is_ascii_digit())) {
+            let start = i;
+            while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+                i += 1;
+            }
+            if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+                let mut j = i + 1;
+                if j < chars.len() && (chars[j] == '+' || chars[j] == '-') {
+                    j += 1;
+                }
+                if j < chars.len() && chars[j].is_ascii_digit() {
+                    while j < chars.len() && chars[j].is_ascii_digit() {
+                        j += 1;
+                    }
+                    i = j;
+                }
+            }
+            out.push((Token::Number(chars[start..i].iter().collect()), start));
+        } else if c.is_ascii_alphabetic() || c == '_' {
+            let start = i;
+            while i < chars.len() && (chars[i].is_ascii_alphanumeric() || chars[i] == '_') {
+                i += 1;
+            }
+            out.push((Token::Ident(chars[start..i].iter().collect()), start));
+        } else if "+-*/^()".contains(c) {
+            out.push((Token::Op(c), i));
+            i += 1;
+        } else {
+            return Err(ParseError { kind: ParseErrorKind::UnexpectedChar(c), position: i });
+        }
+    }
+    Ok(out)
+}
+
+struct Parser<'a> {
+    tokens: Vec<(Token, usize)>,
+    pos: usize,
+    end: usize,
+    symbols: &'a Symbols,
+    depth: usize,
+}
+
+/// Parse an expression into an exact polynomial in the coordinates, with
+/// parameters substituted.
+///
+/// ```
+/// use exact::{parse_expression, Rational, Symbols, ParseErrorKind};
+/// let s = Symbols::new(&["x", "y"]);
+/// let p = parse_expression("(x + y)^2 - 2*x*y", &s).unwrap();
+/// assert_eq!(p, parse_expression("x^2 + y^2", &s).unwrap());
+/// let e = parse_expression("x / y", &s).unwrap_err();
+/// assert_eq!(e.kind, ParseErrorKind::DivisionByPolynomial);
+/// ```
+pub fn parse_expression(text: &str, symbols: &Symbols) -> Result<Poly, ParseError> {
+    if text.len() > symbols.limits.max_length {
+        return Err(ParseError { kind: ParseErrorKind::TooLong(symbols.limits.max_length), position: 0 });
+    }
+    let tokens = tokenize(text)?;
+    if tokens.is_empty() {
+        return Err(ParseError { kind: ParseErrorKind::Empty, position: 0 });
+    }
+    let mut p = Parser { tokens, pos: 0, end: text.chars().count(), symbols, depth: 0 };
+    let value = p.expr()?;
+    if let Some((tok, at)) = p.tokens.get(p.pos) {
+        return Err(ParseError { kind: ParseErrorKind::UnexpectedToken(token_text(tok)), position: *at });
+    }
+    Ok(value)
+}
+
+fn token_text(t: &Token) -> String {
+    match t {
+        Token::Number(s) | Token::Ident(s) => s.clone(),
+        Token::Op(c) => c.to_string(),
+    }
+}
+
+impl Parser<'_> {
+    fn nvars(&self) -> usize {
+        self.symbols.coordinates.len()
+    }
+
+    fn peek(&self) -> Option<&Token> {
+        self.tokens.get(self.pos).map(|(t, _)| t)
+    }
+
+    fn here(&self) -> usize {
+        self.tokens.get(self.pos).map_or(self.end, |(_, p)| *p)
+    }
+
+    fn err<T>(&self, kind: ParseErrorKind, position: usize) -> Result<T, ParseError> {
+        Err(ParseError { kind, position })
+    }
+
+    fn check_size(&self, p: Poly, position: usize) -> Result<Poly, ParseError> {
+        let l = &self.symbols.limits;
+        let degree = p.total_degree();
+        if degree > l.max_degree || p.num_terms() > l.max_terms {
+            return self.err(
+                ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms: p.num_terms(), max_terms: l.max_terms },
+                position,
+            );
+        }
+        Ok(p)
+    }
+
+    fn enter(&mut self) -> Result<(), ParseError> {
+        self.depth += 1;
+        if self.depth > self.symbols.limits.max_depth {
+            return self.err(ParseErrorKind::TooDeep(self.symbols.limits.max_depth), self.here());
+        }
+        Ok(())
+    }
+
+    fn expr(&mut self) -> Result<Poly, ParseError> {
+        self.enter()?;
+        let mut acc = self.term()?;
+        while let Some(Token::Op(c @ ('+' | '-'))) = self.peek().cloned() {
+            let at = self.here();
+            self.pos += 1;
+            let rhs = self.term()?;
+            acc = if c == '+' { acc.add(&rhs) } else { acc.sub(&rhs) };
+            acc = self.check_size(acc, at)?;
+        }
+        self.depth -= 1;
+        Ok(acc)
+    }
+
+    fn term(&mut self) -> Result<Poly, ParseError> {
+        let mut acc = self.unary()?;
+        while let Some(Token::Op(c @ ('*' | '/'))) = self.peek().cloned() {
+            let at = self.here();
+            self.pos += 1;
+            let rhs_at = self.here();
+            let rhs = self.unary()?;
+            if c == '*' {
+                // Bound the product before forming it.
+                let l = &self.symbols.limits;
+                let degree = acc.total_degree() + rhs.total_degree();
+                let terms = acc.num_terms().saturating_mul(rhs.num_terms());
+                if degree > l.max_degree || terms > l.max_terms.saturating_mul(4) {
+                    return self.err(
+                        ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms, max_terms: l.max_terms },
+                        at,
+                    );
+                }
+                acc = self.check_size(acc.mul(&rhs), at)?;
+            } else {
+                let Some(d) = rhs.constant_value() else {
+                    return self.err(ParseErrorKind::DivisionByPolynomial, rhs_at);
+                };
+                if d.is_zero() {
+                    return self.err(ParseErrorKind::DivisionByZero, rhs_at);
+                }
+                acc = acc.scale(&d.recip());
+            }
+        }
+        Ok(acc)
+    }
+
+    fn unary(&mut self) -> Result<Poly, ParseError> {
+        match self.peek() {
+            Some(Token::Op('-')) => {
+                self.pos += 1;
+                self.enter()?;
+                let v = self.unary()?.neg();
+                self.depth -= 1;
+                Ok(v)
+            }
+            Some(Token::Op('+')) => {
+                self.pos += 1;
+                self.enter()?;
+                let v = self.unary()?;
+                self.depth -= 1;
+                Ok(v)
+            }
+            _ => self.power(),
+        }
+    }
+
+    fn power(&mut self) -> Result<Poly, ParseError> {
+        let base = self.atom()?;
+        if let Some(Token::Op('^')) = self.peek() {
+            let at = self.here();
+            self.pos += 1;
+            let exp_at = self.here();
+            self.enter()?;
+            let exponent = self.unary()?;
+            self.depth -= 1;
+            let Some(e) = exponent.constant_value() else {
+                return self.err(ParseErrorKind::NonIntegerExponent, exp_at);
+            };
+            if !e.is_integer() {
+                return self.err(ParseErrorKind::NonIntegerExponent, exp_at);
+            }
+            let max = self.symbols.limits.max_exponent;
+            let magnitude = e.abs().to_integer().to_u32().filter(|&m| m <= max);
+            let Some(m) = magnitude else {
+                return self.err(ParseErrorKind::ExponentTooLarge(e.to_string(), max), exp_at);
+            };
+            if e.is_negative() {
+                let Some(b) = base.constant_value() else {
+                    return self.err(ParseErrorKind::NegativePowerOfPolynomial, at);
+                };
+                if b.is_zero() {
+                    return self.err(ParseErrorKind::ZeroToNegativePower, at);
+                }
+                return Ok(Poly::constant(self.nvars(), num_traits::pow(b.recip(), m as usize)));
+            }
+            let l = &self.symbols.limits;
+            let degree = base.total_degree().saturating_mul(m);
+            if degree > l.max_degree {
+                return self.err(
+                    ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms: base.num_terms(), max_terms: l.max_terms },
+                    at,
+                );
+            }
+            if let Some(b) = base.constant_value() {
+                return Ok(Poly::constant(self.nvars(), num_traits::pow(b, m as usize)));
+            }
+            return self.check_size(base.pow(m), at);
+        }
+        Ok(base)
+    }
+
+    fn atom(&mut self) -> Result<Poly, ParseError> {
+        let at = self.here();
+        let Some((tok, _)) = self.tokens.get(self.pos).cloned() else {
+            return self.err(ParseErrorKind::UnexpectedEnd, self.end);
+        };
+        self.pos += 1;
+        match tok {
+            Token::Number(s) => match parse_number(&s) {
+                Ok(v) => Ok(Poly::constant(self.nvars(), v)),
+                Err(e) => self.err(ParseErrorKind::BadNumber(e.to_string()), at),
+            },
+            Token::Ident(name) => {
+                if let Some(Token::Op('(')) = self.peek() {
+                    return self.err(ParseErrorKind::FunctionCall(name), at);
+                }
+                if let Some(i) = self.symbols.coordinates.iter().position(|c| *c == name) {
+                    return Ok(Poly::var(self.nvars(), i));
+                }
+                if let Some(v) = self.symbols.parameters.get(&name) {
+                    return Ok(Poly::constant(self.nvars(), v.clone()));
+                }
+                self.err(ParseErrorKind::UnknownSymbol { name, known: self.symbols.known_names() }, at)
+            }
+            Token::Op('(') => {
+                let v = self.expr()?;
+                match self.peek() {
+                    Some(Token::Op(')')) => {
+                        self.pos += 1;
+                        Ok(v)
+                    }
+                    Some(t) => {
+                        let t = token_text(t);
+                        self.err(ParseErrorKind::UnexpectedToken(t), self.here())
+                    }
+                    None => self.err(ParseErrorKind::UnexpectedEnd, self.end),
+                }
+            }
+            Token::Op(c) => self.err(ParseErrorKind::UnexpectedToken(c.to_string()), at),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn syms() -> Symbols {
+        let mut s = Symbols::new(&["x", "y"]);
+        s.set_parameter("a", Rational::new(3.into(), 10.into()));
+        s
+    }
+
+    fn q(n: i64, d: i64) -> Rational {
+        Rational::new(n.into(), d.into())
+    }
+
+    #[test]
+    fn precedence_and_associativity() {
+        let s = syms();
+        let p = parse_expression("-x^2", &s).unwrap();
+        assert_eq!(p.coefficient(&[2, 0]), q(-1, 1));
+        let p = parse_expression("2^3^2", &s).unwrap();
+        assert_eq!(p.constant_value().unwrap(), q(512, 1));
+        let p = parse_expression("1 - 2 - 3", &s).unwrap();
+        assert_eq!(p.constant_value().unwrap(), q(-4, 1));
+        let p = parse_expression("12/2/3", &s).unwrap();
+        assert_eq!(p.constant_value().unwrap(), q(2, 1));
+        let p = parse_expression("a*x/(2*a)", &s).unwrap();
+        assert_eq!(p.coefficient(&[1, 0]), q(1, 2));
+        let p = parse_expression("2^-2 + 0.3", &s).unwrap();
+        assert_eq!(p.constant_value().unwrap(), q(11, 20));
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let s = syms();
+        let kind = |t: &str| parse_expression(t, &s).unwrap_err().kind;
+        assert!(matches!(kind("x + z"), ParseErrorKind::UnknownSymbol { .. }));
+        assert_eq!(kind("1/x"), ParseErrorKind::DivisionByPolynomial);
+        assert_eq!(kind("1/(a - 0.3)"), ParseErrorKind::DivisionByZero);
+        assert_eq!(kind("x^y"), ParseErrorKind::NonIntegerExponent);
+        assert_eq!(kind("x^(1/2)"), ParseErrorKind::NonIntegerExponent);
+        assert_eq!(kind("x^-1"), ParseErrorKind::NegativePowerOfPolynomial);
+        assert!(matches!(kind("sin(x)"), ParseErrorKind::FunctionCall(_)));
+        assert!(matches!(kind("x^100"), ParseErrorKind::ExponentTooLarge(..)));
+        assert!(matches!(kind("(x+y)^40*(x+y)^40"), ParseErrorKind::TooLarge { .. }));
+        assert_eq!(kind("(x"), ParseErrorKind::UnexpectedEnd);
+        assert!(matches!(kind("x y"), ParseErrorKind::UnexpectedToken(_)));
+        assert!(matches!(kind("x $ y"), ParseErrorKind::UnexpectedChar('$')));
+        assert_eq!(kind("   "), ParseErrorKind::Empty);
+        assert_eq!(kind("0^-1"), ParseErrorKind::ZeroToNegativePower);
+        let deep = "(".repeat(500) + "x" + &")".repeat(500);
+        assert!(matches!(kind(&deep), ParseErrorKind::TooDeep(_)));
+        let minus = "-".repeat(500) + "x";
+        assert!(matches!(kind(&minus), ParseErrorKind::TooDeep(_)));
+    }
+
+    #[test]
+    fn error_positions_point_at_the_culprit() {
+        let s = syms();
+        let e = parse_expression("x + 2*zz", &s).unwrap_err();
+        assert_eq!(e.position, 6);
+    }
+}

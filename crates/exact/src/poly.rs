@@ -1,0 +1,388 @@
+//! Sparse multivariate polynomials with exact rational coefficients.
+
+use crate::number::{one, rational_to_f64, Rational};
+use num_traits::{One, Signed, Zero};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// Exponent vector of a monomial: `x_0^e_0 x_1^e_1 ...`.
+pub type Monomial = Vec<u16>;
+
+/// A polynomial in a fixed number of variables with rational coefficients.
+///
+/// Terms are kept in a `BTreeMap` so that iteration order (and hence printing
+/// and certificates) is deterministic; no zero coefficient is ever stored.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Poly {
+    nvars: usize,
+    terms: BTreeMap<Monomial, Rational>,
+}
+
+impl Poly {
+    /// The zero polynomial in `nvars` variables.
+    pub fn zero(nvars: usize) -> Self {
+        Poly { nvars, terms: BTreeMap::new() }
+    }
+
+    /// A constant.
+    pub fn constant(nvars: usize, c: Rational) -> Self {
+        let mut p = Self::zero(nvars);
+        if !c.is_zero() {
+            p.terms.insert(vec![0; nvars], c);
+        }
+        p
+    }
+
+    /// The variable `x_i`.
+    ///
+    /// # Panics
+    /// If `i >= nvars`.
+    pub fn var(nvars: usize, i: usize) -> Self {
+        assert!(i < nvars, "variable index out of range");
+        let mut m = vec![0; nvars];
+        m[i] = 1;
+        let mut p = Self::zero(nvars);
+        p.terms.insert(m, one());
+        p
+    }
+
+    /// A single term `c x^m`.
+    pub fn monomial(c: Rational, m: Monomial) -> Self {
+        let nvars = m.len();
+        let mut p = Self::zero(nvars);
+        if !c.is_zero() {
+            p.terms.insert(m, c);
+        }
+        p
+    }
+
+    /// The linear form `sum_i c_i x_i`.
+    pub fn linear(coefficients: &[Rational]) -> Self {
+        let n = coefficients.len();
+        let mut p = Self::zero(n);
+        for (i, c) in coefficients.iter().enumerate() {
+            if !c.is_zero() {
+                let mut m = vec![0; n];
+                m[i] = 1;
+                p.terms.insert(m, c.clone());
+            }
+        }
+        p
+    }
+
+    /// Number of variables.
+    pub fn nvars(&self) -> usize {
+        self.nvars
+    }
+
+    /// Number of nonzero terms.
+    pub fn num_terms(&self) -> usize {
+        self.terms.len()
+    }
+
+    /// The terms, in a deterministic order.
+    pub fn terms(&self) -> impl Iterator<Item = (&Monomial, &Rational)> {
+        self.terms.iter()
+    }
+
+    /// Whether this is the zero polynomial.
+    pub fn is_zero(&self) -> bool {
+        self.terms.is_empty()
+    }
+
+    /// The value if the polynomial is a constant, else `None`.
+    pub fn constant_value(&self) -> Option<Rational> {
+        match self.terms.len() {
+            0 => Some(Rational::zero()),
+            1 => {
+                let (m, c) = self.terms.iter().next()?;
+                m.iter().all(|&e| e == 0).then(|| c.clone())
+            }
+            _ => None,
+        }
+    }
+
+    /// Total degree (`0` for constants and for the zero polynomial).
+    pub fn total_degree(&self) -> u32 {
+        self.terms.keys().map(|m| m.iter().map(|&e| e as u32).sum()).max().unwrap_or(0)
+    }
+
+    /// The coefficient of a monomial.
+    pub fn coefficient(&self, m: &[u16]) -> Rational {
+        self.terms.get(m).cloned().unwrap_or_else(Rational::zero)
+    }
+
+    fn add_term(&mut self, m: Monomial, c: Rational) {
+        if c.is_zero() {
+            return;
+        }
+        match self.terms.entry(m) {
+            std::collections::btree_map::Entry::Vacant(v) => {
+                v.insert(c);
+            }
+            std::collections::btree_map::Entry::Occupied(mut o) => {
+                *o.get_mut() += c;
+                if o.get().is_zero() {
+                    o.remove();
+                }
+            }
+        }
+    }
+
+    /// Sum.
+    pub fn add(&self, other: &Poly) -> Poly {
+        assert_eq!(self.nvars, other.nvars);
+        let mut out = self.clone();
+        for (m, c) in &other.terms {
+            out.add_term(m.clone(), c.clone());
+        }
+        out
+    }
+
+    /// Difference.
+    pub fn sub(&self, other: &Poly) -> Poly {
+        assert_eq!(self.nvars, other.nvars);
+        let mut out = self.clone();
+        for (m, c) in &other.terms {
+            out.add_term(m.clone(), -c.clone());
+        }
+        out
+    }
+
+    /// Negation.
+    pub fn neg(&self) -> Poly {
+        self.scale(&-Rational::one())
+    }
+
+    /// Multiply by a rational.
+    pub fn scale(&self, s: &Rational) -> Poly {
+        if s.is_zero() {
+            return Poly::zero(self.nvars);
+        }
+        Poly { nvars: self.nvars, terms: self.terms.iter().map(|(m, c)| (m.clone(), c * s)).collect() }
+    }
+
+    /// Product.
+    pub fn mul(&self, other: &Poly) -> Poly {
+        assert_eq!(self.nvars, other.nvars);
+        let mut out = Poly::zero(self.nvars);
+        for (m1, c1) in &self.terms {
+            for (m2, c2) in &other.terms {
+                let m: Monomial = m1.iter().zip(m2).map(|(a, b)| a.saturating_add(*b)).collect();
+                out.add_term(m, c1 * c2);
+            }
+        }
+        out
+    }
+
+    /// Power by repeated squaring.
+    pub fn pow(&self, mut e: u32) -> Poly {
+        let mut base = self.clone();
+        let mut acc = Poly::constant(self.nvars, one());
+        while e > 0 {
+            if e & 1 == 1 {
+                acc = acc.mul(&base);
+            }
+            e >>= 1;
+            if e > 0 {
+                base = base.mul(&base);
+            }
+        }
+        acc
+    }
+
+    /// Partial derivative with respect to `x_i`.
+    pub fn derivative(&self, i: usize) -> Poly {
+        let mut out = Poly::zero(self.nvars);
+        for (m, c) in &self.terms {
+            if m[i] == 0 {
+                continue;
+            }
+            let mut m2 = m.clone();
+            m2[i] -= 1;
+            out.add_term(m2, c * Rational::from_integer(m[i].into()));
+        }
+        out
+    }
+
+    /// The gradient `(∂_0 p, ..., ∂_{n-1} p)`.
+    pub fn gradient(&self) -> Vec<Poly> {
+        (0..self.nvars).map(|i| self.derivative(i)).collect()
+    }
+
+    /// The Hessian `∂_i ∂_j p`.
+    pub fn hessian(&self) -> Vec<Vec<Poly>> {
+        let g = self.gradient();
+        g.iter().map(|gi| (0..self.nvars).map(|j| gi.derivative(j)).collect()).collect()
+    }
+
+    /// Exact value at a rational point.
+    pub fn eval(&self, x: &[Rational]) -> Rational {
+        assert_eq!(x.len(), self.nvars);
+        let mut s = Rational::zero();
+        for (m, c) in &self.terms {
+            let mut t = c.clone();
+            for (xi, &e) in x.iter().zip(m) {
+                if e > 0 {
+                    if xi.is_zero() {
+                        t = Rational::zero();
+                        break;
+                    }
+                    t *= num_traits::pow(xi.clone(), e as usize);
+                }
+            }
+            s += t;
+        }
+        s
+    }
+
+    /// Value in floating point.
+    pub fn eval_f64(&self, x: &[f64]) -> f64 {
+        assert_eq!(x.len(), self.nvars);
+        self.terms
+            .iter()
+            .map(|(m, c)| {
+                rational_to_f64(c)
+                    * m.iter().zip(x).map(|(&e, &xi)| xi.powi(e as i32)).product::<f64>()
+            })
+            .sum()
+    }
+
+    /// The homogeneous component of degree `d`.
+    pub fn homogeneous_part(&self, d: u32) -> Poly {
+        Poly {
+            nvars: self.nvars,
+            terms: self
+                .terms
+                .iter()
+                .filter(|(m, _)| m.iter().map(|&e| e as u32).sum::<u32>() == d)
+                .map(|(m, c)| (m.clone(), c.clone()))
+                .collect(),
+        }
+    }
+
+    /// Substitute `x_i -> sum_j map[i][j] y_j` (a linear change of variables
+    /// into `map[i].len()` new variables).
+    pub fn linear_substitution(&self, map: &[Vec<Rational>]) -> Poly {
+        assert_eq!(map.len(), self.nvars);
+        let new_n = map.first().map_or(0, |r| r.len());
+        let images: Vec<Poly> = map.iter().map(|row| Poly::linear(row)).collect();
+        let mut out = Poly::zero(new_n);
+        for (m, c) in &self.terms {
+            let mut t = Poly::constant(new_n, c.clone());
+            for (i, &e) in m.iter().enumerate() {
+                if e > 0 {
+                    t = t.mul(&images[i].pow(e as u32));
+                }
+            }
+            out = out.add(&t);
+        }
+        out
+    }
+
+    /// Human-readable form using the given variable names, e.g.
+    /// `1/2*Pi1^2 + 1/4*Pi2^2`.
+    pub fn to_string_with(&self, names: &[String]) -> String {
+        if self.terms.is_empty() {
+            return "0".to_string();
+        }
+        let mut s = String::new();
+        // Print higher degree first, then by the map order.
+        let mut terms: Vec<_> = self.terms.iter().collect();
+        terms.sort_by_key(|(m, _)| std::cmp::Reverse(m.iter().map(|&e| e as u32).sum::<u32>()));
+        for (k, (m, c)) in terms.into_iter().enumerate() {
+            let negative = c.is_negative();
+            let abs = c.abs();
+            if k == 0 {
+                if negative {
+                    s.push('-');
+                }
+            } else {
+                s.push_str(if negative { " - " } else { " + " });
+            }
+            let vars: Vec<String> = m
+                .iter()
+                .enumerate()
+                .filter(|(_, &e)| e > 0)
+                .map(|(i, &e)| if e == 1 { names[i].clone() } else { format!("{}^{}", names[i], e) })
+                .collect();
+            if vars.is_empty() {
+                let _ = write!(s, "{abs}");
+            } else if abs.is_one() {
+                s.push_str(&vars.join("*"));
+            } else {
+                let _ = write!(s, "{}*{}", abs, vars.join("*"));
+            }
+        }
+        s
+    }
+}
+
+/// All exponent vectors of total degree `d` in `n` variables, in a fixed order.
+pub fn monomials_of_degree(n: usize, d: u16) -> Vec<Monomial> {
+    fn rec(n: usize, d: u16, i: usize, cur: &mut Monomial, out: &mut Vec<Monomial>) {
+        if i == n - 1 {
+            cur[i] = d;
+            out.push(cur.clone());
+            cur[i] = 0;
+            return;
+        }
+        for e in (0..=d).rev() {
+            cur[i] = e;
+            rec(n, d - e, i + 1, cur, out);
+        }
+        cur[i] = 0;
+    }
+    let mut out = Vec::new();
+    if n == 0 {
+        if d == 0 {
+            out.push(Vec::new());
+        }
+        return out;
+    }
+    let mut cur = vec![0; n];
+    rec(n, d, 0, &mut cur, &mut out);
+    out
+}
+
+impl Poly {
+    /// All exponent vectors of total degree `d` in `n` variables.
+    pub fn monomials_of_degree(n: usize, d: u16) -> Vec<Monomial> {
+        monomials_of_degree(n, d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q(n: i64) -> Rational {
+        Rational::from_integer(n.into())
+    }
+
+    #[test]
+    fn product_and_derivative() {
+        let x = Poly::var(2, 0);
+        let y = Poly::var(2, 1);
+        let p = x.add(&y).pow(2); // x^2 + 2xy + y^2
+        assert_eq!(p.coefficient(&[1, 1]), q(2));
+        assert_eq!(p.derivative(0), x.scale(&q(2)).add(&y.scale(&q(2))));
+        assert_eq!(p.eval(&[q(1), q(2)]), q(9));
+        assert_eq!(p.total_degree(), 2);
+    }
+
+    #[test]
+    fn cancellation_leaves_zero() {
+        let x = Poly::var(1, 0);
+        assert!(x.sub(&x).is_zero());
+        assert_eq!(x.sub(&x).constant_value(), Some(q(0)));
+    }
+
+    #[test]
+    fn monomial_count_is_binomial() {
+        // C(n + d - 1, d) monomials of degree d in n variables.
+        assert_eq!(monomials_of_degree(3, 2).len(), 6);
+        assert_eq!(monomials_of_degree(6, 4).len(), 126);
+        assert_eq!(monomials_of_degree(1, 0).len(), 1);
+    }
+}
