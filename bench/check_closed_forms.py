@@ -239,6 +239,24 @@ def main():
         k += 1
     print(f" upright (mgl>0, I3>max) {args.n} sets: max rel err = {max(errs):.2e}")
     worst["b_upright"] = max(errs)
+    # hanging top (mgl < 0) with a flat body I3 < min(I1, I2): stable iff p^2 < |mgl| I3^2/(Ii - I3)
+    errs, k = [], 0
+    while k < args.n:
+        i3 = rng.uniform(0.3, 2.0)
+        i1, i2 = i3 + rng.uniform(0.1, 2.0, 2)
+        m = -rng.uniform(0.1, 2.0)
+        pmax2 = min(-m * i3**2 / (ii - i3) for ii in (i1, i2))
+        pv = math.sqrt(pmax2 * rng.uniform(0.05, 0.95))
+        sg = rng.uniform(0.05, 1.0)
+        _, ce = run(heavy_spec(i1, i2, i3, m, pv, sg))
+        assert ce["verdict"] == "stable", ce["verdict"]
+        errs.append(rel(ce["sigma2"], claim_b(i1, i2, i3, m, pv, sg)))
+        _, ce = run(heavy_spec(i1, i2, i3, m, math.sqrt(pmax2 * rng.uniform(1.05, 3.0)), sg))
+        assert ce["verdict"] != "stable", ce["verdict"]
+        k += 1
+    print(f" hanging (mgl<0, I3<min) {args.n} sets: max rel err = {max(errs):.2e}; "
+          f"p^2 above the bound never certified stable")
+    worst["b_hanging"] = max(errs)
 
     # ---------------------------------------------------------------- (c)
     print("=== (c) Lagrange top I1 = I2, first integral Pi3")
@@ -259,12 +277,13 @@ def main():
     lam = sp.Symbol("lam")
     cp = sp.factor((r["A"] - lam * sp.eye(6)).det())
     print(" charpoly(A) =", cp)
-    ev = sp.roots(sp.Poly(sp.numer(sp.together(cp)), lam))
-    print(" eigenvalues of A:", [sp.simplify(e) for e in ev])
+    # candidate eigenvalues: +-( i(p/I3 - p/(2 I1)) +- (1/2) sqrt(4 mgl/I1 - p^2/I1^2) )
     gr = sp.Rational(1, 2) * sp.sqrt(4 * mglr / I1 - p**2 / I1**2)
-    print(" claimed +-growth rate +-(1/2)sqrt(4mgl/I1 - p^2/I1^2): eigenvalue - (+-rate) is purely imaginary:",
-          [any(sp.simplify(sp.expand_complex(sp.re(sp.expand_complex(e - sg_ * gr)).subs(
-               {mglr: sp.Symbol('m', positive=True)}))) == 0 for e in ev) for sg_ in (1, -1)])
+    cands = [s1 * (sp.I * (p / I3 - p / (2 * I1)) + s2 * gr) for s1 in (1, -1) for s2 in (1, -1)]
+    quart = sp.cancel(cp / lam**2)
+    print(" the 4 candidates  +-( i(p/I3 - p/(2I1)) +- (1/2)sqrt(4mgl/I1 - p^2/I1^2) ) are roots of charpoly/lam^2:",
+          [sp.simplify(sp.expand(quart.subs(lam, e))) == 0 for e in cands],
+          "(so for p^2 < 4 mgl I1 the real parts are exactly +-(1/2)sqrt(4mgl/I1 - p^2/I1^2))")
     # numeric
     errs_u, zs = [], []
     for _ in range(args.n):

@@ -399,6 +399,9 @@ def certify(pp):
             return Rp + sum((ti * Ri for ti, Ri in zip(t, Rk)), np.zeros_like(Rp))
 
         r = len(Pk)
+        out["multipliers"] = {"lambda": x_p[:pp.m_cas].tolist(), "nu": x_p[pp.m_cas:].tolist(),
+                              "family_dimension": r, "t": [0.0] * r,
+                              "family_directions": Nul.T.tolist()}
         # 4. definiteness of R(t), both signs
         for s in (1, -1):
             if r == 0:
@@ -446,7 +449,8 @@ def certify(pp):
             out["multipliers"] = {"lambda": lam[:pp.m_cas].tolist(),
                                   "nu": lam[pp.m_cas:].tolist(),
                                   "family_dimension": r,
-                                  "t": [float(x) for x in t_best]}
+                                  "t": [float(x) for x in t_best],
+                                  "family_directions": Nul.T.tolist()}
             # Finsler / Schur: P = P0 + mfac Y Y^T
             if rk:
                 R = Z.T @ P0 @ Z

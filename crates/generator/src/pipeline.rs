@@ -1,0 +1,230 @@
+//! The whole finite-dimensional pipeline: from a validated [`System`] to a
+//! verdict with its evidence.
+
+use crate::form::{generator_form, GeneratorForm};
+use crate::growth::{growth_constant, GrowthConstant};
+use crate::instability::{find_instability, spectrum, Instability};
+use crate::linearise::{linearise, Linearisation};
+use casimir::{find_definite_choice, CasimirChoice, SearchOutcome, SearchSettings, SecondVariation, System};
+use exact::Rational;
+use nalgebra::Complex;
+use num_traits::Zero;
+
+/// Settings of the pipeline, with documented defaults. Every certificate
+/// records the settings it was made with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// The search over the Casimir freedom.
+    pub search: SearchSettings,
+    /// An eigenvalue of `A` proves linear instability only if its real part
+    /// exceeds this times `max(1, |A|_F)`. Default `1e-6`: round-off moves a
+    /// defective zero eigenvalue (Jordan block of size `k`) by about
+    /// `eps^{1/k} |A|`, which stays below this for `k <= 2`.
+    pub instability_tolerance: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { search: SearchSettings::default(), instability_tolerance: 1e-6 }
+    }
+}
+
+/// The five verdicts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// A definite energy–Casimir form exists: nonlinearly (formally) stable,
+    /// and stable in probability up to the stopping time set by `Sigma^2`.
+    Stable,
+    /// `A` has an eigenvalue with positive real part.
+    LinearlyUnstable,
+    /// Neither a definite form nor an unstable eigenvalue was found.
+    Inconclusive,
+    /// `ad*_{Dh(mu_e)} mu_e != 0`.
+    NotAnEquilibrium,
+    /// Some `ad*_{sigma_i} mu_e != 0`.
+    NoiseIncompatible,
+}
+
+impl Verdict {
+    /// The name used in certificates.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Verdict::Stable => "stable",
+            Verdict::LinearlyUnstable => "linearly_unstable",
+            Verdict::Inconclusive => "inconclusive",
+            Verdict::NotAnEquilibrium => "not_an_equilibrium",
+            Verdict::NoiseIncompatible => "noise_incompatible",
+        }
+    }
+
+    /// Parse a certificate's verdict name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Verdict::Stable, Verdict::LinearlyUnstable, Verdict::Inconclusive, Verdict::NotAnEquilibrium, Verdict::NoiseIncompatible]
+            .into_iter()
+            .find(|v| v.as_str() == name)
+    }
+}
+
+/// The evidence of a `stable` verdict.
+#[derive(Clone, Debug)]
+pub struct StableEvidence {
+    /// The Casimir choice and the exact `P`.
+    pub choice: CasimirChoice,
+    /// `Q`, the drift residual and the paper's formula, exactly.
+    pub form: GeneratorForm,
+    /// `Sigma^2` and the fastest-growing direction.
+    pub growth: GrowthConstant,
+}
+
+/// Everything the pipeline found.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// One sentence explaining it.
+    pub reason: String,
+    /// `ad*_{Dh(mu_e)} mu_e`.
+    pub equilibrium_residual: Vec<Rational>,
+    /// `ad*_{sigma_i} mu_e` for each noise field.
+    pub noise_residuals: Vec<Vec<Rational>>,
+    /// A basis of the isotropy algebra of `mu_e` (the compatible noise).
+    pub isotropy_basis: Vec<Vec<Rational>>,
+    /// For each conserved quantity and noise field, whether they commute.
+    pub noise_commutation: Vec<Vec<bool>>,
+    /// The linearisation (when `mu_e` is an equilibrium with compatible noise).
+    pub linearisation: Option<Linearisation>,
+    /// The spectrum of `A`, largest real part first.
+    pub spectrum: Vec<Complex<f64>>,
+    /// An unstable eigenpair, if one was found.
+    pub instability: Option<Instability>,
+    /// The second variation data (when multipliers exist).
+    pub variation: Option<SecondVariation>,
+    /// The outcome of the search over the Casimir freedom.
+    pub search: Option<SearchOutcome>,
+    /// The evidence for `stable`.
+    pub stable: Option<StableEvidence>,
+}
+
+impl Analysis {
+    /// `Sigma^2` when the verdict is `stable`.
+    pub fn sigma2(&self) -> Option<f64> {
+        self.stable.as_ref().map(|s| s.growth.sigma2)
+    }
+}
+
+/// Run the pipeline (DESIGN.md §3, steps 2–8).
+///
+/// ```
+/// use algebra::builtin;
+/// use casimir::System;
+/// use exact::{parse_expression, Rational, Symbols};
+/// use generator::{analyse, Settings, Verdict};
+/// let so3 = builtin("so3").unwrap().algebra;
+/// let s = Symbols::new(so3.coordinates());
+/// let h = parse_expression("Pi1^2/6 + Pi2^2/4 + Pi3^2/2", &s).unwrap(); // I = (3, 2, 1)
+/// let c = parse_expression("(Pi1^2 + Pi2^2 + Pi3^2)/2", &s).unwrap();
+/// let q = |n: i64, d: i64| Rational::new(n.into(), d.into());
+/// let system = System::new(so3, h, vec![c], vec![], vec![q(1, 1), q(0, 1), q(0, 1)],
+///                          vec![vec![q(3, 10), q(0, 1), q(0, 1)]]).unwrap();
+/// let analysis = analyse(&system, &Settings::default());
+/// assert_eq!(analysis.verdict, Verdict::Stable);
+/// // Sigma^2 = sigma^2 I1 (I2 - I3) / (I3 (I1 - I2)) = 0.09 * 3 = 0.27
+/// assert!((analysis.sigma2().unwrap() - 0.27).abs() < 1e-14);
+/// ```
+pub fn analyse(system: &System, settings: &Settings) -> Analysis {
+    let equilibrium_residual = system.equilibrium_residual();
+    let noise_residuals = system.noise_residuals();
+    let isotropy_basis = system.isotropy_basis();
+    let noise_commutation = system.noise_commutation();
+    let mut analysis = Analysis {
+        verdict: Verdict::Inconclusive,
+        reason: String::new(),
+        equilibrium_residual,
+        noise_residuals,
+        isotropy_basis,
+        noise_commutation,
+        linearisation: None,
+        spectrum: vec![],
+        instability: None,
+        variation: None,
+        search: None,
+        stable: None,
+    };
+    if analysis.equilibrium_residual.iter().any(|r| !r.is_zero()) {
+        analysis.verdict = Verdict::NotAnEquilibrium;
+        analysis.reason = "ad*_{Dh(mu_e)} mu_e is not zero: mu_e is not an equilibrium".into();
+        return analysis;
+    }
+    let incompatible: Vec<usize> = analysis
+        .noise_residuals
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.iter().any(|x| !x.is_zero()))
+        .map(|(i, _)| i)
+        .collect();
+    if !incompatible.is_empty() {
+        analysis.verdict = Verdict::NoiseIncompatible;
+        analysis.reason = format!(
+            "ad*_sigma mu_e is not zero for noise field(s) {incompatible:?}: the noise moves the equilibrium; compatible noise lies in the isotropy algebra of mu_e"
+        );
+        return analysis;
+    }
+    let linearisation = linearise(system);
+    analysis.spectrum = spectrum(&linearisation.a);
+    analysis.instability = find_instability(&linearisation.a, settings.instability_tolerance);
+    analysis.linearisation = Some(linearisation.clone());
+
+    let Some(variation) = system.second_variation() else {
+        return conclude_without_form(
+            analysis,
+            "no multipliers make mu_e a critical point of h + sum lambda_j K_j (Dh(mu_e) is not in the span of the conserved gradients)",
+        );
+    };
+    let outcome = find_definite_choice(&variation, &settings.search);
+    analysis.variation = Some(variation);
+    analysis.search = Some(outcome.clone());
+    let Some(choice) = outcome.definite() else {
+        return conclude_without_form(
+            analysis,
+            "no choice of multipliers and Casimir function makes the second variation definite",
+        );
+    };
+    if analysis.instability.is_some() {
+        // A conserved definite form rules out eigenvalues off the imaginary
+        // axis; both at once means a numerical breakdown. Claim nothing.
+        analysis.verdict = Verdict::Inconclusive;
+        analysis.reason =
+            "contradictory evidence: a definite second variation was found, yet A appears to have an unstable eigenvalue".into();
+        return analysis;
+    }
+    let form = generator_form(&linearisation, &choice.p);
+    match growth_constant(&choice.p, &form.q, choice.sign) {
+        Ok(growth) => {
+            analysis.verdict = Verdict::Stable;
+            analysis.reason = format!(
+                "the second variation is {} definite: formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t)",
+                if choice.sign > 0 { "positive" } else { "negative" }
+            );
+            analysis.stable = Some(StableEvidence { choice: choice.clone(), form, growth });
+        }
+        Err(e) => {
+            analysis.verdict = Verdict::Inconclusive;
+            analysis.reason = format!("a definite second variation was found but Sigma^2 could not be computed: {e}");
+        }
+    }
+    analysis
+}
+
+fn conclude_without_form(mut analysis: Analysis, why: &str) -> Analysis {
+    if let Some(inst) = &analysis.instability {
+        analysis.verdict = Verdict::LinearlyUnstable;
+        analysis.reason = format!(
+            "A has the eigenvalue {:.6e} {:+.6e}i with positive real part",
+            inst.eigenvalue.re, inst.eigenvalue.im
+        );
+    } else {
+        analysis.verdict = Verdict::Inconclusive;
+        analysis.reason = format!("{why}, and no eigenvalue of A has a real part above the tolerance");
+    }
+    analysis
+}
