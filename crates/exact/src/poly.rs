@@ -289,7 +289,12 @@ impl Poly {
         let mut s = String::new();
         // Print higher degree first, then by the map order.
         let mut terms: Vec<_> = self.terms.iter().collect();
-        terms.sort_by_key(|(m, _)| std::cmp::Reverse(m.iter().map(|&e| e as u32).sum::<u32>()));
+        // Highest degree first; within a degree, earlier variables first.
+        terms.sort_by(|(a, _), (b, _)| {
+            let da: u32 = a.iter().map(|&e| e as u32).sum();
+            let db: u32 = b.iter().map(|&e| e as u32).sum();
+            db.cmp(&da).then_with(|| b.cmp(a))
+        });
         for (k, (m, c)) in terms.into_iter().enumerate() {
             let negative = c.is_negative();
             let abs = c.abs();

@@ -1,0 +1,342 @@
+//! Reading a spec: JSON in, a validated [`casimir::System`] out, and every
+//! error named by its JSON path.
+
+use crate::json::{
+    as_array, as_object, as_str, check_keys, child, expression_text, float, index, index_value, rational,
+    required, type_name, Result, SpecError,
+};
+use crate::settings::EngineSettings;
+use algebra::{builtin, builtin_names, AlgebraError, LieAlgebra};
+use casimir::{discover_casimirs, DiscoveryReport, System, SystemError};
+use exact::{parse_expression, Poly, Rational, Symbols};
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// Where a Casimir came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CasimirSource {
+    /// Listed in the spec.
+    Spec,
+    /// The builtin algebra's generators.
+    Builtin,
+    /// Found by [`casimir::discover_casimirs`].
+    Discovered,
+}
+
+impl CasimirSource {
+    /// Name used in certificates.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            CasimirSource::Spec => "spec",
+            CasimirSource::Builtin => "builtin",
+            CasimirSource::Discovered => "discovered",
+        }
+    }
+}
+
+/// The stopping question: `eps` and `delta` with `eps > delta > 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stopping {
+    /// Threshold on `|dmu_t|_P^2`.
+    pub epsilon: f64,
+    /// Initial size `|dmu_0|_P^2`.
+    pub delta: f64,
+}
+
+/// A parsed, validated spec.
+#[derive(Clone, Debug)]
+pub struct Spec {
+    /// The spec's `name`.
+    pub name: String,
+    /// The spec exactly as given (embedded in certificates).
+    pub raw: Value,
+    /// The validated system.
+    pub system: System,
+    /// Where the Casimirs came from.
+    pub casimir_source: CasimirSource,
+    /// The discovery run, if Casimirs were discovered.
+    pub discovery: Option<DiscoveryReport>,
+    /// The builtin algebra's name, if one was used.
+    pub builtin: Option<String>,
+    /// Parameter values.
+    pub parameters: BTreeMap<String, Rational>,
+    /// The stopping question, if asked.
+    pub stopping: Option<Stopping>,
+    /// Settings in force.
+    pub settings: EngineSettings,
+}
+
+const TOP_KEYS: &[&str] = &[
+    "name",
+    "description",
+    "algebra",
+    "parameters",
+    "hamiltonian",
+    "casimirs",
+    "first_integrals",
+    "equilibrium",
+    "noise",
+    "stopping",
+    "settings",
+];
+
+/// Largest number of noise fields accepted.
+pub const MAX_NOISE_FIELDS: usize = 256;
+
+/// Parse a spec from JSON text.
+///
+/// ```
+/// let text = r#"{
+///   "name": "rb", "algebra": "so3",
+///   "parameters": {"I1": 3, "I2": 2, "I3": 1, "sigma": "3/10"},
+///   "hamiltonian": "Pi1^2/(2*I1) + Pi2^2/(2*I2) + Pi3^2/(2*I3)",
+///   "equilibrium": [1, 0, 0], "noise": [["sigma", 0, 0]]
+/// }"#;
+/// let spec = spec::parse_spec(text).unwrap();
+/// assert_eq!(spec.system.dim(), 3);
+/// let bad = text.replace("[\"sigma\", 0, 0]", "[\"sigma\", 0]");
+/// let err = spec::parse_spec(&bad).unwrap_err();
+/// assert_eq!(err.path, "$.noise[0]");
+/// ```
+pub fn parse_spec(text: &str) -> Result<Spec> {
+    let value: Value = serde_json::from_str(text)
+        .map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    spec_from_value(value)
+}
+
+/// Parse a spec from a JSON value.
+pub fn spec_from_value(value: Value) -> Result<Spec> {
+    let root = "$";
+    let map = as_object(&value, root)?;
+    check_keys(map, TOP_KEYS, root)?;
+    let name = as_str(required(map, "name", root)?, &child(root, "name"))?.to_string();
+    if name.trim().is_empty() {
+        return Err(SpecError::new(child(root, "name"), "must not be empty"));
+    }
+    if let Some(d) = map.get("description") {
+        as_str(d, &child(root, "description"))?;
+    }
+    let settings = EngineSettings::from_json(map.get("settings"), &child(root, "settings"))?;
+
+    // Algebra.
+    let algebra_path = child(root, "algebra");
+    let (algebra, builtin_casimirs, builtin_name) = read_algebra(required(map, "algebra", root)?, &algebra_path)?;
+    let n = algebra.dim();
+
+    // Parameters.
+    let mut symbols = Symbols::new(algebra.coordinates());
+    let mut parameters = BTreeMap::new();
+    if let Some(p) = map.get("parameters") {
+        let ppath = child(root, "parameters");
+        for (key, v) in as_object(p, &ppath)? {
+            let kpath = child(&ppath, key);
+            if !is_identifier(key) {
+                return Err(SpecError::new(kpath, format!("'{key}' is not a valid parameter name (letters, digits, '_')")));
+            }
+            if algebra.coordinates().contains(key) {
+                return Err(SpecError::new(kpath, format!("parameter '{key}' has the name of a coordinate")));
+            }
+            let r = rational(v, &kpath)?;
+            symbols.set_parameter(key, r.clone());
+            parameters.insert(key.clone(), r);
+        }
+    }
+    let poly = |v: &Value, path: &str| -> Result<Poly> {
+        let text = expression_text(v, path)?;
+        parse_expression(&text, &symbols).map_err(|e| SpecError::new(path, format!("in '{text}': {e}")))
+    };
+    let constant = |v: &Value, path: &str| -> Result<Rational> {
+        let p = poly(v, path)?;
+        p.constant_value().ok_or_else(|| {
+            SpecError::new(path, "must be a constant (it may use parameters but not coordinates)")
+        })
+    };
+
+    let hpath = child(root, "hamiltonian");
+    let hamiltonian = poly(required(map, "hamiltonian", root)?, &hpath)?;
+
+    let list = |key: &str| -> Result<Option<Vec<(Poly, String)>>> {
+        let Some(v) = map.get(key) else { return Ok(None) };
+        let path = child(root, key);
+        as_array(v, &path)?
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                let p = index(&path, i);
+                poly(e, &p).map(|x| (x, p))
+            })
+            .collect::<Result<Vec<_>>>()
+            .map(Some)
+    };
+    let given_casimirs = list("casimirs")?;
+    let first_integrals = list("first_integrals")?.unwrap_or_default();
+
+    let epath = child(root, "equilibrium");
+    let eq = as_array(required(map, "equilibrium", root)?, &epath)?;
+    if eq.len() != n {
+        return Err(SpecError::new(
+            &epath,
+            format!("expected {n} components (the algebra's dimension), got {}", eq.len()),
+        ));
+    }
+    let equilibrium = eq.iter().enumerate().map(|(i, v)| constant(v, &index(&epath, i))).collect::<Result<Vec<_>>>()?;
+
+    let npath = child(root, "noise");
+    let noise_list = as_array(required(map, "noise", root)?, &npath)?;
+    if noise_list.len() > MAX_NOISE_FIELDS {
+        return Err(SpecError::new(&npath, format!("at most {MAX_NOISE_FIELDS} noise fields are supported")));
+    }
+    let mut noise = Vec::new();
+    for (i, field) in noise_list.iter().enumerate() {
+        let fpath = index(&npath, i);
+        let comps = as_array(field, &fpath)?;
+        if comps.len() != n {
+            return Err(SpecError::new(
+                &fpath,
+                format!("expected {n} components (the algebra's dimension), got {}", comps.len()),
+            ));
+        }
+        noise.push(comps.iter().enumerate().map(|(j, v)| constant(v, &index(&fpath, j))).collect::<Result<Vec<_>>>()?);
+    }
+
+    let stopping = match map.get("stopping") {
+        None => None,
+        Some(v) => Some(read_stopping(v, &child(root, "stopping"))?),
+    };
+
+    // Casimirs: given, builtin, or discovered.
+    let (casimirs, casimir_paths, casimir_source, discovery) = match given_casimirs {
+        Some(list) => {
+            let (polys, paths): (Vec<_>, Vec<_>) = list.into_iter().unzip();
+            (polys, paths, CasimirSource::Spec, None)
+        }
+        None => match builtin_casimirs {
+            Some(texts) => {
+                let s = Symbols::new(algebra.coordinates());
+                let polys = texts
+                    .iter()
+                    .map(|t| parse_expression(t, &s).map_err(|e| SpecError::new(&algebra_path, format!("builtin Casimir '{t}': {e}"))))
+                    .collect::<Result<Vec<_>>>()?;
+                let paths = vec![algebra_path.clone(); polys.len()];
+                (polys, paths, CasimirSource::Builtin, None)
+            }
+            None => {
+                let report = discover_casimirs(&algebra, settings.discovery_degree, settings.discovery_max_unknowns);
+                let paths = vec![child(root, "casimirs"); report.casimirs.len()];
+                (report.casimirs.clone(), paths, CasimirSource::Discovered, Some(report))
+            }
+        },
+    };
+    let fi_paths: Vec<String> = (0..first_integrals.len()).map(|i| index(&child(root, "first_integrals"), i)).collect();
+    let first_integrals: Vec<Poly> = first_integrals.into_iter().map(|(p, _)| p).collect();
+
+    let system = System::new(algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| match &e {
+        SystemError::NotACasimir { index, .. } => SpecError::new(&casimir_paths[*index], e.to_string()),
+        SystemError::ConstantQuantity { what: "casimir", index } => SpecError::new(&casimir_paths[*index], e.to_string()),
+        SystemError::NotConserved { index, .. } | SystemError::ConstantQuantity { index, .. } => {
+            SpecError::new(&fi_paths[*index], e.to_string())
+        }
+        _ => SpecError::new(root, e.to_string()),
+    })?;
+    Ok(Spec {
+        name,
+        raw: value.clone(),
+        system,
+        casimir_source,
+        discovery,
+        builtin: builtin_name,
+        parameters,
+        stopping,
+        settings,
+    })
+}
+
+fn is_identifier(s: &str) -> bool {
+    let mut c = s.chars();
+    matches!(c.next(), Some(x) if x.is_ascii_alphabetic() || x == '_') && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
+}
+
+type AlgebraRead = (LieAlgebra, Option<Vec<&'static str>>, Option<String>);
+
+fn read_algebra(v: &Value, path: &str) -> Result<AlgebraRead> {
+    match v {
+        Value::String(name) => match builtin(name) {
+            Some(b) => Ok((b.algebra, Some(b.casimirs), Some(name.clone()))),
+            None => Err(SpecError::new(
+                path,
+                format!("unknown algebra '{name}' (builtins: {}; or give an object with coordinates and structure_constants)", builtin_names().join(", ")),
+            )),
+        },
+        Value::Object(map) => {
+            check_keys(map, &["name", "coordinates", "structure_constants"], path)?;
+            let label = match map.get("name") {
+                Some(n) => as_str(n, &child(path, "name"))?.to_string(),
+                None => "custom".to_string(),
+            };
+            let cpath = child(path, "coordinates");
+            let coords = as_array(required(map, "coordinates", path)?, &cpath)?
+                .iter()
+                .enumerate()
+                .map(|(i, c)| as_str(c, &index(&cpath, i)).map(str::to_string))
+                .collect::<Result<Vec<_>>>()?;
+            let spath = child(path, "structure_constants");
+            let rows_json = as_array(required(map, "structure_constants", path)?, &spath)?;
+            let max_rows = algebra::MAX_DIMENSION.pow(3);
+            if rows_json.len() > max_rows {
+                return Err(SpecError::new(&spath, format!("more than {max_rows} rows")));
+            }
+            let mut rows = Vec::with_capacity(rows_json.len());
+            for (i, r) in rows_json.iter().enumerate() {
+                let rpath = index(&spath, i);
+                let entries = as_array(r, &rpath)?;
+                if entries.len() != 4 {
+                    return Err(SpecError::new(
+                        &rpath,
+                        format!("expected a row [a, b, k, c] of 4 entries, got {}", entries.len()),
+                    ));
+                }
+                let a = index_value(&entries[0], &index(&rpath, 0))?;
+                let b = index_value(&entries[1], &index(&rpath, 1))?;
+                let k = index_value(&entries[2], &index(&rpath, 2))?;
+                let c = rational(&entries[3], &index(&rpath, 3))?;
+                rows.push((a, b, k, c));
+            }
+            let algebra = LieAlgebra::from_structure_constants(&label, &coords, &rows).map_err(|e| algebra_error(e, path))?;
+            Ok((algebra, None, None))
+        }
+        other => Err(SpecError::new(path, format!("expected a builtin name or an object, found {}", type_name(other)))),
+    }
+}
+
+fn algebra_error(e: AlgebraError, path: &str) -> SpecError {
+    let spath = child(path, "structure_constants");
+    let cpath = child(path, "coordinates");
+    let at = match &e {
+        AlgebraError::IndexOutOfRange { row, .. }
+        | AlgebraError::DiagonalEntry { row, .. }
+        | AlgebraError::Inconsistent { row, .. } => index(&spath, *row),
+        AlgebraError::InvalidCoordinateName { index: i, .. } | AlgebraError::DuplicateCoordinate { index: i, .. } => {
+            index(&cpath, *i)
+        }
+        AlgebraError::Empty | AlgebraError::TooLarge { .. } => cpath,
+        _ => spath,
+    };
+    SpecError::new(at, e.to_string())
+}
+
+fn read_stopping(v: &Value, path: &str) -> Result<Stopping> {
+    let map = as_object(v, path)?;
+    check_keys(map, &["epsilon", "delta"], path)?;
+    let epsilon = float(required(map, "epsilon", path)?, &child(path, "epsilon"))?;
+    let delta = float(required(map, "delta", path)?, &child(path, "delta"))?;
+    if delta <= 0.0 {
+        return Err(SpecError::new(child(path, "delta"), format!("must be positive, got {delta}")));
+    }
+    if epsilon <= delta {
+        return Err(SpecError::new(
+            child(path, "epsilon"),
+            format!("must exceed delta ({delta}), got {epsilon}: the stopping time ln(epsilon/delta)/Sigma^2 would not be positive"),
+        ));
+    }
+    Ok(Stopping { epsilon, delta })
+}

@@ -1,0 +1,171 @@
+//! `verify`: certify stochastic Lie–Poisson equilibria from JSON specs.
+//!
+//! * `verify` — certify every spec under `fixtures/`, re-check the committed
+//!   certificates, print a table;
+//! * `verify certify SPEC [-o CERT]` — certificate JSON on stdout (or CERT),
+//!   a short summary on stderr;
+//! * `verify check CERT...` — re-derive each certificate from its embedded
+//!   spec and compare.
+//!
+//! Exit status: 0 success (whatever the verdict), 1 a certificate failed its
+//! check or an internal failure, 2 bad input (the message names the JSON path).
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use serde_json::Value;
+use spec::{check_certificate, parse_spec, CheckError};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+mod table;
+
+#[derive(Parser)]
+#[command(name = "verify", version, about = "Stochastic energy–Casimir stability certificates")]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    /// Directory of fixture specs for the no-argument run.
+    #[arg(long, global = true)]
+    fixtures: Option<PathBuf>,
+    /// In the no-argument run, (re)write each fixture's certificate.
+    #[arg(long)]
+    write: bool,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Certify one spec.
+    Certify {
+        /// The spec (JSON).
+        spec: PathBuf,
+        /// Write the certificate here instead of stdout.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+    /// Re-check certificates.
+    Check {
+        /// Certificates (JSON).
+        #[arg(required = true)]
+        certificates: Vec<PathBuf>,
+    },
+}
+
+/// An outcome that maps to an exit status.
+enum Failure {
+    BadInput(String),
+    Failed(String),
+}
+
+fn read(path: &Path) -> Result<String, Failure> {
+    std::fs::read_to_string(path).map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))
+}
+
+fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failure> {
+    let text = read(spec_path)?;
+    let spec = parse_spec(&text).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
+    let cert = spec::certify(&spec);
+    let pretty = spec::to_pretty_json(&cert.json);
+    match output {
+        Some(path) => std::fs::write(path, pretty)
+            .map_err(|e| Failure::Failed(format!("{}: cannot write: {e}", path.display())))?,
+        None => print!("{pretty}"),
+    }
+    eprintln!("{}", summary(&cert.json));
+    Ok(())
+}
+
+/// One or two lines for a human.
+fn summary(cert: &Value) -> String {
+    let mut s = format!(
+        "{}: {} ({})",
+        cert["name"].as_str().unwrap_or("?"),
+        cert["verdict"].as_str().unwrap_or("?"),
+        cert["level"].as_str().unwrap_or("?")
+    );
+    if let Some(s2) = cert.get("sigma2") {
+        s.push_str(&format!(", Sigma^2 = {}", table::format_number(s2)));
+    }
+    if let Some(st) = cert.get("stopping") {
+        s.push_str(&format!(
+            ", T({}, {}) = {}",
+            table::format_number(&st["epsilon"]),
+            table::format_number(&st["delta"]),
+            table::format_number(&st["T"])
+        ));
+    }
+    if let Some(r) = cert["reason"].as_str() {
+        s.push_str(&format!("\n  {r}"));
+    }
+    s
+}
+
+fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
+    let mut failures = Vec::new();
+    let mut bad_input = Vec::new();
+    for path in paths {
+        let text = match read(path) {
+            Ok(t) => t,
+            Err(Failure::BadInput(m)) | Err(Failure::Failed(m)) => {
+                bad_input.push(m);
+                continue;
+            }
+        };
+        match check_certificate(&text) {
+            Ok(report) => {
+                let s2 = report.sigma2.map(|x| format!(", Sigma^2 = {x}")).unwrap_or_default();
+                println!("ok   {}: {} {}{}", path.display(), report.name, report.verdict, s2);
+            }
+            Err(CheckError::BadInput(e)) => {
+                eprintln!("BAD  {}: {e}", path.display());
+                bad_input.push(format!("{}: {e}", path.display()));
+            }
+            Err(e) => {
+                eprintln!("FAIL {}: {e}", path.display());
+                failures.push(format!("{}: {e}", path.display()));
+            }
+        }
+    }
+    if !failures.is_empty() {
+        return Err(Failure::Failed(format!("{} certificate(s) failed their check", failures.len())));
+    }
+    if !bad_input.is_empty() {
+        return Err(Failure::BadInput(bad_input.join("\n")));
+    }
+    Ok(())
+}
+
+fn fixtures_dir(given: Option<PathBuf>) -> PathBuf {
+    if let Some(d) = given {
+        return d;
+    }
+    let local = PathBuf::from("fixtures");
+    if local.is_dir() {
+        return local;
+    }
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures"))
+}
+
+fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Some(Command::Certify { spec, output }) => certify_command(&spec, output.as_deref()),
+        Some(Command::Check { certificates }) => check_command(&certificates),
+        None => table::fixtures_table(&fixtures_dir(cli.fixtures), cli.write)
+            .context("running the fixtures")
+            .map_err(|e| Failure::Failed(format!("{e:#}")))
+            .and_then(|status| status),
+    }
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Failed(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(1)
+        }
+        Err(Failure::BadInput(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(2)
+        }
+    }
+}
