@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 pub fn format_number(v: &Value) -> String {
     match v {
         Value::Number(n) => match n.as_f64() {
-            Some(x) if x == 0.0 => "0".into(),
+            Some(0.0) => "0".into(),
             Some(x) if (1e-3..1e5).contains(&x.abs()) => {
                 let s = format!("{x:.6}");
                 s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -97,8 +97,9 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
             status,
         ]);
     }
-    let widths: Vec<usize> =
-        (0..header.len()).map(|c| rows.iter().map(|r| r[c].len()).chain([header[c].len()]).max().unwrap_or(0)).collect();
+    let widths: Vec<usize> = (0..header.len())
+        .map(|c| rows.iter().map(|r| r[c].len()).chain([header[c].len()]).max().unwrap_or(0))
+        .collect();
     let line = |cells: &[String]| {
         cells.iter().zip(&widths).map(|(c, w)| format!("{c:<w$}")).collect::<Vec<_>>().join("  ").trim_end().to_string()
     };

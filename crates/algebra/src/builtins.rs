@@ -130,11 +130,7 @@ mod tests {
         let xi_u = [q(1), q(2), q(3), q(-1), q(4), q(2)];
         let mu = [q(2), q(-1), q(5), q(3), q(1), q(-2)];
         let cross = |a: &[Rational], b: &[Rational]| {
-            vec![
-                &a[1] * &b[2] - &a[2] * &b[1],
-                &a[2] * &b[0] - &a[0] * &b[2],
-                &a[0] * &b[1] - &a[1] * &b[0],
-            ]
+            vec![&a[1] * &b[2] - &a[2] * &b[1], &a[2] * &b[0] - &a[0] * &b[2], &a[0] * &b[1] - &a[1] * &b[0]]
         };
         let (xi, u) = xi_u.split_at(3);
         let (pi, gamma) = mu.split_at(3);

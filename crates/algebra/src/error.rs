@@ -1,7 +1,5 @@
 //! Errors raised while building a Lie algebra.
 
-use exact::Rational;
-
 /// Why a structure-constant table or a construction is not a Lie algebra.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
@@ -53,7 +51,7 @@ pub enum AlgebraError {
         /// Output index.
         k: usize,
         /// The value given.
-        value: Rational,
+        value: String,
     },
     /// Two rows disagree about `c^k_ab` (directly, or via antisymmetry).
     #[error("row {row} gives c^{k}_({a},{b}) = {value}, but row {earlier_row} implies {implied} (antisymmetry c^k_ab = -c^k_ba)")]
@@ -69,9 +67,9 @@ pub enum AlgebraError {
         /// Output index.
         k: usize,
         /// Value in the later row.
-        value: Rational,
+        value: String,
         /// Value implied by the earlier row.
-        implied: Rational,
+        implied: String,
     },
     /// The Jacobi identity fails.
     #[error("the Jacobi identity fails for (e_{a}, e_{b}, e_{c}): component {k} of [[e_a,e_b],e_c] + [[e_b,e_c],e_a] + [[e_c,e_a],e_b] is {value}")]
@@ -85,7 +83,7 @@ pub enum AlgebraError {
         /// Component that is nonzero.
         k: usize,
         /// Its value.
-        value: Rational,
+        value: String,
     },
     /// A representation matrix has the wrong size.
     #[error("representation matrix {index} is {rows}x{cols}, expected {dim}x{dim}")]

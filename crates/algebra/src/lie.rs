@@ -82,7 +82,7 @@ impl LieAlgebra {
             let (a, b, k) = (*a, *b, *k);
             if a == b {
                 if !c.is_zero() {
-                    return Err(AlgebraError::DiagonalEntry { row, a, k, value: c.clone() });
+                    return Err(AlgebraError::DiagonalEntry { row, a, k, value: c.to_string() });
                 }
                 continue;
             }
@@ -97,8 +97,8 @@ impl LieAlgebra {
                             a,
                             b,
                             k,
-                            value: c.clone(),
-                            implied,
+                            value: c.to_string(),
+                            implied: implied.to_string(),
                         });
                     }
                     Some(_) => {}
@@ -145,10 +145,7 @@ impl LieAlgebra {
 
     /// `c^k_ab`.
     pub fn structure_constant(&self, a: usize, b: usize, k: usize) -> Rational {
-        self.bracket_of_basis(a, b)
-            .iter()
-            .find(|(kk, _)| *kk == k)
-            .map_or_else(Rational::zero, |(_, c)| c.clone())
+        self.bracket_of_basis(a, b).iter().find(|(kk, _)| *kk == k).map_or_else(Rational::zero, |(_, c)| c.clone())
     }
 
     /// All nonzero structure constants as rows `(a, b, k, c)` with `a < b`.
@@ -263,7 +260,7 @@ impl LieAlgebra {
                     for k in 0..n {
                         let value = &t1[k] + &t2[k] + &t3[k];
                         if !value.is_zero() {
-                            return Err(AlgebraError::Jacobi { a, b, c, k, value });
+                            return Err(AlgebraError::Jacobi { a, b, c, k, value: value.to_string() });
                         }
                     }
                 }
@@ -284,10 +281,7 @@ impl LieAlgebra {
         let brackets = (0..n * n)
             .map(|ab| {
                 let (a, b) = (ab / n, ab % n);
-                self.brackets[ab]
-                    .iter()
-                    .map(|(k, c)| (*k, c * &scales[a] * &scales[b] / &scales[*k]))
-                    .collect()
+                self.brackets[ab].iter().map(|(k, c)| (*k, c * &scales[a] * &scales[b] / &scales[*k])).collect()
             })
             .collect();
         LieAlgebra { name: format!("{} (rescaled)", self.name), coordinates: self.coordinates.clone(), brackets }
@@ -344,12 +338,8 @@ impl LieAlgebra {
                 }
             }
         }
-        let coordinates: Vec<String> = self
-            .coordinates
-            .iter()
-            .cloned()
-            .chain(vector_coordinates.iter().map(|s| s.as_ref().to_string()))
-            .collect();
+        let coordinates: Vec<String> =
+            self.coordinates.iter().cloned().chain(vector_coordinates.iter().map(|s| s.as_ref().to_string())).collect();
         if dim > MAX_DIMENSION {
             return Err(AlgebraError::TooLarge { dim, max: MAX_DIMENSION });
         }
@@ -364,8 +354,7 @@ impl LieAlgebra {
         for (a, b, k, c) in other.structure_constant_rows() {
             rows.push((a + n, b + n, k + n, c));
         }
-        let coordinates: Vec<String> =
-            self.coordinates.iter().chain(other.coordinates.iter()).cloned().collect();
+        let coordinates: Vec<String> = self.coordinates.iter().chain(other.coordinates.iter()).cloned().collect();
         LieAlgebra::from_structure_constants(name, &coordinates, &rows)
     }
 
@@ -378,7 +367,11 @@ impl LieAlgebra {
     /// Rename the coordinates (same length, valid, distinct names).
     pub fn with_coordinates<S: AsRef<str>>(self, coordinates: &[S]) -> Result<Self, AlgebraError> {
         if coordinates.len() != self.dim() {
-            return Err(AlgebraError::WrongCount { what: "coordinate names", expected: self.dim(), got: coordinates.len() });
+            return Err(AlgebraError::WrongCount {
+                what: "coordinate names",
+                expected: self.dim(),
+                got: coordinates.len(),
+            });
         }
         let rows = self.structure_constant_rows();
         LieAlgebra::from_structure_constants(&self.name, coordinates, &rows)

@@ -39,7 +39,9 @@ pub fn lie_poisson_bracket(algebra: &LieAlgebra, f: &Poly, g: &Poly) -> Poly {
                 continue;
             }
             let coefficients: Vec<_> = (0..n)
-                .map(|k| bracket.iter().find(|(kk, _)| *kk == k).map_or_else(num_traits::Zero::zero, |(_, c)| c.clone()))
+                .map(|k| {
+                    bracket.iter().find(|(kk, _)| *kk == k).map_or_else(num_traits::Zero::zero, |(_, c)| c.clone())
+                })
                 .collect();
             let lambda_ab = Poly::linear(&coefficients);
             out = out.add(&df[a].mul(&dg[b]).mul(&lambda_ab));

@@ -37,7 +37,12 @@ pub struct SearchSettings {
 
 impl Default for SearchSettings {
     fn default() -> Self {
-        SearchSettings { definiteness_tolerance: 1e-9, max_iterations: 200, max_expansions: 4, max_denominator: 1_000_000 }
+        SearchSettings {
+            definiteness_tolerance: 1e-9,
+            max_iterations: 200,
+            max_expansions: 4,
+            max_denominator: 1_000_000,
+        }
     }
 }
 
@@ -203,13 +208,7 @@ fn rational_parameters(
     loop {
         let candidate: Option<Vec<Rational>> = t
             .iter()
-            .map(|&x| {
-                if x == 0.0 {
-                    Some(Rational::zero())
-                } else {
-                    best_rational_approximation(x, denominator)
-                }
-            })
+            .map(|&x| if x == 0.0 { Some(Rational::zero()) } else { best_rational_approximation(x, denominator) })
             .collect();
         if let Some(candidate) = candidate {
             let lambda = variation.family.at(&candidate);

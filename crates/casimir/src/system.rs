@@ -61,7 +61,11 @@ impl System {
             check_vars(format!("first integral {i}"), f)?;
         }
         if equilibrium.len() != n {
-            return Err(SystemError::WrongLength { what: "the equilibrium".into(), expected: n, got: equilibrium.len() });
+            return Err(SystemError::WrongLength {
+                what: "the equilibrium".into(),
+                expected: n,
+                got: equilibrium.len(),
+            });
         }
         for (i, s) in noise.iter().enumerate() {
             if s.len() != n {
@@ -140,10 +144,7 @@ impl System {
         self.conserved()
             .iter()
             .map(|(_, k)| {
-                self.noise
-                    .iter()
-                    .map(|s| lie_poisson_bracket(&self.algebra, k, &Poly::linear(s)).is_zero())
-                    .collect()
+                self.noise.iter().map(|s| lie_poisson_bracket(&self.algebra, k, &Poly::linear(s)).is_zero()).collect()
             })
             .collect()
     }

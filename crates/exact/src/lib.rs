@@ -33,8 +33,7 @@ mod poly;
 
 pub use matrix::{AffineSolution, Matrix};
 pub use number::{
-    best_rational_approximation, parse_number, rational_from_f64, rational_to_f64, NumberError,
-    Rational,
+    best_rational_approximation, parse_number, rational_from_f64, rational_to_f64, NumberError, Rational,
 };
-pub use parse::{parse_expression, ParseError, ParseErrorKind, Symbols, Limits};
+pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};
 pub use poly::{monomials_of_degree, Monomial, Poly};

@@ -136,8 +136,7 @@ impl Matrix {
 
     /// Whether the matrix equals its transpose.
     pub fn is_symmetric(&self) -> bool {
-        self.rows == self.cols
-            && (0..self.rows).all(|i| (0..i).all(|j| self[(i, j)] == self[(j, i)]))
+        self.rows == self.cols && (0..self.rows).all(|i| (0..i).all(|j| self[(i, j)] == self[(j, i)]))
     }
 
     /// `(self + selfᵀ)/2`.

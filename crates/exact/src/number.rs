@@ -21,7 +21,9 @@ pub enum NumberError {
     #[error("empty number")]
     Empty,
     /// The text is not an integer, a decimal literal or `p/q`.
-    #[error("'{text}' is not a number (expected an integer, a decimal such as 0.3 or 1e-3, or a rational such as 3/10)")]
+    #[error(
+        "'{text}' is not a number (expected an integer, a decimal such as 0.3 or 1e-3, or a rational such as 3/10)"
+    )]
     Malformed {
         /// The offending text.
         text: String,
@@ -174,11 +176,7 @@ pub fn rational_to_f64(r: &Rational) -> f64 {
     let nb = n.bits() as i64;
     let db = d.bits() as i64;
     let shift = nb - db;
-    let scaled = if shift > 60 {
-        Rational::new(n.clone(), d.clone() << (shift - 60) as usize)
-    } else {
-        r.clone()
-    };
+    let scaled = if shift > 60 { Rational::new(n.clone(), d.clone() << (shift - 60) as usize) } else { r.clone() };
     let v = scaled.to_f64().unwrap_or(if r.is_negative() { f64::NEG_INFINITY } else { f64::INFINITY });
     if shift > 60 {
         v * 2f64.powi((shift - 60) as i32)
@@ -283,6 +281,6 @@ mod tests {
     fn continued_fraction_rounding() {
         assert_eq!(best_rational_approximation(0.333333333333, 1000).unwrap(), q(1, 3));
         assert_eq!(best_rational_approximation(-2.5, 10).unwrap(), q(-5, 2));
-        assert_eq!(best_rational_approximation(3.141592653589793, 1000).unwrap(), q(355, 113));
+        assert_eq!(best_rational_approximation(std::f64::consts::PI, 1000).unwrap(), q(355, 113));
     }
 }

@@ -111,7 +111,9 @@ pub enum ParseErrorKind {
         known: Vec<String>,
     },
     /// A function call: only polynomials are allowed here.
-    #[error("'{0}(...)' is a function call; expressions here must be polynomials (use only + - * / ^ and parentheses)")]
+    #[error(
+        "'{0}(...)' is a function call; expressions here must be polynomials (use only + - * / ^ and parentheses)"
+    )]
     FunctionCall(String),
     /// Division by something that is not a constant.
     #[error("division by a polynomial that is not a constant; expressions must be polynomials")]
@@ -280,7 +282,12 @@ impl Parser<'_> {
         let degree = p.total_degree();
         if degree > l.max_degree || p.num_terms() > l.max_terms {
             return self.err(
-                ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms: p.num_terms(), max_terms: l.max_terms },
+                ParseErrorKind::TooLarge {
+                    degree,
+                    max_degree: l.max_degree,
+                    terms: p.num_terms(),
+                    max_terms: l.max_terms,
+                },
                 position,
             );
         }
@@ -394,7 +401,12 @@ impl Parser<'_> {
             let degree = base.total_degree().saturating_mul(m);
             if degree > l.max_degree {
                 return self.err(
-                    ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms: base.num_terms(), max_terms: l.max_terms },
+                    ParseErrorKind::TooLarge {
+                        degree,
+                        max_degree: l.max_degree,
+                        terms: base.num_terms(),
+                        max_terms: l.max_terms,
+                    },
                     at,
                 );
             }

@@ -241,10 +241,7 @@ impl Poly {
         assert_eq!(x.len(), self.nvars);
         self.terms
             .iter()
-            .map(|(m, c)| {
-                rational_to_f64(c)
-                    * m.iter().zip(x).map(|(&e, &xi)| xi.powi(e as i32)).product::<f64>()
-            })
+            .map(|(m, c)| rational_to_f64(c) * m.iter().zip(x).map(|(&e, &xi)| xi.powi(e as i32)).product::<f64>())
             .sum()
     }
 

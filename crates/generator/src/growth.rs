@@ -92,4 +92,3 @@ pub fn growth_constant(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstan
         relative_residual,
     })
 }
-

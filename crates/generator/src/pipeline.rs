@@ -59,9 +59,15 @@ impl Verdict {
 
     /// Parse a certificate's verdict name.
     pub fn from_name(name: &str) -> Option<Self> {
-        [Verdict::Stable, Verdict::LinearlyUnstable, Verdict::Inconclusive, Verdict::NotAnEquilibrium, Verdict::NoiseIncompatible]
-            .into_iter()
-            .find(|v| v.as_str() == name)
+        [
+            Verdict::Stable,
+            Verdict::LinearlyUnstable,
+            Verdict::Inconclusive,
+            Verdict::NotAnEquilibrium,
+            Verdict::NoiseIncompatible,
+        ]
+        .into_iter()
+        .find(|v| v.as_str() == name)
     }
 }
 

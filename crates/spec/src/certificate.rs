@@ -33,7 +33,13 @@ fn float(x: f64) -> Value {
     if x.is_finite() {
         json!(x)
     } else {
-        Value::String(if x > 0.0 { "infinity".into() } else if x < 0.0 { "-infinity".into() } else { "nan".into() })
+        Value::String(if x > 0.0 {
+            "infinity".into()
+        } else if x < 0.0 {
+            "-infinity".into()
+        } else {
+            "nan".into()
+        })
     }
 }
 
@@ -57,7 +63,9 @@ fn level_and_checks(a: &Analysis) -> (&'static str, Value) {
                 "sigma2": "floating point (generalized symmetric eigenproblem)"
             }),
         ),
-        Verdict::LinearlyUnstable => ("numerical", json!({ "eigenvalue": "floating point (Schur form), real part above tolerance" })),
+        Verdict::LinearlyUnstable => {
+            ("numerical", json!({ "eigenvalue": "floating point (Schur form), real part above tolerance" }))
+        }
         Verdict::NotAnEquilibrium => ("exact", json!({ "equilibrium_residual": "exact (rational)" })),
         Verdict::NoiseIncompatible => ("exact", json!({ "noise_residuals": "exact (rational)" })),
         Verdict::Inconclusive => ("numerical", json!({ "search": "floating point search; no claim is made" })),

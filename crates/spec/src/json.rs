@@ -79,7 +79,10 @@ pub(crate) fn rational(v: &Value, path: &str) -> Result<Rational> {
         Value::Number(n) => n.to_string(),
         Value::String(s) => s.clone(),
         other => {
-            return Err(SpecError::new(path, format!("expected a number or a rational string, found {}", type_name(other))))
+            return Err(SpecError::new(
+                path,
+                format!("expected a number or a rational string, found {}", type_name(other)),
+            ))
         }
     };
     parse_number(&text).map_err(|e| SpecError::new(path, e.to_string()))
@@ -91,8 +94,7 @@ pub(crate) fn index_value(v: &Value, path: &str) -> Result<usize> {
     if !r.is_integer() || r < Rational::from_integer(0.into()) {
         return Err(SpecError::new(path, format!("expected a non-negative integer index, found {r}")));
     }
-    num_traits::ToPrimitive::to_usize(&r.to_integer())
-        .ok_or_else(|| SpecError::new(path, "index is too large"))
+    num_traits::ToPrimitive::to_usize(&r.to_integer()).ok_or_else(|| SpecError::new(path, "index is too large"))
 }
 
 /// A finite double from a JSON number or numeric string.
@@ -105,6 +107,9 @@ pub(crate) fn expression_text(v: &Value, path: &str) -> Result<String> {
     match v {
         Value::String(s) => Ok(s.clone()),
         Value::Number(n) => Ok(n.to_string()),
-        other => Err(SpecError::new(path, format!("expected an expression (a string or a number), found {}", type_name(other)))),
+        other => Err(SpecError::new(
+            path,
+            format!("expected an expression (a string or a number), found {}", type_name(other)),
+        )),
     }
 }

@@ -2,8 +2,8 @@
 //! error named by its JSON path.
 
 use crate::json::{
-    as_array, as_object, as_str, check_keys, child, expression_text, float, index, index_value, rational,
-    required, type_name, Result, SpecError,
+    as_array, as_object, as_str, check_keys, child, expression_text, float, index, index_value, rational, required,
+    type_name, Result, SpecError,
 };
 use crate::settings::EngineSettings;
 use algebra::{builtin, builtin_names, AlgebraError, LieAlgebra};
@@ -99,8 +99,7 @@ pub const MAX_NOISE_FIELDS: usize = 256;
 /// assert_eq!(err.path, "$.noise[0]");
 /// ```
 pub fn parse_spec(text: &str) -> Result<Spec> {
-    let value: Value = serde_json::from_str(text)
-        .map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    let value: Value = serde_json::from_str(text).map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
     spec_from_value(value)
 }
 
@@ -131,7 +130,10 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
         for (key, v) in as_object(p, &ppath)? {
             let kpath = child(&ppath, key);
             if !is_identifier(key) {
-                return Err(SpecError::new(kpath, format!("'{key}' is not a valid parameter name (letters, digits, '_')")));
+                return Err(SpecError::new(
+                    kpath,
+                    format!("'{key}' is not a valid parameter name (letters, digits, '_')"),
+                ));
             }
             if algebra.coordinates().contains(key) {
                 return Err(SpecError::new(kpath, format!("parameter '{key}' has the name of a coordinate")));
@@ -147,9 +149,8 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
     };
     let constant = |v: &Value, path: &str| -> Result<Rational> {
         let p = poly(v, path)?;
-        p.constant_value().ok_or_else(|| {
-            SpecError::new(path, "must be a constant (it may use parameters but not coordinates)")
-        })
+        p.constant_value()
+            .ok_or_else(|| SpecError::new(path, "must be a constant (it may use parameters but not coordinates)"))
     };
 
     let hpath = child(root, "hamiltonian");
@@ -215,7 +216,10 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
                 let s = Symbols::new(algebra.coordinates());
                 let polys = texts
                     .iter()
-                    .map(|t| parse_expression(t, &s).map_err(|e| SpecError::new(&algebra_path, format!("builtin Casimir '{t}': {e}"))))
+                    .map(|t| {
+                        parse_expression(t, &s)
+                            .map_err(|e| SpecError::new(&algebra_path, format!("builtin Casimir '{t}': {e}")))
+                    })
                     .collect::<Result<Vec<_>>>()?;
                 let paths = vec![algebra_path.clone(); polys.len()];
                 (polys, paths, CasimirSource::Builtin, None)
@@ -230,14 +234,17 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
     let fi_paths: Vec<String> = (0..first_integrals.len()).map(|i| index(&child(root, "first_integrals"), i)).collect();
     let first_integrals: Vec<Poly> = first_integrals.into_iter().map(|(p, _)| p).collect();
 
-    let system = System::new(algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| match &e {
-        SystemError::NotACasimir { index, .. } => SpecError::new(&casimir_paths[*index], e.to_string()),
-        SystemError::ConstantQuantity { what: "casimir", index } => SpecError::new(&casimir_paths[*index], e.to_string()),
-        SystemError::NotConserved { index, .. } | SystemError::ConstantQuantity { index, .. } => {
-            SpecError::new(&fi_paths[*index], e.to_string())
-        }
-        _ => SpecError::new(root, e.to_string()),
-    })?;
+    let system =
+        System::new(algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| match &e {
+            SystemError::NotACasimir { index, .. } => SpecError::new(&casimir_paths[*index], e.to_string()),
+            SystemError::ConstantQuantity { what: "casimir", index } => {
+                SpecError::new(&casimir_paths[*index], e.to_string())
+            }
+            SystemError::NotConserved { index, .. } | SystemError::ConstantQuantity { index, .. } => {
+                SpecError::new(&fi_paths[*index], e.to_string())
+            }
+            _ => SpecError::new(root, e.to_string()),
+        })?;
     Ok(Spec {
         name,
         raw: value.clone(),
@@ -253,7 +260,8 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
 
 fn is_identifier(s: &str) -> bool {
     let mut c = s.chars();
-    matches!(c.next(), Some(x) if x.is_ascii_alphabetic() || x == '_') && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
+    matches!(c.next(), Some(x) if x.is_ascii_alphabetic() || x == '_')
+        && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
 }
 
 type AlgebraRead = (LieAlgebra, Option<Vec<&'static str>>, Option<String>);

@@ -53,18 +53,16 @@ impl EngineSettings {
                 "definiteness_tolerance" => {
                     s.pipeline.search.definiteness_tolerance = in_range(float(v, &p)?, 1e-15, 0.5, &p)?
                 }
-                "search_iterations" => s.pipeline.search.max_iterations = in_range(index_value(v, &p)?, 1, 100_000, &p)?,
+                "search_iterations" => {
+                    s.pipeline.search.max_iterations = in_range(index_value(v, &p)?, 1, 100_000, &p)?
+                }
                 "search_expansions" => s.pipeline.search.max_expansions = in_range(index_value(v, &p)?, 0, 10, &p)?,
                 "max_denominator" => {
                     s.pipeline.search.max_denominator = in_range(index_value(v, &p)? as u64, 16, 1_000_000_000_000, &p)?
                 }
-                "instability_tolerance" => {
-                    s.pipeline.instability_tolerance = in_range(float(v, &p)?, 1e-15, 0.5, &p)?
-                }
+                "instability_tolerance" => s.pipeline.instability_tolerance = in_range(float(v, &p)?, 1e-15, 0.5, &p)?,
                 "discovery_degree" => s.discovery_degree = in_range(index_value(v, &p)?, 0, 8, &p)? as u32,
-                "discovery_max_unknowns" => {
-                    s.discovery_max_unknowns = in_range(index_value(v, &p)?, 1, 20_000, &p)?
-                }
+                "discovery_max_unknowns" => s.discovery_max_unknowns = in_range(index_value(v, &p)?, 1, 20_000, &p)?,
                 _ => unreachable!("keys checked above"),
             }
         }

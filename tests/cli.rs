@@ -1,0 +1,286 @@
+//! End-to-end tests of the `verify` binary: every verdict path, bad input
+//! (exit status 2 and the JSON path in the message), the fixture table, and
+//! tampered certificates (exit status 1).
+
+mod common;
+
+use common::*;
+use serde_json::Value;
+use std::io::Write;
+use std::process::{Command, Output};
+
+fn verify(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
+}
+
+fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("verify-cli-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::File::create(&path).unwrap().write_all(contents.as_bytes()).unwrap();
+    path
+}
+
+fn certify_text(name: &str, text: &str) -> Output {
+    let path = temp_file(name, text);
+    verify(&["certify", path.to_str().unwrap()])
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Certify a fixture through the CLI and return the certificate.
+fn certify_fixture(name: &str) -> Value {
+    let out = verify(&["certify", fixture_path(name).to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn every_verdict_path_through_the_cli() {
+    let cases = [
+        ("rigid-body-major-axis.json", "stable"),
+        ("rigid-body-minor-axis.json", "stable"),
+        ("rigid-body-intermediate-axis.json", "linearly_unstable"),
+        ("rigid-body-spherical.json", "inconclusive"),
+        ("rigid-body-not-equilibrium.json", "not_an_equilibrium"),
+        ("rigid-body-isotropic-noise.json", "noise_incompatible"),
+        ("lagrange-top-slow.json", "linearly_unstable"),
+    ];
+    for (name, verdict) in cases {
+        let cert = certify_fixture(name);
+        assert_eq!(cert["verdict"], verdict, "{name}");
+        assert!(cert.get("sigma2").is_some() == (verdict == "stable"), "{name}: sigma2 present iff stable");
+    }
+}
+
+#[test]
+fn minor_axis_is_negative_definite() {
+    let cert = certify_fixture("rigid-body-minor-axis.json");
+    assert_eq!(cert["casimir_choice"]["sign"], -1);
+    // Sigma^2 = sigma^2 I1 (I2 - I3)/(I3 (I1 - I2)) = 0.09 * 1 * (-1) / (3 * (-1)) = 0.03
+    assert!(rel(cert["sigma2"].as_f64().unwrap(), 0.03) < 1e-13);
+}
+
+#[test]
+fn not_an_equilibrium_reports_the_residual() {
+    let cert = certify_fixture("rigid-body-not-equilibrium.json");
+    // Pi = (1,1,0), Omega = (1/3, 1/2, 0): Pi x Omega = (0, 0, 1/2 - 1/3) = (0, 0, 1/6)
+    assert_eq!(cert["equilibrium"]["residual"], serde_json::json!(["0", "0", "1/6"]));
+}
+
+#[test]
+fn incompatible_noise_reports_residuals_and_the_compatible_noise() {
+    let cert = certify_fixture("rigid-body-isotropic-noise.json");
+    // ad*_{sigma e2} (1,0,0) = (1,0,0) x (0, 3/10, 0) = (0, 0, 3/10); e3 gives (0, -3/10, 0).
+    assert_eq!(cert["noise"]["residuals"][0], serde_json::json!(["0", "0", "0"]));
+    assert_eq!(cert["noise"]["residuals"][1], serde_json::json!(["0", "0", "3/10"]));
+    assert_eq!(cert["noise"]["residuals"][2], serde_json::json!(["0", "-3/10", "0"]));
+    assert_eq!(cert["noise"]["isotropy_basis"], serde_json::json!([["1", "0", "0"]]));
+}
+
+#[test]
+fn unstable_certificate_carries_the_eigenpair() {
+    let cert = certify_fixture("rigid-body-intermediate-axis.json");
+    // I = (2, 3, 1): a2 = 1/3 - 1/2 = -1/6, a3 = 1 - 1/2 = 1/2, rate sqrt(1/12).
+    let re = cert["instability"]["eigenvalue"]["re"].as_f64().unwrap();
+    assert!(rel(re, (1.0f64 / 12.0).sqrt()) < 1e-12, "{re}");
+    assert_eq!(cert["instability"]["eigenvector"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn summary_goes_to_stderr_and_output_file_is_written() {
+    let out_path = std::env::temp_dir().join(format!("verify-cli-out-{}.json", std::process::id()));
+    let out = verify(&[
+        "certify",
+        fixture_path("rigid-body-major-axis.json").to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(out.stdout.is_empty());
+    let err = stderr(&out);
+    assert!(err.contains("rigid-body-major-axis: stable") && err.contains("Sigma^2 = 0.27"), "{err}");
+    let cert: Value = serde_json::from_str(&std::fs::read_to_string(&out_path).unwrap()).unwrap();
+    assert_eq!(cert["verdict"], "stable");
+    let check = verify(&["check", out_path.to_str().unwrap()]);
+    assert_eq!(check.status.code(), Some(0), "{}", stderr(&check));
+}
+
+#[test]
+fn fixture_table_lists_every_fixture() {
+    let out = verify(&["--fixtures", fixture_path("").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout);
+    for name in fixture_specs() {
+        let stem = name.trim_end_matches(".json");
+        let line = table.lines().find(|l| l.starts_with(stem)).unwrap_or_else(|| panic!("{stem} missing:\n{table}"));
+        assert!(line.ends_with("checked"), "{line}");
+    }
+}
+
+/// Each bad input: exit 2 and a message naming the JSON path.
+#[test]
+fn bad_input_is_exit_2_with_the_json_path() {
+    let good = fixture("rigid-body-major-axis.json");
+    let structure =
+        r#"{"coordinates": ["a", "b", "c"], "structure_constants": [[0, 1, 1, 1], [0, 2, 1, 1], [1, 2, 0, 1]]}"#;
+    let cases: Vec<(&str, String, &str, &str)> = vec![
+        ("malformed JSON", r#"{"name": "x", "#.into(), "$:", "malformed JSON"),
+        ("unknown field", good.replacen(r#""name""#, r#""nmae""#, 1), "$.nmae", "unknown field"),
+        ("unknown algebra", good.replace(r#""so3""#, r#""so5""#), "$.algebra", "unknown algebra 'so5'"),
+        ("equilibrium length", good.replace("[1, 0, 0]", "[1, 0]"), "$.equilibrium", "expected 3 components"),
+        (
+            "noise length",
+            good.replace(r#"[["sigma", 0, 0]]"#, r#"[["sigma", 0, 0, 0]]"#),
+            "$.noise[0]",
+            "expected 3 components",
+        ),
+        ("non-finite string", good.replace(r#""I1": 3"#, r#""I1": "inf""#), "$.parameters.I1", "not a finite number"),
+        ("non-finite literal", good.replace(r#""I1": 3"#, r#""I1": 1e999"#), "$.parameters.I1", "not a finite number"),
+        (
+            "nan in expression",
+            good.replace("[1, 0, 0]", r#"["NaN", 0, 0]"#),
+            "$.equilibrium[0]",
+            "unknown symbol 'NaN'",
+        ),
+        ("unknown symbol", good.replace("Pi3^2/(2*I3)", "Pi3^2/(2*I4)"), "$.hamiltonian", "unknown symbol 'I4'"),
+        (
+            "division by a polynomial",
+            good.replace("Pi3^2/(2*I3)", "1/Pi3"),
+            "$.hamiltonian",
+            "division by a polynomial",
+        ),
+        ("non-polynomial", good.replace("Pi3^2/(2*I3)", "sin(Pi3)"), "$.hamiltonian", "function call"),
+        (
+            "Jacobi",
+            good.replace(r#""so3""#, structure),
+            "$.algebra.structure_constants",
+            "Jacobi identity fails for (e_0, e_1, e_2)",
+        ),
+        (
+            "missing field",
+            good.replace(r#""hamiltonian": "Pi1^2/(2*I1) + Pi2^2/(2*I2) + Pi3^2/(2*I3)","#, ""),
+            "$.hamiltonian",
+            "missing",
+        ),
+        ("wrong type", good.replace(r#"[["sigma", 0, 0]]"#, r#""sigma""#), "$.noise", "expected an array"),
+        (
+            "false Casimir",
+            good.replace(r#""(Pi1^2 + Pi2^2 + Pi3^2)/2""#, r#""Pi1^2""#),
+            "$.casimirs[0]",
+            "is not a Casimir",
+        ),
+        (
+            "false first integral",
+            good.replace(r#""first_integrals": []"#, r#""first_integrals": ["Pi1"]"#),
+            "$.first_integrals[0]",
+            "not conserved",
+        ),
+        (
+            "epsilon below delta",
+            good.replace(r#""epsilon": 0.1"#, r#""epsilon": 0.0001"#),
+            "$.stopping.epsilon",
+            "must exceed delta",
+        ),
+        (
+            "parameter named like a coordinate",
+            good.replace(r#""I1": 3"#, r#""Pi1": 3, "I1": 3"#),
+            "$.parameters.Pi1",
+            "name of a coordinate",
+        ),
+        (
+            "coordinate in the equilibrium",
+            good.replace("[1, 0, 0]", r#"[1, "Pi2", 0]"#),
+            "$.equilibrium[1]",
+            "must be a constant",
+        ),
+        (
+            "diagonal structure constant",
+            good.replace(r#""so3""#, r#"{"coordinates": ["a", "b"], "structure_constants": [[1, 1, 0, 2]]}"#),
+            "$.algebra.structure_constants[0]",
+            "antisymmetry",
+        ),
+        (
+            "index out of range",
+            good.replace(r#""so3""#, r#"{"coordinates": ["a", "b"], "structure_constants": [[0, 1, 5, 1]]}"#),
+            "$.algebra.structure_constants[0]",
+            "out of range",
+        ),
+        ("not an object", "[1, 2, 3]".into(), "$:", "expected an object"),
+        ("exponent too large", good.replace("Pi1^2/(2*I1)", "Pi1^200"), "$.hamiltonian", "too large"),
+        (
+            "bad setting",
+            good.replace(
+                r#""name": "rigid-body-major-axis","#,
+                r#""name": "x", "settings": {"definiteness_tolerance": 2},"#,
+            ),
+            "$.settings.definiteness_tolerance",
+            "must be between",
+        ),
+    ];
+    for (what, text, path, message) in cases {
+        let out = certify_text(&format!("{}.json", what.replace(' ', "-")), &text);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{what}: status {:?}, stderr {err}", out.status);
+        assert!(err.contains(path), "{what}: stderr lacks the path {path}: {err}");
+        assert!(err.contains(message), "{what}: stderr lacks '{message}': {err}");
+        assert!(!err.contains("panicked"), "{what}: {err}");
+        assert!(out.stdout.is_empty(), "{what}: no certificate on bad input");
+    }
+}
+
+#[test]
+fn missing_file_is_bad_input() {
+    let out = verify(&["certify", "/nonexistent/spec.json"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = verify(&["check", "/nonexistent/cert.json"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+/// Single-number alterations of a certificate each fail `check` with exit 1.
+#[test]
+fn tampered_certificates_fail_check() {
+    let cert = certify_fixture("heavy-top-asymmetric.json");
+    let sigma2 = cert["sigma2"].as_f64().unwrap();
+    let mut tampers: Vec<(&str, Value)> = Vec::new();
+    let mut c = cert.clone();
+    c["sigma2"] = serde_json::json!(sigma2 * (1.0 - 1e-6));
+    tampers.push(("sigma2 lowered", c));
+    let mut c = cert.clone();
+    c["verdict"] = serde_json::json!("linearly_unstable");
+    tampers.push(("verdict flipped", c));
+    let mut c = cert.clone();
+    c["P"][0][0] = serde_json::json!("2");
+    tampers.push(("P entry", c));
+    let mut c = cert.clone();
+    c["Q"][0][0] = serde_json::json!("0");
+    tampers.push(("Q entry", c));
+    let mut c = cert.clone();
+    c["casimir_choice"]["multipliers"][0] = serde_json::json!("4");
+    tampers.push(("multiplier", c));
+    let mut c = cert.clone();
+    c["spec"]["parameters"]["mgl"] = serde_json::json!(2);
+    tampers.push(("spec parameter", c));
+    let mut c = cert.clone();
+    c["stopping"]["T"] = serde_json::json!(100.0);
+    tampers.push(("stopping time", c));
+    for (what, c) in tampers {
+        let path = temp_file(&format!("tampered-{}.json", what.replace(' ', "-")), &c.to_string());
+        let out = verify(&["check", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(1), "{what}: {}", stderr(&out));
+        assert!(stderr(&out).contains("check failed at $."), "{what}: {}", stderr(&out));
+    }
+    // The untouched certificate passes.
+    let path = temp_file("untouched.json", &cert.to_string());
+    assert_eq!(verify(&["check", path.to_str().unwrap()]).status.code(), Some(0));
+}
+
+#[test]
+fn malformed_certificate_is_bad_input() {
+    let path = temp_file("not-a-cert.json", r#"{"verdict": "stable"}"#);
+    let out = verify(&["check", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("$.spec"));
+}

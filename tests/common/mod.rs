@@ -1,0 +1,83 @@
+//! Shared helpers and proptest generators for the workspace tests.
+#![allow(dead_code)]
+
+use exact::Rational;
+use proptest::prelude::*;
+use std::path::PathBuf;
+
+/// Path of a file under `fixtures/`.
+pub fn fixture_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("fixtures").join(name)
+}
+
+/// Text of a fixture spec.
+pub fn fixture(name: &str) -> String {
+    std::fs::read_to_string(fixture_path(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Every fixture spec (not certificates), sorted.
+pub fn fixture_specs() -> Vec<String> {
+    let dir = fixture_path("");
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".json") && !n.ends_with(".cert.json"))
+        .collect();
+    names.sort();
+    names
+}
+
+/// `n/d` as an exact rational.
+pub fn q(n: i64, d: i64) -> Rational {
+    Rational::new(n.into(), d.into())
+}
+
+/// A positive rational `k/100` with `k` in `lo..=hi` (so values in `[lo/100, hi/100]`).
+pub fn hundredths(lo: i64, hi: i64) -> impl Strategy<Value = Rational> {
+    (lo..=hi).prop_map(|k| q(k, 100))
+}
+
+/// A rigid-body spec on so3 about the e1 axis with noise sigma e1.
+pub fn rigid_body_spec(i: [&Rational; 3], sigma: &Rational) -> String {
+    format!(
+        r#"{{"name": "rb", "algebra": "so3",
+            "parameters": {{"I1": "{}", "I2": "{}", "I3": "{}", "sigma": "{}"}},
+            "hamiltonian": "Pi1^2/(2*I1) + Pi2^2/(2*I2) + Pi3^2/(2*I3)",
+            "equilibrium": [1, 0, 0], "noise": [["sigma", 0, 0]],
+            "stopping": {{"epsilon": 0.1, "delta": 0.001}}}}"#,
+        i[0], i[1], i[2], sigma
+    )
+}
+
+/// A sleeping heavy top on se3 (builtin Casimirs), with an optional first
+/// integral `Pi3`.
+pub fn heavy_top_spec(i: [&Rational; 3], mgl: &Rational, p: &Rational, sigma: &Rational, with_pi3: bool) -> String {
+    format!(
+        r#"{{"name": "ht", "algebra": "se3",
+            "parameters": {{"I1": "{}", "I2": "{}", "I3": "{}", "mgl": "{}", "p": "{}", "sigma": "{}"}},
+            "hamiltonian": "Pi1^2/(2*I1) + Pi2^2/(2*I2) + Pi3^2/(2*I3) + mgl*Gamma3",
+            "first_integrals": {},
+            "equilibrium": [0, 0, "p", 0, 0, 1], "noise": [[0, 0, "sigma", 0, 0, 0]]}}"#,
+        i[0],
+        i[1],
+        i[2],
+        mgl,
+        p,
+        sigma,
+        if with_pi3 { r#"["Pi3"]"# } else { "[]" }
+    )
+}
+
+/// Relative difference.
+pub fn rel(a: f64, b: f64) -> f64 {
+    if a == b {
+        0.0
+    } else {
+        (a - b).abs() / a.abs().max(b.abs())
+    }
+}
+
+/// Exact rational to double.
+pub fn f(r: &Rational) -> f64 {
+    exact::rational_to_f64(r)
+}

@@ -1,0 +1,86 @@
+//! No input makes the engine panic or hang: random text, and random mutations
+//! of a valid spec, go through parsing and (when valid) certification.
+
+mod common;
+
+use common::*;
+use proptest::prelude::*;
+use serde_json::Value;
+
+fn leaf() -> impl Strategy<Value = Value> {
+    prop_oneof![
+        Just(Value::Null),
+        any::<bool>().prop_map(Value::Bool),
+        (-1000i64..1000).prop_map(|n| Value::from(n)),
+        "[-+*/^()a-zA-Z0-9_. ]{0,24}".prop_map(Value::String),
+        Just(Value::String("Pi1^64*Pi2^64".into())),
+        Just(Value::String("1e400".into())),
+        Just(Value::Array(vec![])),
+        Just(serde_json::json!([0, 0, 0])),
+        Just(serde_json::json!({})),
+    ]
+}
+
+/// Replace the value at a pseudo-randomly chosen position of the tree.
+fn mutate(v: &mut Value, choice: &mut u64, replacement: &Value) -> bool {
+    *choice = choice.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let here = (*choice >> 33) % 4 == 0;
+    match v {
+        Value::Object(map) => {
+            let keys: Vec<String> = map.keys().cloned().collect();
+            for k in keys {
+                if here || mutate(map.get_mut(&k).unwrap(), choice, replacement) {
+                    if here {
+                        map.insert(k, replacement.clone());
+                    }
+                    return true;
+                }
+            }
+            false
+        }
+        Value::Array(items) => {
+            for item in items.iter_mut() {
+                if mutate(item, choice, replacement) {
+                    return true;
+                }
+            }
+            if here && !items.is_empty() {
+                items[0] = replacement.clone();
+                return true;
+            }
+            false
+        }
+        _ => false,
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(feature = "heavy-tests") { 20_000 } else { 300 }))]
+
+    #[test]
+    fn random_text_never_panics(text in ".{0,200}") {
+        let _ = spec::parse_spec(&text);
+        let _ = spec::check_certificate(&text);
+        let s = exact::Symbols::new(&["x", "y"]);
+        let _ = exact::parse_expression(&text, &s);
+    }
+
+    #[test]
+    fn random_expressions_never_panic(text in "[-+*/^()xy0-9. e]{0,60}") {
+        let s = exact::Symbols::new(&["x", "y"]);
+        let _ = exact::parse_expression(&text, &s);
+    }
+
+    #[test]
+    fn mutated_specs_never_panic(which in 0usize..64, seed in any::<u64>(), replacement in leaf()) {
+        let names = fixture_specs();
+        let mut v: Value = serde_json::from_str(&fixture(&names[which % names.len()])).unwrap();
+        let mut choice = seed;
+        mutate(&mut v, &mut choice, &replacement);
+        if let Ok(spec) = spec::spec_from_value(v) {
+            let cert = spec::certify(&spec);
+            // Whatever the verdict, the certificate re-checks.
+            prop_assert!(spec::check_certificate_value(&cert.json).is_ok());
+        }
+    }
+}
