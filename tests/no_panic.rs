@@ -11,7 +11,7 @@ fn leaf() -> impl Strategy<Value = Value> {
     prop_oneof![
         Just(Value::Null),
         any::<bool>().prop_map(Value::Bool),
-        (-1000i64..1000).prop_map(|n| Value::from(n)),
+        (-1000i64..1000).prop_map(Value::from),
         "[-+*/^()a-zA-Z0-9_. ]{0,24}".prop_map(Value::String),
         Just(Value::String("Pi1^64*Pi2^64".into())),
         Just(Value::String("1e400".into())),
