@@ -2,6 +2,7 @@
 //! certificate JSON out) on the rigid body and the heavy top, grouped by
 //! dimension. The side-by-side numpy/scipy figure comes from
 //! `bench/numpy_pipeline.py --bench N` on the same specs.
+#![allow(missing_docs)] // criterion_group! generates an undocumented function
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::hint::black_box;
