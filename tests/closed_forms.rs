@@ -8,7 +8,7 @@ mod common;
 
 use common::*;
 use exact::Rational;
-use num_traits::{Signed, Zero};
+use num_traits::Zero;
 use proptest::prelude::*;
 
 fn certify(text: &str) -> spec::Certificate {

@@ -161,16 +161,9 @@ pub fn discover_casimirs(algebra: &LieAlgebra, max_degree: u32, max_unknowns: us
 
 /// Scale so that coefficients are coprime integers with a positive leading one.
 fn normalise(p: Poly) -> Poly {
-    use num_integer::Integer;
-    let mut lcm_den = num_bigint::BigInt::from(1);
-    let mut gcd_num = num_bigint::BigInt::from(0);
-    for (_, c) in p.terms() {
-        lcm_den = lcm_den.lcm(c.denom());
-        gcd_num = gcd_num.gcd(c.numer());
-    }
-    let first_negative = p.terms().next().is_some_and(|(_, c)| c < &Rational::zero());
-    let mut s = Rational::new(lcm_den, if gcd_num.is_zero() { 1.into() } else { gcd_num });
-    if first_negative {
+    let coefficients: Vec<Rational> = p.terms().map(|(_, c)| c.clone()).collect();
+    let mut s = exact::integer_scale(&coefficients);
+    if coefficients.first().is_some_and(Rational::is_negative) {
         s = -s;
     }
     p.scale(&s)

@@ -15,7 +15,7 @@
 use crate::variation::SecondVariation;
 use exact::{best_rational_approximation, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use num_bigint::BigInt;
+use exact::BigInt;
 use num_traits::{One, Zero};
 
 /// Settings of the search, with documented defaults.

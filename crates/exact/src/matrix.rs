@@ -6,7 +6,7 @@
 //! small hand-written module exists.
 
 use crate::number::{rational_to_f64, Rational};
-use num_traits::{One, Signed, Zero};
+use num_traits::{One, Zero};
 use std::fmt;
 
 /// A dense `rows × cols` matrix of rationals, row-major.

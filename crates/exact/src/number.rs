@@ -1,10 +1,9 @@
 //! Exact rational numbers and their exact parsing from text.
 
 use num_bigint::BigInt;
-use num_traits::{One, Signed, ToPrimitive, Zero};
+use num_traits::{One, Zero};
 
-/// The engine's exact number type: an arbitrary-precision rational.
-pub type Rational = num_rational::BigRational;
+pub use crate::rational::Rational;
 
 /// Largest decimal exponent accepted in a literal such as `1e300`.
 ///
@@ -166,22 +165,25 @@ fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
 /// assert_eq!(rational_to_f64(&Rational::new(1.into(), 3.into())), 1.0 / 3.0);
 /// ```
 pub fn rational_to_f64(r: &Rational) -> f64 {
-    if let Some(v) = r.to_f64() {
+    if let Some(v) = r.to_f64().filter(|v| v.is_finite()) {
         return v;
     }
-    // num-rational returns None only in corner cases; fall back to a ratio of
-    // scaled integers.
-    let n = r.numer();
-    let d = r.denom();
-    let nb = n.bits() as i64;
-    let db = d.bits() as i64;
-    let shift = nb - db;
-    let scaled = if shift > 60 { Rational::new(n.clone(), d.clone() << (shift - 60) as usize) } else { r.clone() };
-    let v = scaled.to_f64().unwrap_or(if r.is_negative() { f64::NEG_INFINITY } else { f64::INFINITY });
+    // Beyond the double range (or a big-integer corner case): compare bit
+    // lengths to return a signed infinity or the scaled ratio.
+    let (n, d) = (r.numer(), r.denom());
+    let shift = n.bits() as i64 - d.bits() as i64;
+    if shift > 1100 {
+        return if r.is_negative() { f64::NEG_INFINITY } else { f64::INFINITY };
+    }
+    if shift < -1100 {
+        return 0.0;
+    }
+    let scaled = if shift > 60 { Rational::new(n, d << (shift - 60) as usize) } else { Rational::new(n << (-shift + 60).max(0) as usize, d) };
+    let v = scaled.to_f64().unwrap_or(0.0);
     if shift > 60 {
         v * 2f64.powi((shift - 60) as i32)
     } else {
-        v
+        v * 2f64.powi((shift - 60).min(0) as i32)
     }
 }
 

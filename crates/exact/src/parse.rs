@@ -20,7 +20,7 @@
 
 use crate::number::{parse_number, Rational};
 use crate::poly::Poly;
-use num_traits::{Signed, ToPrimitive, Zero};
+use num_traits::{ToPrimitive, Zero};
 use std::collections::BTreeMap;
 
 /// The names an expression may use: coordinates (variables) and parameters
@@ -395,7 +395,7 @@ impl Parser<'_> {
                 if b.is_zero() {
                     return self.err(ParseErrorKind::ZeroToNegativePower, at);
                 }
-                return Ok(Poly::constant(self.nvars(), num_traits::pow(b.recip(), m as usize)));
+                return Ok(Poly::constant(self.nvars(), b.recip().pow(m)));
             }
             let l = &self.symbols.limits;
             let degree = base.total_degree().saturating_mul(m);
@@ -411,7 +411,7 @@ impl Parser<'_> {
                 );
             }
             if let Some(b) = base.constant_value() {
-                return Ok(Poly::constant(self.nvars(), num_traits::pow(b, m as usize)));
+                return Ok(Poly::constant(self.nvars(), b.pow(m)));
             }
             return self.check_size(base.pow(m), at);
         }

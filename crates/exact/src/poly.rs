@@ -1,7 +1,7 @@
 //! Sparse multivariate polynomials with exact rational coefficients.
 
 use crate::number::{one, rational_to_f64, Rational};
-use num_traits::{One, Signed, Zero};
+use num_traits::{One, Zero};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -228,7 +228,7 @@ impl Poly {
                         t = Rational::zero();
                         break;
                     }
-                    t *= num_traits::pow(xi.clone(), e as usize);
+                    t *= xi.pow(e as u32);
                 }
             }
             s += t;
