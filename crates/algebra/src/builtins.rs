@@ -72,6 +72,13 @@ fn cross_product_representation() -> Vec<Matrix> {
 /// assert!(algebra::builtin("so4").is_none());
 /// ```
 pub fn builtin(name: &str) -> Option<Builtin> {
+    // Built (and Jacobi-checked) once per process; clones are cheap.
+    static CACHE: std::sync::OnceLock<Vec<(&'static str, Builtin)>> = std::sync::OnceLock::new();
+    let cache = CACHE.get_or_init(|| builtin_names().iter().filter_map(|n| Some((*n, build(n)?))).collect());
+    cache.iter().find(|(n, _)| *n == name).map(|(_, b)| b.clone())
+}
+
+fn build(name: &str) -> Option<Builtin> {
     let b = match name {
         "so3" => Builtin {
             algebra: LieAlgebra::from_structure_constants("so3", &["Pi1", "Pi2", "Pi3"], &cross_rows(0)).ok()?,

@@ -13,9 +13,9 @@
 //! confirmed definite by an exact LDLᵀ test.
 
 use crate::variation::SecondVariation;
+use exact::BigInt;
 use exact::{best_rational_approximation, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use exact::BigInt;
 use num_traits::{One, Zero};
 
 /// Settings of the search, with documented defaults.

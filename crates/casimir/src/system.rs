@@ -4,7 +4,8 @@ use crate::bracket::lie_poisson_bracket;
 use crate::error::SystemError;
 use crate::variation::SecondVariation;
 use algebra::LieAlgebra;
-use exact::{Poly, Rational};
+use exact::{Matrix, Poly, Rational};
+use num_traits::Zero;
 
 /// Whether a conserved quantity is a Casimir or a first integral of `h`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -18,20 +19,44 @@ pub enum ConservedKind {
 /// A stochastic Lie–Poisson system
 /// `d mu = ad*_{Dh(mu)} mu dt + sum_i ad*_{sigma_i} mu o dW^i`
 /// with its conserved quantities and one candidate equilibrium.
+///
+/// The data are validated on construction and read through accessors, so
+/// the derivatives of `h` at `mu_e` (computed once) cannot go stale.
 #[derive(Clone, Debug)]
 pub struct System {
-    /// The Lie algebra.
-    pub algebra: LieAlgebra,
-    /// The Hamiltonian `h`.
-    pub hamiltonian: Poly,
-    /// Casimirs `C_j` (checked).
-    pub casimirs: Vec<Poly>,
-    /// First integrals `F_j` (checked: `{F_j, h} = 0`).
-    pub first_integrals: Vec<Poly>,
-    /// The candidate equilibrium `mu_e`.
-    pub equilibrium: Vec<Rational>,
-    /// The noise fields `sigma_i` in `g`, in components on `e_a`.
-    pub noise: Vec<Vec<Rational>>,
+    algebra: LieAlgebra,
+    hamiltonian: Poly,
+    casimirs: Vec<Poly>,
+    first_integrals: Vec<Poly>,
+    equilibrium: Vec<Rational>,
+    noise: Vec<Vec<Rational>>,
+    gradient_h: Vec<Rational>,
+    hessian_h: Matrix,
+}
+
+/// `{K, mu_j}` for every coordinate `j`: `sum_a ∂_a K Lambda_aj(mu)`, with the
+/// gradient computed once.
+fn brackets_with_coordinates<'a>(algebra: &'a LieAlgebra, k: &Poly) -> impl Iterator<Item = (usize, Poly)> + 'a {
+    let n = algebra.dim();
+    let grad = k.gradient();
+    (0..n).map(move |j| {
+        let mut out = Poly::zero(n);
+        for (a, ga) in grad.iter().enumerate() {
+            if ga.is_zero() {
+                continue;
+            }
+            let bracket = algebra.bracket_of_basis(a, j);
+            if bracket.is_empty() {
+                continue;
+            }
+            let mut coefficients = vec![Rational::zero(); n];
+            for (kk, c) in bracket {
+                coefficients[*kk] = c.clone();
+            }
+            out = out.add(&ga.mul(&Poly::linear(&coefficients)));
+        }
+        (j, out)
+    })
 }
 
 impl System {
@@ -76,8 +101,7 @@ impl System {
             if c.constant_value().is_some() {
                 return Err(SystemError::ConstantQuantity { what: "casimir", index });
             }
-            for j in 0..n {
-                let b = lie_poisson_bracket(&algebra, c, &Poly::var(n, j));
+            for (j, b) in brackets_with_coordinates(&algebra, c) {
                 if !b.is_zero() {
                     return Err(SystemError::NotACasimir {
                         index,
@@ -97,7 +121,45 @@ impl System {
                 return Err(SystemError::NotConserved { index, bracket: b.to_string_with(algebra.coordinates()) });
             }
         }
-        Ok(System { algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise })
+        let gradient_h: Vec<Rational> = hamiltonian.gradient().iter().map(|g| g.eval(&equilibrium)).collect();
+        let hessian_polys = hamiltonian.hessian();
+        let hessian_h = Matrix::from_fn(n, n, |i, j| hessian_polys[i][j].eval(&equilibrium));
+        Ok(System { algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise, gradient_h, hessian_h })
+    }
+
+    /// The Lie algebra.
+    pub fn algebra(&self) -> &LieAlgebra {
+        &self.algebra
+    }
+
+    /// The Hamiltonian `h`.
+    pub fn hamiltonian(&self) -> &Poly {
+        &self.hamiltonian
+    }
+
+    /// The Casimirs `C_j` (checked exactly).
+    pub fn casimirs(&self) -> &[Poly] {
+        &self.casimirs
+    }
+
+    /// The first integrals `F_j` (checked: `{F_j, h} = 0`).
+    pub fn first_integrals(&self) -> &[Poly] {
+        &self.first_integrals
+    }
+
+    /// The candidate equilibrium `mu_e`.
+    pub fn equilibrium(&self) -> &[Rational] {
+        &self.equilibrium
+    }
+
+    /// The noise fields `sigma_i` in `g`, in components on `e_a`.
+    pub fn noise(&self) -> &[Vec<Rational>] {
+        &self.noise
+    }
+
+    /// `D^2h(mu_e)`, exactly.
+    pub fn hamiltonian_hessian(&self) -> &Matrix {
+        &self.hessian_h
     }
 
     /// Dimension of the algebra.
@@ -115,14 +177,14 @@ impl System {
     }
 
     /// `Dh(mu_e)`, exactly.
-    pub fn hamiltonian_gradient(&self) -> Vec<Rational> {
-        self.hamiltonian.gradient().iter().map(|g| g.eval(&self.equilibrium)).collect()
+    pub fn hamiltonian_gradient(&self) -> &[Rational] {
+        &self.gradient_h
     }
 
     /// The equilibrium residual `ad*_{Dh(mu_e)} mu_e` (zero iff `mu_e` is an
     /// equilibrium of the deterministic flow).
     pub fn equilibrium_residual(&self) -> Vec<Rational> {
-        self.algebra.coad(&self.hamiltonian_gradient(), &self.equilibrium)
+        self.algebra.coad(&self.gradient_h, &self.equilibrium)
     }
 
     /// The noise residuals `ad*_{sigma_i} mu_e` (all zero iff the noise is

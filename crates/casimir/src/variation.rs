@@ -58,9 +58,9 @@ fn eval_matrix(polys: &[Vec<exact::Poly>], x: &[Rational]) -> Matrix {
 impl SecondVariation {
     pub(crate) fn new(system: &System) -> Option<Self> {
         let n = system.dim();
-        let mu = &system.equilibrium;
-        let gradient_h = system.hamiltonian_gradient();
-        let hessian_h = eval_matrix(&system.hamiltonian.hessian(), mu);
+        let mu = system.equilibrium();
+        let gradient_h = system.hamiltonian_gradient().to_vec();
+        let hessian_h = system.hamiltonian_hessian().clone();
         let conserved = system.conserved();
         let columns: Vec<Vec<Rational>> =
             conserved.iter().map(|(_, k)| k.gradient().iter().map(|g| g.eval(mu)).collect()).collect();

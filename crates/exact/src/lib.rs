@@ -33,10 +33,10 @@ mod poly;
 mod rational;
 
 pub use matrix::{AffineSolution, Matrix};
+pub use num_bigint::BigInt;
 pub use number::{
     best_rational_approximation, parse_number, rational_from_f64, rational_to_f64, NumberError, Rational,
 };
 pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};
-pub use num_bigint::BigInt;
 pub use poly::{monomials_of_degree, Monomial, Poly};
 pub use rational::integer_scale;

@@ -142,7 +142,7 @@ impl Matrix {
     /// `(self + selfᵀ)/2`.
     pub fn symmetric_part(&self) -> Self {
         assert_eq!(self.rows, self.cols);
-        let half = Rational::new(1.into(), 2.into());
+        let half = Rational::new_small(1, 2);
         Self::from_fn(self.rows, self.cols, |i, j| (&self[(i, j)] + &self[(j, i)]) * &half)
     }
 

@@ -138,6 +138,16 @@ fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
     if i != bytes.len() {
         return Err(malformed());
     }
+    // Fast path: short literals (the common case) never touch big integers.
+    if exponent == 0 && int_digits.len() + frac_digits.len() <= 18 {
+        let mut m: i64 = 0;
+        for b in int_digits.bytes().chain(frac_digits.bytes()) {
+            m = m * 10 + (b - b'0') as i64;
+        }
+        let d = 10i64.pow(frac_digits.len() as u32);
+        let value = Rational::new_small(if negative { -m } else { m }, d);
+        return Ok(value);
+    }
     let digits = format!("{int_digits}{frac_digits}");
     let mantissa: BigInt = digits.parse().map_err(|_| malformed())?;
     if mantissa.is_zero() {
@@ -178,7 +188,11 @@ pub fn rational_to_f64(r: &Rational) -> f64 {
     if shift < -1100 {
         return 0.0;
     }
-    let scaled = if shift > 60 { Rational::new(n, d << (shift - 60) as usize) } else { Rational::new(n << (-shift + 60).max(0) as usize, d) };
+    let scaled = if shift > 60 {
+        Rational::new(n, d << (shift - 60) as usize)
+    } else {
+        Rational::new(n << (-shift + 60).max(0) as usize, d)
+    };
     let v = scaled.to_f64().unwrap_or(0.0);
     if shift > 60 {
         v * 2f64.powi((shift - 60) as i32)

@@ -169,57 +169,62 @@ pub struct ParseError {
     pub position: usize,
 }
 
-#[derive(Clone, Debug, PartialEq)]
-enum Token {
-    Number(String),
-    Ident(String),
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Token<'t> {
+    Number(&'t str),
+    Ident(&'t str),
     Op(char),
 }
 
-fn tokenize(text: &str) -> Result<Vec<(Token, usize)>, ParseError> {
-    let chars: Vec<char> = text.chars().collect();
-    let mut out = Vec::new();
+/// Split into tokens borrowing from the text (no allocation per token).
+/// Positions are byte offsets; the grammar is ASCII, so they equal character
+/// offsets up to the first non-ASCII character, which is itself an error.
+fn tokenize(text: &str) -> Result<Vec<(Token<'_>, usize)>, ParseError> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len() / 2 + 1);
     let mut i = 0;
-    while i < chars.len() {
-        let c = chars[i];
-        if c.is_whitespace() {
+    while i < bytes.len() {
+        let c = bytes[i];
+        if c.is_ascii_whitespace() {
             i += 1;
-        } else if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(|d| d.is_ascii_digit())) {
+        } else if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(|d| d.is_ascii_digit())) {
             let start = i;
-            while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+            while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
                 i += 1;
             }
-            if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+            if i < bytes.len() && (bytes[i] == b'e' || bytes[i] == b'E') {
                 let mut j = i + 1;
-                if j < chars.len() && (chars[j] == '+' || chars[j] == '-') {
+                if j < bytes.len() && (bytes[j] == b'+' || bytes[j] == b'-') {
                     j += 1;
                 }
-                if j < chars.len() && chars[j].is_ascii_digit() {
-                    while j < chars.len() && chars[j].is_ascii_digit() {
+                if j < bytes.len() && bytes[j].is_ascii_digit() {
+                    while j < bytes.len() && bytes[j].is_ascii_digit() {
                         j += 1;
                     }
                     i = j;
                 }
             }
-            out.push((Token::Number(chars[start..i].iter().collect()), start));
-        } else if c.is_ascii_alphabetic() || c == '_' {
+            out.push((Token::Number(&text[start..i]), start));
+        } else if c.is_ascii_alphabetic() || c == b'_' {
             let start = i;
-            while i < chars.len() && (chars[i].is_ascii_alphanumeric() || chars[i] == '_') {
+            while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
                 i += 1;
             }
-            out.push((Token::Ident(chars[start..i].iter().collect()), start));
-        } else if "+-*/^()".contains(c) {
-            out.push((Token::Op(c), i));
+            out.push((Token::Ident(&text[start..i]), start));
+        } else if b"+-*/^()".contains(&c) {
+            out.push((Token::Op(c as char), i));
             i += 1;
         } else {
-            return Err(ParseError { kind: ParseErrorKind::UnexpectedChar(c), position: i });
+            let position = text[..i].chars().count();
+            let ch = text[i..].chars().next().unwrap_or('?');
+            return Err(ParseError { kind: ParseErrorKind::UnexpectedChar(ch), position });
         }
     }
     Ok(out)
 }
 
 struct Parser<'a> {
-    tokens: Vec<(Token, usize)>,
+    tokens: Vec<(Token<'a>, usize)>,
     pos: usize,
     end: usize,
     symbols: &'a Symbols,
@@ -245,7 +250,7 @@ pub fn parse_expression(text: &str, symbols: &Symbols) -> Result<Poly, ParseErro
     if tokens.is_empty() {
         return Err(ParseError { kind: ParseErrorKind::Empty, position: 0 });
     }
-    let mut p = Parser { tokens, pos: 0, end: text.chars().count(), symbols, depth: 0 };
+    let mut p = Parser { tokens, pos: 0, end: text.len(), symbols, depth: 0 };
     let value = p.expr()?;
     if let Some((tok, at)) = p.tokens.get(p.pos) {
         return Err(ParseError { kind: ParseErrorKind::UnexpectedToken(token_text(tok)), position: *at });
@@ -255,17 +260,17 @@ pub fn parse_expression(text: &str, symbols: &Symbols) -> Result<Poly, ParseErro
 
 fn token_text(t: &Token) -> String {
     match t {
-        Token::Number(s) | Token::Ident(s) => s.clone(),
+        Token::Number(s) | Token::Ident(s) => s.to_string(),
         Token::Op(c) => c.to_string(),
     }
 }
 
-impl Parser<'_> {
+impl<'a> Parser<'a> {
     fn nvars(&self) -> usize {
         self.symbols.coordinates.len()
     }
 
-    fn peek(&self) -> Option<&Token> {
+    fn peek(&self) -> Option<&Token<'a>> {
         self.tokens.get(self.pos).map(|(t, _)| t)
     }
 
@@ -425,21 +430,24 @@ impl Parser<'_> {
         };
         self.pos += 1;
         match tok {
-            Token::Number(s) => match parse_number(&s) {
+            Token::Number(s) => match parse_number(s) {
                 Ok(v) => Ok(Poly::constant(self.nvars(), v)),
                 Err(e) => self.err(ParseErrorKind::BadNumber(e.to_string()), at),
             },
             Token::Ident(name) => {
                 if let Some(Token::Op('(')) = self.peek() {
-                    return self.err(ParseErrorKind::FunctionCall(name), at);
+                    return self.err(ParseErrorKind::FunctionCall(name.to_string()), at);
                 }
                 if let Some(i) = self.symbols.coordinates.iter().position(|c| *c == name) {
                     return Ok(Poly::var(self.nvars(), i));
                 }
-                if let Some(v) = self.symbols.parameters.get(&name) {
+                if let Some(v) = self.symbols.parameters.get(name) {
                     return Ok(Poly::constant(self.nvars(), v.clone()));
                 }
-                self.err(ParseErrorKind::UnknownSymbol { name, known: self.symbols.known_names() }, at)
+                self.err(
+                    ParseErrorKind::UnknownSymbol { name: name.to_string(), known: self.symbols.known_names() },
+                    at,
+                )
             }
             Token::Op('(') => {
                 let v = self.expr()?;

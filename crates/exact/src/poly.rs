@@ -2,33 +2,36 @@
 
 use crate::number::{one, rational_to_f64, Rational};
 use num_traits::{One, Zero};
-use std::collections::BTreeMap;
+use smallvec::{smallvec, SmallVec};
 use std::fmt::Write as _;
 
-/// Exponent vector of a monomial: `x_0^e_0 x_1^e_1 ...`.
-pub type Monomial = Vec<u16>;
+/// Exponent vector of a monomial: `x_0^e_0 x_1^e_1 ...`, stored inline for up
+/// to eight variables so that building and comparing monomials of the
+/// engine's small algebras does not allocate.
+pub type Monomial = SmallVec<[u16; 8]>;
 
 /// A polynomial in a fixed number of variables with rational coefficients.
 ///
-/// Terms are kept in a `BTreeMap` so that iteration order (and hence printing
-/// and certificates) is deterministic; no zero coefficient is ever stored.
+/// Terms are kept in a vector sorted by monomial (lexicographic order on the
+/// exponents), without zero coefficients, so iteration order (and hence
+/// printing and certificates) is deterministic and sums are linear merges.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Poly {
     nvars: usize,
-    terms: BTreeMap<Monomial, Rational>,
+    terms: Vec<(Monomial, Rational)>,
 }
 
 impl Poly {
     /// The zero polynomial in `nvars` variables.
     pub fn zero(nvars: usize) -> Self {
-        Poly { nvars, terms: BTreeMap::new() }
+        Poly { nvars, terms: Vec::new() }
     }
 
     /// A constant.
     pub fn constant(nvars: usize, c: Rational) -> Self {
         let mut p = Self::zero(nvars);
         if !c.is_zero() {
-            p.terms.insert(vec![0; nvars], c);
+            p.terms.push((smallvec![0; nvars], c));
         }
         p
     }
@@ -39,11 +42,9 @@ impl Poly {
     /// If `i >= nvars`.
     pub fn var(nvars: usize, i: usize) -> Self {
         assert!(i < nvars, "variable index out of range");
-        let mut m = vec![0; nvars];
+        let mut m: Monomial = smallvec![0; nvars];
         m[i] = 1;
-        let mut p = Self::zero(nvars);
-        p.terms.insert(m, one());
-        p
+        Poly { nvars, terms: vec![(m, one())] }
     }
 
     /// A single term `c x^m`.
@@ -51,7 +52,7 @@ impl Poly {
         let nvars = m.len();
         let mut p = Self::zero(nvars);
         if !c.is_zero() {
-            p.terms.insert(m, c);
+            p.terms.push((m, c));
         }
         p
     }
@@ -60,11 +61,12 @@ impl Poly {
     pub fn linear(coefficients: &[Rational]) -> Self {
         let n = coefficients.len();
         let mut p = Self::zero(n);
-        for (i, c) in coefficients.iter().enumerate() {
+        // x_0 > x_1 > ... in lexicographic order of exponents, so push in reverse.
+        for (i, c) in coefficients.iter().enumerate().rev() {
             if !c.is_zero() {
-                let mut m = vec![0; n];
+                let mut m: Monomial = smallvec![0; n];
                 m[i] = 1;
-                p.terms.insert(m, c.clone());
+                p.terms.push((m, c.clone()));
             }
         }
         p
@@ -82,7 +84,7 @@ impl Poly {
 
     /// The terms, in a deterministic order.
     pub fn terms(&self) -> impl Iterator<Item = (&Monomial, &Rational)> {
-        self.terms.iter()
+        self.terms.iter().map(|(m, c)| (m, c))
     }
 
     /// Whether this is the zero polynomial.
@@ -95,7 +97,7 @@ impl Poly {
         match self.terms.len() {
             0 => Some(Rational::zero()),
             1 => {
-                let (m, c) = self.terms.iter().next()?;
+                let (m, c) = self.terms.first()?;
                 m.iter().all(|&e| e == 0).then(|| c.clone())
             }
             _ => None,
@@ -104,54 +106,76 @@ impl Poly {
 
     /// Total degree (`0` for constants and for the zero polynomial).
     pub fn total_degree(&self) -> u32 {
-        self.terms.keys().map(|m| m.iter().map(|&e| e as u32).sum()).max().unwrap_or(0)
+        self.terms.iter().map(|(m, _)| m.iter().map(|&e| e as u32).sum()).max().unwrap_or(0)
     }
 
     /// The coefficient of a monomial.
     pub fn coefficient(&self, m: &[u16]) -> Rational {
-        self.terms.get(m).cloned().unwrap_or_else(Rational::zero)
+        match self.terms.binary_search_by(|(x, _)| x.as_slice().cmp(m)) {
+            Ok(i) => self.terms[i].1.clone(),
+            Err(_) => Rational::zero(),
+        }
     }
 
-    fn add_term(&mut self, m: Monomial, c: Rational) {
-        if c.is_zero() {
-            return;
-        }
-        match self.terms.entry(m) {
-            std::collections::btree_map::Entry::Vacant(v) => {
-                v.insert(c);
-            }
-            std::collections::btree_map::Entry::Occupied(mut o) => {
-                *o.get_mut() += c;
-                if o.get().is_zero() {
-                    o.remove();
+    /// Sorted merge of two term lists with `sign` applied to the second.
+    fn merge(&self, other: &Poly, negate: bool) -> Poly {
+        assert_eq!(self.nvars, other.nvars);
+        let mut out = Vec::with_capacity(self.terms.len() + other.terms.len());
+        let (mut i, mut j) = (0, 0);
+        let (a, b) = (&self.terms, &other.terms);
+        let sign = |c: &Rational| if negate { -c } else { c.clone() };
+        while i < a.len() && j < b.len() {
+            match a[i].0.cmp(&b[j].0) {
+                std::cmp::Ordering::Less => {
+                    out.push(a[i].clone());
+                    i += 1;
+                }
+                std::cmp::Ordering::Greater => {
+                    out.push((b[j].0.clone(), sign(&b[j].1)));
+                    j += 1;
+                }
+                std::cmp::Ordering::Equal => {
+                    let c = if negate { &a[i].1 - &b[j].1 } else { &a[i].1 + &b[j].1 };
+                    if !c.is_zero() {
+                        out.push((a[i].0.clone(), c));
+                    }
+                    i += 1;
+                    j += 1;
                 }
             }
         }
+        out.extend(a[i..].iter().cloned());
+        out.extend(b[j..].iter().map(|(m, c)| (m.clone(), sign(c))));
+        Poly { nvars: self.nvars, terms: out }
+    }
+
+    /// Sort and combine an unsorted list of terms.
+    fn from_unsorted(nvars: usize, mut terms: Vec<(Monomial, Rational)>) -> Poly {
+        terms.sort_unstable_by(|x, y| x.0.cmp(&y.0));
+        let mut out: Vec<(Monomial, Rational)> = Vec::with_capacity(terms.len());
+        for (m, c) in terms {
+            match out.last_mut() {
+                Some((lm, lc)) if *lm == m => *lc += c,
+                _ => out.push((m, c)),
+            }
+        }
+        out.retain(|(_, c)| !c.is_zero());
+        Poly { nvars, terms: out }
     }
 
     /// Sum.
     pub fn add(&self, other: &Poly) -> Poly {
-        assert_eq!(self.nvars, other.nvars);
-        let mut out = self.clone();
-        for (m, c) in &other.terms {
-            out.add_term(m.clone(), c.clone());
-        }
-        out
+        self.merge(other, false)
     }
 
     /// Difference.
     pub fn sub(&self, other: &Poly) -> Poly {
-        assert_eq!(self.nvars, other.nvars);
-        let mut out = self.clone();
-        for (m, c) in &other.terms {
-            out.add_term(m.clone(), -c.clone());
-        }
-        out
+        self.merge(other, true)
     }
 
     /// Negation.
     pub fn neg(&self) -> Poly {
-        self.scale(&-Rational::one())
+        Poly { nvars: self.nvars, terms: self.terms.iter().map(|(m, c)| (m.clone(), -c)).collect() }
     }
 
     /// Multiply by a rational.
@@ -165,14 +189,17 @@ impl Poly {
     /// Product.
     pub fn mul(&self, other: &Poly) -> Poly {
         assert_eq!(self.nvars, other.nvars);
-        let mut out = Poly::zero(self.nvars);
+        if self.terms.is_empty() || other.terms.is_empty() {
+            return Poly::zero(self.nvars);
+        }
+        let mut terms = Vec::with_capacity(self.terms.len() * other.terms.len());
         for (m1, c1) in &self.terms {
             for (m2, c2) in &other.terms {
                 let m: Monomial = m1.iter().zip(m2).map(|(a, b)| a.saturating_add(*b)).collect();
-                out.add_term(m, c1 * c2);
+                terms.push((m, c1 * c2));
             }
         }
-        out
+        Poly::from_unsorted(self.nvars, terms)
     }
 
     /// Power by repeated squaring.
@@ -193,16 +220,19 @@ impl Poly {
 
     /// Partial derivative with respect to `x_i`.
     pub fn derivative(&self, i: usize) -> Poly {
-        let mut out = Poly::zero(self.nvars);
-        for (m, c) in &self.terms {
-            if m[i] == 0 {
-                continue;
-            }
-            let mut m2 = m.clone();
-            m2[i] -= 1;
-            out.add_term(m2, c * Rational::from_integer(m[i].into()));
-        }
-        out
+        // Decrementing one exponent keeps the lexicographic order and is
+        // injective on the terms that survive, so no re-sorting is needed.
+        let terms = self
+            .terms
+            .iter()
+            .filter(|(m, _)| m[i] > 0)
+            .map(|(m, c)| {
+                let mut m2 = m.clone();
+                m2[i] -= 1;
+                (m2, c * Rational::from(m[i] as i64))
+            })
+            .collect();
+        Poly { nvars: self.nvars, terms }
     }
 
     /// The gradient `(∂_0 p, ..., ∂_{n-1} p)`.
@@ -249,12 +279,7 @@ impl Poly {
     pub fn homogeneous_part(&self, d: u32) -> Poly {
         Poly {
             nvars: self.nvars,
-            terms: self
-                .terms
-                .iter()
-                .filter(|(m, _)| m.iter().map(|&e| e as u32).sum::<u32>() == d)
-                .map(|(m, c)| (m.clone(), c.clone()))
-                .collect(),
+            terms: self.terms.iter().filter(|(m, _)| m.iter().map(|&e| e as u32).sum::<u32>() == d).cloned().collect(),
         }
     }
 
@@ -285,7 +310,7 @@ impl Poly {
         }
         let mut s = String::new();
         // Print higher degree first, then by the map order.
-        let mut terms: Vec<_> = self.terms.iter().collect();
+        let mut terms: Vec<_> = self.terms.iter().map(|(m, c)| (m, c)).collect();
         // Highest degree first; within a degree, earlier variables first.
         terms.sort_by(|(a, _), (b, _)| {
             let da: u32 = a.iter().map(|&e| e as u32).sum();
@@ -338,11 +363,11 @@ pub fn monomials_of_degree(n: usize, d: u16) -> Vec<Monomial> {
     let mut out = Vec::new();
     if n == 0 {
         if d == 0 {
-            out.push(Vec::new());
+            out.push(Monomial::new());
         }
         return out;
     }
-    let mut cur = vec![0; n];
+    let mut cur: Monomial = smallvec![0; n];
     rec(n, d, 0, &mut cur, &mut out);
     out
 }

@@ -66,7 +66,7 @@ impl Rational {
         if n == 0 {
             return Rational(Repr::Small(0, 1));
         }
-        let g = gcd_u128(n.unsigned_abs(), d as u128) as i128;
+        let g = if d == 1 { 1 } else { gcd_u128(n.unsigned_abs(), d as u128) as i128 };
         if g > 1 {
             n /= g;
             d /= g;
@@ -99,6 +99,15 @@ impl Rational {
     pub fn new(n: BigInt, d: BigInt) -> Rational {
         assert!(!d.is_zero(), "zero denominator");
         Rational::from_big(Big::new(n, d))
+    }
+
+    /// `n / d` for machine integers, reduced.
+    ///
+    /// # Panics
+    /// If `d` is zero.
+    pub fn new_small(n: i64, d: i64) -> Rational {
+        assert!(d != 0, "zero denominator");
+        Rational::from_i128(n as i128, d as i128)
     }
 
     /// An integer.
@@ -198,7 +207,12 @@ impl Rational {
         num_traits::pow(self.clone(), e as usize)
     }
 
-    fn op(&self, other: &Rational, small: fn(i64, i64, i64, i64) -> Option<Rational>, big: fn(Big, Big) -> Big) -> Rational {
+    fn op(
+        &self,
+        other: &Rational,
+        small: fn(i64, i64, i64, i64) -> Option<Rational>,
+        big: fn(Big, Big) -> Big,
+    ) -> Rational {
         if let (Repr::Small(a, b), Repr::Small(c, d)) = (&self.0, &other.0) {
             if let Some(r) = small(*a, *b, *c, *d) {
                 return r;
@@ -209,6 +223,9 @@ impl Rational {
 }
 
 fn small_add(a: i64, b: i64, c: i64, d: i64) -> Option<Rational> {
+    if b == 1 && d == 1 {
+        return a.checked_add(c).map(|n| Rational(Repr::Small(n, 1)));
+    }
     if b == d {
         return Some(Rational::from_i128(a as i128 + c as i128, b as i128));
     }
@@ -221,6 +238,12 @@ fn small_sub(a: i64, b: i64, c: i64, d: i64) -> Option<Rational> {
 }
 
 fn small_mul(a: i64, b: i64, c: i64, d: i64) -> Option<Rational> {
+    if a == 0 || c == 0 {
+        return Some(Rational(Repr::Small(0, 1)));
+    }
+    if b == 1 && d == 1 {
+        return a.checked_mul(c).map(|n| Rational(Repr::Small(n, 1)));
+    }
     Some(Rational::from_i128((a as i128).checked_mul(c as i128)?, (b as i128).checked_mul(d as i128)?))
 }
 

@@ -40,16 +40,12 @@ pub struct Linearisation {
 /// assert_eq!(&lin.a_tilde[(1, 1)] - &lin.a[(1, 1)], Rational::new((-1).into(), 2.into()));
 /// ```
 pub fn linearise(system: &System) -> Linearisation {
-    let algebra = &system.algebra;
-    let mu = &system.equilibrium;
-    let n = algebra.dim();
-    let grad = system.hamiltonian_gradient();
-    let hess_polys = system.hamiltonian.hessian();
-    let hessian = Matrix::from_fn(n, n, |i, j| hess_polys[i][j].eval(mu));
-    let lambda = algebra.poisson_tensor(mu);
-    let a = lambda.transpose().mul(&hessian).add(&algebra.coad_matrix(&grad));
-    let noise: Vec<Matrix> = system.noise.iter().map(|s| algebra.coad_matrix(s)).collect();
-    let half = Rational::new(1.into(), 2.into());
+    let algebra = system.algebra();
+    let lambda = algebra.poisson_tensor(system.equilibrium());
+    let a =
+        lambda.transpose().mul(system.hamiltonian_hessian()).add(&algebra.coad_matrix(system.hamiltonian_gradient()));
+    let noise: Vec<Matrix> = system.noise().iter().map(|s| algebra.coad_matrix(s)).collect();
+    let half = Rational::new_small(1, 2);
     let mut a_tilde = a.clone();
     for b in &noise {
         a_tilde.add_scaled_assign(&half, &b.mul(b));

@@ -21,17 +21,32 @@ pub struct Certificate {
     pub analysis: Analysis,
 }
 
+/// Build a JSON object by moving the values in (the `json!` macro would
+/// re-serialise every embedded `Value`, a deep copy per field).
+macro_rules! obj {
+    ($($k:expr => $v:expr),* $(,)?) => {{
+        #[allow(unused_mut)]
+        let mut m = Map::new();
+        $( m.insert($k.to_string(), Value::from($v)); )*
+        Value::Object(m)
+    }};
+}
+
 fn rationals(v: &[Rational]) -> Value {
     Value::Array(v.iter().map(|r| Value::String(r.to_string())).collect())
 }
 
 fn matrix(m: &Matrix) -> Value {
-    json!(m.to_string_rows())
+    Value::Array(
+        (0..m.nrows())
+            .map(|i| Value::Array((0..m.ncols()).map(|j| Value::String(m[(i, j)].to_string())).collect()))
+            .collect(),
+    )
 }
 
 fn float(x: f64) -> Value {
     if x.is_finite() {
-        json!(x)
+        Value::from(x)
     } else {
         Value::String(if x > 0.0 {
             "infinity".into()
@@ -44,7 +59,7 @@ fn float(x: f64) -> Value {
 }
 
 fn complex(z: &Complex<f64>) -> Value {
-    json!({ "re": float(z.re), "im": float(z.im) })
+    obj! { "re" => float(z.re), "im" => float(z.im) }
 }
 
 /// The verification level of a verdict.
@@ -82,46 +97,46 @@ pub fn certify(spec: &Spec) -> Certificate {
 /// Build the certificate JSON from a spec and its analysis.
 pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
     let system = &spec.system;
-    let coords = system.algebra.coordinates();
+    let coords = system.algebra().coordinates();
     let (level, checks) = level_and_checks(a);
     let mut c = Map::new();
-    c.insert("certificate_version".into(), json!(CERTIFICATE_VERSION));
-    c.insert("engine".into(), json!({ "name": "verify", "version": ENGINE_VERSION }));
-    c.insert("name".into(), json!(spec.name));
-    c.insert("verdict".into(), json!(a.verdict.as_str()));
-    c.insert("reason".into(), json!(a.reason));
-    c.insert("level".into(), json!(level));
-    c.insert("checks".into(), checks);
+    let mut put = |k: &str, v: Value| {
+        c.insert(k.to_string(), v);
+    };
+    put("certificate_version", Value::from(CERTIFICATE_VERSION));
+    put("engine", obj! { "name" => "verify", "version" => ENGINE_VERSION });
+    put("name", Value::from(spec.name.as_str()));
+    put("verdict", Value::from(a.verdict.as_str()));
+    put("reason", Value::from(a.reason.as_str()));
+    put("level", Value::from(level));
+    put("checks", checks);
     if let Some(s2) = a.sigma2() {
-        c.insert("sigma2".into(), float(s2));
+        put("sigma2", float(s2));
     }
     if let (Some(stop), Some(s2)) = (spec.stopping, a.sigma2()) {
         let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
-        c.insert(
-            "stopping".into(),
-            json!({
-                "epsilon": stop.epsilon,
-                "delta": stop.delta,
-                "T": st.time().map_or(Value::String("infinity".into()), float),
-                "bound": "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta",
-            }),
+        put(
+            "stopping",
+            obj! {
+                "epsilon" => stop.epsilon,
+                "delta" => stop.delta,
+                "T" => st.time().map_or(Value::String("infinity".into()), float),
+                "bound" => "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta",
+            },
         );
     }
-    c.insert("coordinates".into(), json!(coords));
-    c.insert(
-        "equilibrium".into(),
-        json!({
-            "point": rationals(&system.equilibrium),
-            "residual": rationals(&a.equilibrium_residual),
-        }),
+    put("coordinates", Value::Array(coords.iter().map(|c| Value::from(c.as_str())).collect()));
+    put(
+        "equilibrium",
+        obj! { "point" => rationals(system.equilibrium()), "residual" => rationals(&a.equilibrium_residual) },
     );
-    c.insert(
-        "noise".into(),
-        json!({
-            "fields": system.noise.iter().map(|s| rationals(s)).collect::<Vec<_>>(),
-            "residuals": a.noise_residuals.iter().map(|r| rationals(r)).collect::<Vec<_>>(),
-            "isotropy_basis": a.isotropy_basis.iter().map(|r| rationals(r)).collect::<Vec<_>>(),
-        }),
+    put(
+        "noise",
+        obj! {
+            "fields" => Value::Array(system.noise().iter().map(|s| rationals(s)).collect()),
+            "residuals" => Value::Array(a.noise_residuals.iter().map(|r| rationals(r)).collect()),
+            "isotropy_basis" => Value::Array(a.isotropy_basis.iter().map(|r| rationals(r)).collect()),
+        },
     );
     let conserved: Vec<Value> = system
         .conserved()
@@ -132,98 +147,94 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
                 casimir::ConservedKind::Casimir => ("casimir", spec.casimir_source.as_str()),
                 casimir::ConservedKind::FirstIntegral => ("first_integral", "spec"),
             };
-            json!({
-                "kind": kind,
-                "source": source,
-                "expression": poly.to_string_with(coords),
-                "commutes_with_noise": commutes,
-            })
+            obj! {
+                "kind" => kind,
+                "source" => source,
+                "expression" => poly.to_string_with(coords),
+                "commutes_with_noise" => Value::Array(commutes.iter().map(|b| Value::Bool(*b)).collect()),
+            }
         })
         .collect();
-    c.insert("conserved".into(), Value::Array(conserved));
+    put("conserved", Value::Array(conserved));
     if let Some(d) = &spec.discovery {
-        c.insert(
-            "casimir_discovery".into(),
-            json!({ "degree_searched": d.degree_searched, "skipped_degrees": d.skipped_degrees }),
-        );
+        put("casimir_discovery", json!({ "degree_searched": d.degree_searched, "skipped_degrees": d.skipped_degrees }));
     }
     if let Some(v) = &a.variation {
-        c.insert(
-            "multipliers".into(),
-            json!({
-                "particular": rationals(&v.family.particular),
-                "directions": v.family.directions.iter().map(|d| rationals(d)).collect::<Vec<_>>(),
-            }),
+        put(
+            "multipliers",
+            obj! {
+                "particular" => rationals(&v.family.particular),
+                "directions" => Value::Array(v.family.directions.iter().map(|d| rationals(d)).collect()),
+            },
         );
-        c.insert("hessian_h".into(), matrix(&v.hessian_h));
     }
     if let Some(lin) = &a.linearisation {
-        c.insert(
-            "linearisation".into(),
-            json!({
-                "A": matrix(&lin.a),
-                "B": lin.noise.iter().map(matrix).collect::<Vec<_>>(),
-                "spectrum": a.spectrum.iter().map(complex).collect::<Vec<_>>(),
-            }),
+        put(
+            "linearisation",
+            obj! {
+                "A" => matrix(&lin.a),
+                "B" => Value::Array(lin.noise.iter().map(matrix).collect()),
+                "spectrum" => Value::Array(a.spectrum.iter().map(complex).collect()),
+            },
         );
     }
     if let Some(inst) = &a.instability {
-        c.insert(
-            "instability".into(),
-            json!({
-                "eigenvalue": complex(&inst.eigenvalue),
-                "eigenvector": inst.eigenvector.iter().map(complex).collect::<Vec<_>>(),
-                "residual": float(inst.residual),
-                "tolerance": float(inst.tolerance),
-            }),
+        put(
+            "instability",
+            obj! {
+                "eigenvalue" => complex(&inst.eigenvalue),
+                "eigenvector" => Value::Array(inst.eigenvector.iter().map(complex).collect()),
+                "residual" => float(inst.residual),
+                "tolerance" => float(inst.tolerance),
+            },
         );
     }
     if let Some(casimir::SearchOutcome::NotFound { best_positive_margin, best_negative_margin, restricted_dimension }) =
         &a.search
     {
-        c.insert(
-            "search".into(),
-            json!({
-                "best_positive_margin": float(*best_positive_margin),
-                "best_negative_margin": float(*best_negative_margin),
-                "restricted_dimension": restricted_dimension,
-            }),
+        put(
+            "search",
+            obj! {
+                "best_positive_margin" => float(*best_positive_margin),
+                "best_negative_margin" => float(*best_negative_margin),
+                "restricted_dimension" => *restricted_dimension as u64,
+            },
         );
     }
     if let Some(s) = &a.stable {
         let ch = &s.choice;
-        c.insert(
-            "casimir_choice".into(),
-            json!({
-                "sign": ch.sign,
-                "family_parameters": rationals(&ch.family_parameters),
-                "multipliers": rationals(&ch.multipliers),
-                "M": matrix(&ch.m),
-                "relative_margin": float(ch.relative_margin),
-                "note": "first definite choice found (maximal Finsler margin); optimisation over the freedom is not yet done",
-            }),
+        put(
+            "casimir_choice",
+            obj! {
+                "sign" => ch.sign as i64,
+                "family_parameters" => rationals(&ch.family_parameters),
+                "multipliers" => rationals(&ch.multipliers),
+                "M" => matrix(&ch.m),
+                "relative_margin" => float(ch.relative_margin),
+                "note" => "first definite choice found (maximal Finsler margin); optimisation over the freedom is not yet done",
+            },
         );
-        c.insert("P".into(), matrix(&ch.p));
-        c.insert("Q".into(), matrix(&s.form.q));
-        c.insert(
-            "residuals".into(),
-            json!({
-                "drift": matrix(&s.form.drift_residual),
-                "Q_minus_paper_formula": matrix(&s.form.q.sub(&s.form.paper_formula)),
-            }),
+        put("P", matrix(&ch.p));
+        put("Q", matrix(&s.form.q));
+        put(
+            "residuals",
+            obj! {
+                "drift" => matrix(&s.form.drift_residual),
+                "paper_formula_3_3_equals_Q" => s.form.q == s.form.paper_formula,
+            },
         );
-        c.insert(
-            "growth".into(),
-            json!({
-                "sigma2": float(s.growth.sigma2),
-                "largest_generalized_eigenvalue": float(s.growth.largest_eigenvalue),
-                "generalized_eigenvalues": s.growth.eigenvalues.iter().map(|x| float(*x)).collect::<Vec<_>>(),
-                "fastest_direction": s.growth.direction.iter().map(|x| float(*x)).collect::<Vec<_>>(),
-                "relative_residual": float(s.growth.relative_residual),
-            }),
+        put(
+            "growth",
+            obj! {
+                "sigma2" => float(s.growth.sigma2),
+                "largest_generalized_eigenvalue" => float(s.growth.largest_eigenvalue),
+                "generalized_eigenvalues" => Value::Array(s.growth.eigenvalues.iter().map(|x| float(*x)).collect()),
+                "fastest_direction" => Value::Array(s.growth.direction.iter().map(|x| float(*x)).collect()),
+                "relative_residual" => float(s.growth.relative_residual),
+            },
         );
     }
-    c.insert("settings".into(), spec.settings.to_json());
-    c.insert("spec".into(), spec.raw.clone());
+    put("settings", spec.settings.to_json());
+    put("spec", spec.raw.clone());
     Value::Object(c)
 }

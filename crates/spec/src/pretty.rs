@@ -7,13 +7,61 @@
 
 use serde_json::Value;
 
+/// Keys printed first, in this order, wherever they occur; other keys follow
+/// alphabetically. (Maps are stored sorted, which is fast; this restores a
+/// reading order: verdict before evidence, spec fields in the spec's order.)
+const KEY_ORDER: &[&str] = &[
+    "certificate_version",
+    "engine",
+    "name",
+    "description",
+    "verdict",
+    "reason",
+    "level",
+    "checks",
+    "sigma2",
+    "stopping",
+    "coordinates",
+    "equilibrium",
+    "noise",
+    "conserved",
+    "casimir_discovery",
+    "multipliers",
+    "casimir_choice",
+    "P",
+    "Q",
+    "residuals",
+    "growth",
+    "linearisation",
+    "instability",
+    "search",
+    "settings",
+    "spec",
+    "algebra",
+    "parameters",
+    "hamiltonian",
+    "casimirs",
+    "first_integrals",
+    "epsilon",
+    "delta",
+    "T",
+    "bound",
+    "re",
+    "im",
+];
+
+fn key_rank(k: &str) -> usize {
+    KEY_ORDER.iter().position(|x| *x == k).unwrap_or(KEY_ORDER.len())
+}
+
 fn is_scalar(v: &Value) -> bool {
     !matches!(v, Value::Array(_) | Value::Object(_))
 }
 
-fn scalar(v: &Value) -> String {
+fn scalar(v: &Value, out: &mut String) {
+    use std::fmt::Write as _;
     // serde_json prints scalars (strings escaped, numbers as parsed) correctly.
-    v.to_string()
+    let _ = write!(out, "{v}");
 }
 
 fn write(v: &Value, indent: usize, out: &mut String) {
@@ -23,9 +71,11 @@ fn write(v: &Value, indent: usize, out: &mut String) {
         Value::Object(map) if map.is_empty() => out.push_str("{}"),
         Value::Object(map) => {
             out.push_str("{\n");
-            for (i, (k, val)) in map.iter().enumerate() {
+            let mut entries: Vec<(&String, &Value)> = map.iter().collect();
+            entries.sort_by(|(a, _), (b, _)| key_rank(a).cmp(&key_rank(b)).then_with(|| a.cmp(b)));
+            for (i, (k, val)) in entries.into_iter().enumerate() {
                 out.push_str(&pad_in);
-                out.push_str(&Value::String(k.clone()).to_string());
+                scalar(&Value::String(k.clone()), out);
                 out.push_str(": ");
                 write(val, indent + 1, out);
                 if i + 1 < map.len() {
@@ -38,7 +88,12 @@ fn write(v: &Value, indent: usize, out: &mut String) {
         }
         Value::Array(items) if items.iter().all(is_scalar) => {
             out.push('[');
-            out.push_str(&items.iter().map(scalar).collect::<Vec<_>>().join(", "));
+            for (i, item) in items.iter().enumerate() {
+                if i > 0 {
+                    out.push_str(", ");
+                }
+                scalar(item, out);
+            }
             out.push(']');
         }
         Value::Array(items) => {
@@ -54,7 +109,7 @@ fn write(v: &Value, indent: usize, out: &mut String) {
             out.push_str(&pad);
             out.push(']');
         }
-        other => out.push_str(&scalar(other)),
+        other => scalar(other, out),
     }
 }
 
@@ -62,7 +117,7 @@ fn write(v: &Value, indent: usize, out: &mut String) {
 /// newline. The output parses back to the same value.
 ///
 /// ```
-/// let v = serde_json::json!({"P": [["1", "0"], ["0", "2"]], "x": [1, 2]});
+/// let v = serde_json::json!({"x": [1, 2], "P": [["1", "0"], ["0", "2"]]});
 /// let s = spec::to_pretty_json(&v);
 /// assert_eq!(s, "{\n  \"P\": [\n    [\"1\", \"0\"],\n    [\"0\", \"2\"]\n  ],\n  \"x\": [1, 2]\n}\n");
 /// assert_eq!(serde_json::from_str::<serde_json::Value>(&s).unwrap(), v);
