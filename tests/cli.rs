@@ -284,3 +284,32 @@ fn malformed_certificate_is_bad_input() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("$.spec"));
 }
+
+/// Numbers that are verified rather than compared (eigenvector, spectrum,
+/// fastest direction) still fail `check` when altered.
+#[test]
+fn tampered_verified_numbers_fail_check() {
+    let unstable = certify_fixture("rigid-body-intermediate-axis.json");
+    let stable = certify_fixture("rigid-body-major-axis.json");
+    let mut tampers: Vec<(&str, Value)> = Vec::new();
+    let mut c = unstable.clone();
+    let x = c["instability"]["eigenvector"][1]["re"].as_f64().unwrap();
+    c["instability"]["eigenvector"][1]["re"] = serde_json::json!(x + 1e-3);
+    tampers.push(("eigenvector entry", c));
+    let mut c = unstable.clone();
+    let x = c["linearisation"]["spectrum"][0]["re"].as_f64().unwrap();
+    c["linearisation"]["spectrum"][0]["re"] = serde_json::json!(x * (1.0 + 1e-6));
+    tampers.push(("spectrum entry", c));
+    let mut c = stable.clone();
+    let x = c["growth"]["fastest_direction"][1].as_f64().unwrap();
+    c["growth"]["fastest_direction"][1] = serde_json::json!(x * (1.0 + 1e-6));
+    tampers.push(("fastest direction", c));
+    let mut c = stable.clone();
+    c["growth"]["generalized_eigenvalues"][0] = serde_json::json!(-1.0);
+    tampers.push(("generalized eigenvalue", c));
+    for (what, c) in tampers {
+        let path = temp_file(&format!("tampered-verified-{}.json", what.replace(' ', "-")), &c.to_string());
+        let out = verify(&["check", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(1), "{what}: {}", stderr(&out));
+    }
+}

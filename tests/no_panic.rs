@@ -55,7 +55,7 @@ fn mutate(v: &mut Value, choice: &mut u64, replacement: &Value) -> bool {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(feature = "heavy-tests") { 20_000 } else { 300 }))]
+    #![proptest_config(proptest_config(300, 20_000))]
 
     #[test]
     fn random_text_never_panics(text in ".{0,200}") {

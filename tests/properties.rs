@@ -92,7 +92,7 @@ fn a_wrong_representation_is_rejected() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(proptest_config(64, 2048))]
 
     /// <ad*_xi mu, eta> = <mu, ad_xi eta> on every algebra of the zoo.
     #[test]

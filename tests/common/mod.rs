@@ -81,3 +81,14 @@ pub fn rel(a: f64, b: f64) -> f64 {
 pub fn f(r: &Rational) -> f64 {
     exact::rational_to_f64(r)
 }
+
+/// Proptest settings with a fixed seed (reproducible runs; the failure
+/// persistence file still records any counterexample), `cases` cases, or
+/// `heavy` cases with the `heavy-tests` feature.
+pub fn proptest_config(cases: u32, heavy: u32) -> ProptestConfig {
+    ProptestConfig {
+        cases: if cfg!(feature = "heavy-tests") { heavy } else { cases },
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x5EC_CA51),
+        ..ProptestConfig::default()
+    }
+}

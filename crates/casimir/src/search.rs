@@ -89,8 +89,22 @@ impl SearchOutcome {
     }
 }
 
+/// Symmetric eigen-decomposition with an iteration limit (nalgebra's default
+/// has none), `None` if it does not converge or the input is not finite.
+pub(crate) fn symmetric_eigen(m: DMatrix<f64>) -> Option<SymmetricEigen<f64, nalgebra::Dyn>> {
+    if m.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    let limit = 1000 * (m.nrows() + 1);
+    SymmetricEigen::try_new(m, f64::EPSILON, limit)
+}
+
+/// Smallest eigenvalue, its eigenvector, and the largest absolute eigenvalue;
+/// `-inf` (never definite) if the eigen-solve fails.
 fn symmetric_extremes(m: &DMatrix<f64>) -> (f64, DVector<f64>, f64) {
-    let eig = SymmetricEigen::new(m.clone());
+    let Some(eig) = symmetric_eigen(m.clone()) else {
+        return (f64::NEG_INFINITY, DVector::zeros(m.nrows()), f64::INFINITY);
+    };
     let mut imin = 0;
     for i in 1..eig.eigenvalues.len() {
         if eig.eigenvalues[i] < eig.eigenvalues[imin] {
@@ -329,8 +343,8 @@ fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> 
     let l_inv = ch.l().try_inverse()?;
     let pencil = &l_inv * (-&schur) * l_inv.transpose();
     let pencil = (&pencil + pencil.transpose()) * 0.5;
-    let mu_star = SymmetricEigen::new(pencil).eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-    let w2_max = SymmetricEigen::new(w2).eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+    let mu_star = symmetric_eigen(pencil)?.eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    let w2_max = symmetric_eigen(w2)?.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
     let floor = if z.ncols() > 0 {
         let rz = z.transpose() * &sp0 * &z;
         symmetric_extremes(&rz).0.max(f64::MIN_POSITIVE)

@@ -14,7 +14,8 @@ pub struct GrowthConstant {
     /// All generalized eigenvalues, ascending.
     pub eigenvalues: Vec<f64>,
     /// A unit-`P`-norm eigenvector for `l_max`: the perturbation that grows
-    /// fastest at `t = 0`.
+    /// fastest at `t = 0` (sign fixed so its largest entry is positive; when
+    /// `l_max` is multiple, any vector of its eigenspace).
     pub direction: Vec<f64>,
     /// Residual `|Q v - l P v| / (|Q| + |l| |P|)` of that eigenpair.
     pub relative_residual: f64,
@@ -30,6 +31,9 @@ pub enum GrowthError {
     /// A non-finite number appeared.
     #[error("non-finite value in the generalized eigenproblem")]
     NonFinite,
+    /// The symmetric eigen-iteration did not converge.
+    #[error("the symmetric eigenvalue iteration did not converge")]
+    NoConvergence,
 }
 
 /// `Sigma^2 = max(0, lambda_max(sQ, sP))` with `s = sign` (+1 or -1).
@@ -69,7 +73,7 @@ pub fn growth_constant(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstan
     let linv_q = l.solve_lower_triangular(&qf).ok_or(GrowthError::NotPositiveDefinite)?;
     let c_t = l.solve_lower_triangular(&linv_q.transpose()).ok_or(GrowthError::NotPositiveDefinite)?;
     let c = (&c_t + c_t.transpose()) * 0.5;
-    let eig = SymmetricEigen::new(c);
+    let eig = SymmetricEigen::try_new(c, f64::EPSILON, 1000 * (n + 1)).ok_or(GrowthError::NoConvergence)?;
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
     let eigenvalues: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
@@ -81,6 +85,10 @@ pub fn growth_constant(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstan
     // v = L^{-T} w has v^T sP v = 1.
     let w: DVector<f64> = eig.eigenvectors.column(imax).into_owned();
     let v = l.transpose().solve_upper_triangular(&w).ok_or(GrowthError::NotPositiveDefinite)?;
+    // Fix the sign: the first entry within 1e-6 of the largest modulus is positive.
+    let max_abs = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let pivot = v.iter().find(|x| x.abs() >= max_abs * (1.0 - 1e-6)).copied().unwrap_or(1.0);
+    let v = if pivot < 0.0 { -v } else { v };
     let residual = (&qf * &v - &pf * &v * lmax).norm();
     let scale = qf.norm() + lmax.abs() * pf.norm();
     let relative_residual = if scale > 0.0 { residual / scale } else { 0.0 };

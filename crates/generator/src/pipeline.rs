@@ -103,6 +103,8 @@ pub struct Analysis {
     pub spectrum: Vec<Complex<f64>>,
     /// An unstable eigenpair, if one was found.
     pub instability: Option<Instability>,
+    /// Why the spectrum of `A` could not be computed, if it could not.
+    pub spectrum_error: Option<String>,
     /// The second variation data (when multipliers exist).
     pub variation: Option<SecondVariation>,
     /// The outcome of the search over the Casimir freedom.
@@ -152,6 +154,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         linearisation: None,
         spectrum: vec![],
         instability: None,
+        spectrum_error: None,
         variation: None,
         search: None,
         stable: None,
@@ -176,9 +179,20 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         return analysis;
     }
     let linearisation = linearise(system);
-    analysis.spectrum = spectrum(&linearisation.a);
-    analysis.instability = find_instability(&linearisation.a, settings.instability_tolerance);
+    let spectral = spectrum(&linearisation.a)
+        .and_then(|s| Ok((s, find_instability(&linearisation.a, settings.instability_tolerance)?)));
     analysis.linearisation = Some(linearisation.clone());
+    match spectral {
+        Ok((s, instability)) => {
+            analysis.spectrum = s;
+            analysis.instability = instability;
+        }
+        Err(e) => {
+            // Without a spectrum nothing about A can be claimed; the energy-
+            // Casimir test below does not need it.
+            analysis.spectrum_error = Some(e.to_string());
+        }
+    }
 
     let Some(variation) = system.second_variation() else {
         return conclude_without_form(

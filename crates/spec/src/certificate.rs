@@ -178,13 +178,15 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
             },
         );
     }
+    if let Some(e) = &a.spectrum_error {
+        put("spectrum_error", Value::from(e.as_str()));
+    }
     if let Some(inst) = &a.instability {
         put(
             "instability",
             obj! {
                 "eigenvalue" => complex(&inst.eigenvalue),
                 "eigenvector" => Value::Array(inst.eigenvector.iter().map(complex).collect()),
-                "residual" => float(inst.residual),
                 "tolerance" => float(inst.tolerance),
             },
         );
@@ -230,7 +232,6 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
                 "largest_generalized_eigenvalue" => float(s.growth.largest_eigenvalue),
                 "generalized_eigenvalues" => Value::Array(s.growth.eigenvalues.iter().map(|x| float(*x)).collect()),
                 "fastest_direction" => Value::Array(s.growth.direction.iter().map(|x| float(*x)).collect()),
-                "relative_residual" => float(s.growth.relative_residual),
             },
         );
     }

@@ -2,10 +2,15 @@
 //!
 //! The checker re-derives the whole certificate from the embedded spec and
 //! the recorded settings, and compares field by field: strings, rationals and
-//! integers must match exactly, floating-point numbers to a relative `1e-9`.
-//! Nothing stored in the certificate is trusted, so changing any number, the
-//! verdict, a matrix, the Casimir choice or the spec makes the check fail and
-//! names the field.
+//! integers must match exactly, floating-point numbers to a relative `1e-9`
+//! (with an absolute floor of `1e-9` times the largest entry of the enclosing
+//! array, so round-off zeros compare against their vector's scale). Numbers
+//! whose representation is arbitrary are verified instead of compared: the
+//! spectrum as a multiset, the unstable eigenvector by its residual
+//! `|A v - lambda v|` against the re-derived `A`, and the fastest-growing
+//! direction by `v^T P v = 1` and `v^T Q v = l_max`. Nothing stored is
+//! trusted, so changing the verdict, `Sigma^2`, a matrix entry, the Casimir
+//! choice or the spec makes the check fail and names the field.
 
 use crate::certificate::certify;
 use crate::json::{as_object, required, SpecError};
@@ -62,7 +67,19 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
     let settings = map.get("settings");
     spec.settings = EngineSettings::from_json(settings, "$.settings").map_err(CheckError::BadInput)?;
     let rederived = certify(&spec);
-    compare(&rederived.json, cert, "$")?;
+    let mut expected = rederived.json.clone();
+    let mut found = cert.clone();
+    // Representation-dependent numbers are verified, not compared.
+    let spectrum =
+        (take(&mut expected, &["linearisation", "spectrum"]), take(&mut found, &["linearisation", "spectrum"]));
+    let eigenvector =
+        (take(&mut expected, &["instability", "eigenvector"]), take(&mut found, &["instability", "eigenvector"]));
+    let direction =
+        (take(&mut expected, &["growth", "fastest_direction"]), take(&mut found, &["growth", "fastest_direction"]));
+    compare(&expected, &found, "$", 0.0)?;
+    check_spectrum(spectrum)?;
+    check_eigenvector(eigenvector, &rederived.analysis)?;
+    check_direction(direction, &rederived.analysis)?;
     Ok(CheckReport {
         name: spec.name.clone(),
         verdict: rederived.analysis.verdict.as_str().to_string(),
@@ -74,7 +91,153 @@ fn fail(path: &str, message: String) -> CheckError {
     CheckError::Failed { path: path.to_string(), message }
 }
 
-fn compare(expected: &Value, found: &Value, path: &str) -> Result<(), CheckError> {
+/// Remove `v[path]` and return it.
+fn take(v: &mut Value, path: &[&str]) -> Option<Value> {
+    let (last, parents) = path.split_last()?;
+    let mut cur = v;
+    for p in parents {
+        cur = cur.get_mut(*p)?;
+    }
+    cur.as_object_mut()?.remove(*last)
+}
+
+fn max_abs_number(v: &Value) -> f64 {
+    match v {
+        Value::Number(n) => n.as_f64().map_or(0.0, f64::abs),
+        Value::Array(a) => a.iter().map(max_abs_number).fold(0.0, f64::max),
+        Value::Object(m) => m.values().map(max_abs_number).fold(0.0, f64::max),
+        _ => 0.0,
+    }
+}
+
+fn complex_list(v: &Value, path: &str) -> Result<Vec<(f64, f64)>, CheckError> {
+    let items = v.as_array().ok_or_else(|| fail(path, "expected an array of {re, im}".into()))?;
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, z)| match (z.get("re").and_then(Value::as_f64), z.get("im").and_then(Value::as_f64)) {
+            (Some(re), Some(im)) if re.is_finite() && im.is_finite() => Ok((re, im)),
+            _ => Err(fail(&format!("{path}[{i}]"), "expected {re, im} with finite numbers".into())),
+        })
+        .collect()
+}
+
+/// The spectrum is compared as a multiset, to `1e-9` of the spectral radius
+/// (round-off decides the order of eigenvalues with equal real parts).
+fn check_spectrum(pair: (Option<Value>, Option<Value>)) -> Result<(), CheckError> {
+    let path = "$.linearisation.spectrum";
+    let (expected, found) = match pair {
+        (None, None) => return Ok(()),
+        (Some(e), Some(f)) => (complex_list(&e, path)?, complex_list(&f, path)?),
+        (Some(_), None) => return Err(fail(path, "missing in the certificate".into())),
+        (None, Some(_)) => return Err(fail(path, "not produced by the engine for this spec".into())),
+    };
+    if expected.len() != found.len() {
+        return Err(fail(path, format!("re-derived {} eigenvalues, certificate has {}", expected.len(), found.len())));
+    }
+    let radius = expected.iter().map(|(a, b)| a.hypot(*b)).fold(0.0, f64::max);
+    let tol = FLOAT_TOLERANCE * radius.max(f64::MIN_POSITIVE);
+    let mut used = vec![false; found.len()];
+    for (i, e) in expected.iter().enumerate() {
+        let hit = (0..found.len()).find(|&j| !used[j] && (found[j].0 - e.0).hypot(found[j].1 - e.1) <= tol);
+        match hit {
+            Some(j) => used[j] = true,
+            None => {
+                return Err(fail(
+                    path,
+                    format!("re-derived eigenvalue {} {:+}i (#{i}) is not in the certificate", e.0, e.1),
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The stored eigenvector must be a unit eigenvector of the re-derived `A`
+/// for the re-derived unstable eigenvalue.
+fn check_eigenvector(pair: (Option<Value>, Option<Value>), analysis: &generator::Analysis) -> Result<(), CheckError> {
+    let path = "$.instability.eigenvector";
+    let found = match pair {
+        (None, None) => return Ok(()),
+        (Some(_), Some(f)) => complex_list(&f, path)?,
+        (Some(_), None) => return Err(fail(path, "missing in the certificate".into())),
+        (None, Some(_)) => return Err(fail(path, "not produced by the engine for this spec".into())),
+    };
+    let (Some(inst), Some(lin)) = (&analysis.instability, &analysis.linearisation) else {
+        return Err(fail(path, "no instability was re-derived".into()));
+    };
+    let a = lin.a.to_dmatrix();
+    let n = a.nrows();
+    if found.len() != n {
+        return Err(fail(path, format!("expected {n} components, got {}", found.len())));
+    }
+    let norm = found.iter().map(|(x, y)| x * x + y * y).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > 1e-9 {
+        return Err(fail(path, format!("not a unit vector (norm {norm})")));
+    }
+    let lambda = inst.eigenvalue;
+    let mut residual = 0.0;
+    for i in 0..n {
+        let (mut re, mut im) = (0.0, 0.0);
+        for j in 0..n {
+            re += a[(i, j)] * found[j].0;
+            im += a[(i, j)] * found[j].1;
+        }
+        re -= lambda.re * found[i].0 - lambda.im * found[i].1;
+        im -= lambda.re * found[i].1 + lambda.im * found[i].0;
+        residual += re * re + im * im;
+    }
+    let residual = residual.sqrt();
+    let scale = a.norm().max(lambda.norm()).max(f64::MIN_POSITIVE);
+    if residual > 1e-8 * scale {
+        return Err(fail(path, format!("|A v - lambda v| = {residual:e} is not small: not an eigenvector")));
+    }
+    Ok(())
+}
+
+/// The stored fastest direction must have unit `P`-norm and attain the
+/// largest generalized eigenvalue: `v^T (sQ) v = l_max`.
+fn check_direction(pair: (Option<Value>, Option<Value>), analysis: &generator::Analysis) -> Result<(), CheckError> {
+    let path = "$.growth.fastest_direction";
+    let found = match pair {
+        (None, None) => return Ok(()),
+        (Some(_), Some(f)) => f,
+        (Some(_), None) => return Err(fail(path, "missing in the certificate".into())),
+        (None, Some(_)) => return Err(fail(path, "not produced by the engine for this spec".into())),
+    };
+    let Some(stable) = &analysis.stable else {
+        return Err(fail(path, "no stable evidence was re-derived".into()));
+    };
+    let v: Vec<f64> = found
+        .as_array()
+        .ok_or_else(|| fail(path, "expected an array".into()))?
+        .iter()
+        .map(|x| x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| fail(path, "expected finite numbers".into())))
+        .collect::<Result<_, _>>()?;
+    let s = stable.choice.sign as f64;
+    let p = stable.choice.p.to_dmatrix() * s;
+    let q = stable.form.q.to_dmatrix() * s;
+    if v.len() != p.nrows() {
+        return Err(fail(path, format!("expected {} components, got {}", p.nrows(), v.len())));
+    }
+    let x = nalgebra::DVector::from_column_slice(&v);
+    let pn = (x.transpose() * &p * &x)[(0, 0)];
+    let qn = (x.transpose() * &q * &x)[(0, 0)];
+    let lmax = stable.growth.largest_eigenvalue;
+    if (pn - 1.0).abs() > 1e-8 {
+        return Err(fail(path, format!("v^T P v = {pn}, expected 1")));
+    }
+    let scale = q.norm().max(lmax.abs() * p.norm()).max(f64::MIN_POSITIVE);
+    if (qn - lmax).abs() > 1e-8 * scale {
+        return Err(fail(path, format!("v^T Q v = {qn}, expected the largest generalized eigenvalue {lmax}")));
+    }
+    Ok(())
+}
+
+/// Compare field by field. `floor` is an absolute tolerance for numbers,
+/// `1e-9` of the largest number in the enclosing array (round-off zeros in a
+/// vector are compared against the vector's scale, not their own).
+fn compare(expected: &Value, found: &Value, path: &str, floor: f64) -> Result<(), CheckError> {
     match (expected, found) {
         (Value::Object(e), Value::Object(f)) => {
             for (k, ev) in e {
@@ -83,12 +246,13 @@ fn compare(expected: &Value, found: &Value, path: &str) -> Result<(), CheckError
                     continue; // a newer engine may re-check an older certificate
                 }
                 match f.get(k) {
-                    Some(fv) => compare(ev, fv, &p)?,
+                    Some(fv) => compare(ev, fv, &p, floor)?,
                     None => return Err(fail(&p, "missing in the certificate".into())),
                 }
             }
             for k in f.keys() {
-                if !e.contains_key(k) {
+                let engine = path == "$" && k == "engine";
+                if !e.contains_key(k) && !engine {
                     return Err(fail(&format!("{path}.{k}"), "not produced by the engine for this spec".into()));
                 }
             }
@@ -98,8 +262,9 @@ fn compare(expected: &Value, found: &Value, path: &str) -> Result<(), CheckError
             if e.len() != f.len() {
                 return Err(fail(path, format!("re-derived {} entries, certificate has {}", e.len(), f.len())));
             }
+            let floor = floor.max(FLOAT_TOLERANCE * max_abs_number(expected));
             for (i, (ev, fv)) in e.iter().zip(f).enumerate() {
-                compare(ev, fv, &format!("{path}[{i}]"))?;
+                compare(ev, fv, &format!("{path}[{i}]"), floor)?;
             }
             Ok(())
         }
@@ -114,8 +279,7 @@ fn compare(expected: &Value, found: &Value, path: &str) -> Result<(), CheckError
                 }
                 return Ok(());
             }
-            let scale = x.abs().max(y.abs());
-            if (x - y).abs() > FLOAT_TOLERANCE * scale.max(f64::MIN_POSITIVE) && (x - y).abs() > 1e-300 {
+            if !y.is_finite() || (x - y).abs() > (FLOAT_TOLERANCE * x.abs().max(y.abs())).max(floor) {
                 return Err(fail(path, format!("re-derived {x:e}, certificate says {y:e}")));
             }
             Ok(())
