@@ -205,7 +205,20 @@ impl LieAlgebra {
     /// The matrix of `ad*_xi` acting on `mu`: `(ad*_xi)_{b k} = c^k_ab xi^a`,
     /// i.e. the transpose of [`Self::ad_matrix`].
     pub fn coad_matrix(&self, xi: &[Rational]) -> Matrix {
-        self.ad_matrix(xi).transpose()
+        let n = self.dim();
+        assert_eq!(xi.len(), n, "vector length");
+        let mut m = Matrix::zeros(n, n);
+        for a in 0..n {
+            if xi[a].is_zero() {
+                continue;
+            }
+            for b in 0..n {
+                for (k, c) in self.bracket_of_basis(a, b) {
+                    m[(b, *k)] += c * &xi[a];
+                }
+            }
+        }
+        m
     }
 
     /// `ad*_xi mu`.

@@ -293,8 +293,17 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
     let Some((sign, t, relative_margin)) = found else {
         return not_found();
     };
-    let Some(t_rational) = rational_parameters(variation, &t, sign, settings.max_denominator) else {
-        return not_found();
+    let t_rational = if f == 0 {
+        // Nothing to round: confirm the restricted Hessian's sign exactly.
+        if k > 0 && r0.definiteness() != Some(sign) {
+            return not_found();
+        }
+        vec![]
+    } else {
+        match rational_parameters(variation, &t, sign, settings.max_denominator) {
+            Some(t) => t,
+            None => return not_found(),
+        }
     };
     let multipliers = family.at(&t_rational);
     match choose_m(variation, &multipliers, sign) {

@@ -205,8 +205,14 @@ impl System {
     pub fn noise_commutation(&self) -> Vec<Vec<bool>> {
         self.conserved()
             .iter()
-            .map(|(_, k)| {
-                self.noise.iter().map(|s| lie_poisson_bracket(&self.algebra, k, &Poly::linear(s)).is_zero()).collect()
+            .map(|(kind, k)| match kind {
+                // A Casimir commutes with every function (checked in `new`).
+                ConservedKind::Casimir => vec![true; self.noise.len()],
+                ConservedKind::FirstIntegral => self
+                    .noise
+                    .iter()
+                    .map(|s| lie_poisson_bracket(&self.algebra, k, &Poly::linear(s)).is_zero())
+                    .collect(),
             })
             .collect()
     }

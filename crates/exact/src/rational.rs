@@ -22,13 +22,35 @@ type Big = num_rational::BigRational;
 enum Repr {
     /// `n / d` with `d > 0`, `gcd(n, d) = 1`.
     Small(i64, i64),
-    /// Only values that do not fit `Small`.
-    Big(Big),
+    /// Only values that do not fit `Small` (boxed, so the common small case
+    /// stays 24 bytes).
+    Big(Box<Big>),
 }
 
 /// An exact rational number (see the module docs for the representation).
 #[derive(Clone, PartialEq, Eq, Hash)]
 pub struct Rational(Repr);
+
+fn gcd_u64(mut a: u64, mut b: u64) -> u64 {
+    if a == 0 {
+        return b;
+    }
+    if b == 0 {
+        return a;
+    }
+    let shift = (a | b).trailing_zeros();
+    a >>= a.trailing_zeros();
+    loop {
+        b >>= b.trailing_zeros();
+        if a > b {
+            std::mem::swap(&mut a, &mut b);
+        }
+        b -= a;
+        if b == 0 {
+            return a << shift;
+        }
+    }
+}
 
 fn gcd_u128(mut a: u128, mut b: u128) -> u128 {
     if a == 0 {
@@ -66,14 +88,21 @@ impl Rational {
         if n == 0 {
             return Rational(Repr::Small(0, 1));
         }
-        let g = if d == 1 { 1 } else { gcd_u128(n.unsigned_abs(), d as u128) as i128 };
+        let na = n.unsigned_abs();
+        let g = if d == 1 {
+            1
+        } else if na <= u64::MAX as u128 && d <= u64::MAX as i128 {
+            gcd_u64(na as u64, d as u64) as i128
+        } else {
+            gcd_u128(na, d as u128) as i128
+        };
         if g > 1 {
             n /= g;
             d /= g;
         }
         match (i64::try_from(n), i64::try_from(d)) {
             (Ok(n), Ok(d)) => Rational(Repr::Small(n, d)),
-            _ => Rational(Repr::Big(Big::new_raw(BigInt::from(n), BigInt::from(d)))),
+            _ => Rational(Repr::Big(Box::new(Big::new_raw(BigInt::from(n), BigInt::from(d))))),
         }
     }
 
@@ -81,14 +110,14 @@ impl Rational {
     fn from_big(b: Big) -> Rational {
         match (b.numer().to_i64(), b.denom().to_i64()) {
             (Some(n), Some(d)) => Rational(Repr::Small(n, d)),
-            _ => Rational(Repr::Big(b)),
+            _ => Rational(Repr::Big(Box::new(b))),
         }
     }
 
     fn to_big(&self) -> Big {
         match &self.0 {
             Repr::Small(n, d) => Big::new_raw(BigInt::from(*n), BigInt::from(*d)),
-            Repr::Big(b) => b.clone(),
+            Repr::Big(b) => (**b).clone(),
         }
     }
 
@@ -114,7 +143,7 @@ impl Rational {
     pub fn from_integer(n: BigInt) -> Rational {
         match n.to_i64() {
             Some(v) => Rational(Repr::Small(v, 1)),
-            None => Rational(Repr::Big(Big::from_integer(n))),
+            None => Rational(Repr::Big(Box::new(Big::from_integer(n)))),
         }
     }
 
@@ -304,7 +333,7 @@ impl Neg for &Rational {
                 Some(m) => Rational(Repr::Small(m, *d)),
                 None => Rational::from_big(-self.to_big()),
             },
-            Repr::Big(b) => Rational::from_big(-b.clone()),
+            Repr::Big(b) => Rational::from_big(-(**b).clone()),
         }
     }
 }

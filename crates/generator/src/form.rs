@@ -36,15 +36,17 @@ pub struct GeneratorForm {
 /// assert!(form.q.is_zero());
 /// ```
 pub fn generator_form(linearisation: &Linearisation, p: &Matrix) -> GeneratorForm {
-    let two = Rational::from_integer(2.into());
-    let pa_tilde = p.mul(&linearisation.a_tilde);
-    let mut q = pa_tilde.symmetric_part().scale(&two);
+    // 2 sym(P A~) = 2 sym(P A) + sum_i sym(P B_i^2), so Q = drift + paper formula.
+    let two = Rational::from(2);
+    let drift_residual = p.mul(&linearisation.a).symmetric_part().scale(&two);
     let mut paper_formula = Matrix::zeros(p.nrows(), p.ncols());
     for b in &linearisation.noise {
-        let btpb = b.transpose().mul(p).mul(b);
-        q = q.add(&btpb);
-        paper_formula = paper_formula.add(&btpb).add(&p.mul(&b.mul(b)).symmetric_part());
+        let pb = p.mul(b);
+        // B^T P B = (P B)^T B is not symmetric-by-construction in the code, so
+        // form it from P B once and symmetrise the P B^2 term.
+        let btpb = b.transpose().mul(&pb);
+        paper_formula = paper_formula.add(&btpb).add(&pb.mul(b).symmetric_part());
     }
-    let drift_residual = p.mul(&linearisation.a).symmetric_part().scale(&two);
+    let q = drift_residual.add(&paper_formula);
     GeneratorForm { q, drift_residual, paper_formula }
 }

@@ -59,7 +59,17 @@ fn eigen(a: &Matrix) -> Result<Eigen, SpectrumError> {
 
 /// Eigenvalues of `A`, largest real part first.
 pub fn spectrum(a: &Matrix) -> Result<Vec<Complex<f64>>, SpectrumError> {
-    let mut ev = eigen(a)?.values;
+    let n = a.nrows();
+    let af = a.to_dmatrix();
+    if af.iter().any(|x| !x.is_finite()) {
+        return Err(SpectrumError::NonFinite);
+    }
+    if n == 0 {
+        return Ok(vec![]);
+    }
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| af[(i, j)]);
+    let values = m.eigenvalues().map_err(|_| SpectrumError::NoConvergence)?;
+    let mut ev: Vec<Complex<f64>> = values.iter().map(|z| Complex::new(z.re, z.im)).collect();
     ev.sort_by(|x, y| y.re.total_cmp(&x.re).then(y.im.total_cmp(&x.im)));
     Ok(ev)
 }
@@ -72,17 +82,34 @@ pub fn spectrum(a: &Matrix) -> Result<Vec<Complex<f64>>, SpectrumError> {
 /// about `eps^{1/k} |A|`, so real parts below the tolerance are not evidence of
 /// instability and the verdict stays inconclusive.
 pub fn find_instability(a: &Matrix, relative_tolerance: f64) -> Result<Option<Instability>, SpectrumError> {
-    let e = eigen(a)?;
-    let Some(top) = (0..e.values.len()).max_by(|&i, &j| e.values[i].re.total_cmp(&e.values[j].re)) else {
+    let values = spectrum(a)?;
+    instability_from_spectrum(a, &values, relative_tolerance)
+}
+
+/// As [`find_instability`], reusing a spectrum already computed; the
+/// eigenvector is computed only when an unstable eigenvalue is found.
+pub fn instability_from_spectrum(
+    a: &Matrix,
+    spectrum: &[Complex<f64>],
+    relative_tolerance: f64,
+) -> Result<Option<Instability>, SpectrumError> {
+    let Some(top) = spectrum.iter().copied().max_by(|x, y| x.re.total_cmp(&y.re)) else {
         return Ok(None);
     };
     let af = a.to_dmatrix();
     let tolerance = relative_tolerance * af.norm().max(1.0);
-    let eigenvalue = e.values[top];
-    if eigenvalue.re <= tolerance {
+    if top.re <= tolerance {
         return Ok(None);
     }
-    let v = &e.vectors[top];
+    let e = eigen(a)?;
+    // The decomposition's eigenvalue closest to the one found.
+    let Some(k) =
+        (0..e.values.len()).min_by(|&i, &j| (e.values[i] - top).norm().total_cmp(&(e.values[j] - top).norm()))
+    else {
+        return Ok(None);
+    };
+    let eigenvalue = e.values[k];
+    let v = &e.vectors[k];
     let norm = v.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
     // Fix the arbitrary phase: the first component whose modulus is within
     // 1e-6 of the largest is made real and positive, so the vector does not

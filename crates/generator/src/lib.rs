@@ -51,7 +51,7 @@ mod stopping;
 
 pub use form::{generator_form, GeneratorForm};
 pub use growth::{growth_constant, GrowthConstant, GrowthError};
-pub use instability::{find_instability, spectrum, Instability, SpectrumError};
+pub use instability::{find_instability, instability_from_spectrum, spectrum, Instability, SpectrumError};
 pub use linearise::{linearise, Linearisation};
 pub use moments::SecondMoments;
 pub use pipeline::{analyse, Analysis, Settings, StableEvidence, Verdict};

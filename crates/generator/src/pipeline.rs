@@ -3,7 +3,7 @@
 
 use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{growth_constant, GrowthConstant};
-use crate::instability::{find_instability, spectrum, Instability};
+use crate::instability::{instability_from_spectrum, spectrum, Instability};
 use crate::linearise::{linearise, Linearisation};
 use casimir::{find_definite_choice, CasimirChoice, SearchOutcome, SearchSettings, SecondVariation, System};
 use exact::Rational;
@@ -179,8 +179,10 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         return analysis;
     }
     let linearisation = linearise(system);
-    let spectral = spectrum(&linearisation.a)
-        .and_then(|s| Ok((s, find_instability(&linearisation.a, settings.instability_tolerance)?)));
+    let spectral = spectrum(&linearisation.a).and_then(|s| {
+        let instability = instability_from_spectrum(&linearisation.a, &s, settings.instability_tolerance)?;
+        Ok((s, instability))
+    });
     analysis.linearisation = Some(linearisation.clone());
     match spectral {
         Ok((s, instability)) => {

@@ -1,0 +1,42 @@
+//! Time the phases of `certify` on one spec, for the side-by-side comparison
+//! with the numpy/scipy baseline (`bench/side_by_side.sh`) and for profilers.
+//!
+//! Usage: `bench_certify SPEC [REPS]`. Prints one JSON line with microseconds
+//! per certificate for: parsing the spec (JSON + exact polynomials + checks),
+//! the analysis (steps 1-8 of the pipeline: the scope of the numpy timing),
+//! building the certificate JSON, and the whole `certify` path end to end.
+use std::time::Instant;
+
+fn per_call(reps: usize, mut f: impl FnMut()) -> f64 {
+    f(); // warm-up
+    let t = Instant::now();
+    for _ in 0..reps {
+        f();
+    }
+    t.elapsed().as_secs_f64() * 1e6 / reps as f64
+}
+
+fn main() {
+    let path = std::env::args().nth(1).expect("usage: bench_certify SPEC [REPS]");
+    let reps: usize = std::env::args().nth(2).map_or(5000, |s| s.parse().expect("REPS"));
+    let text = std::fs::read_to_string(&path).expect("read spec");
+    let spec = spec::parse_spec(&text).expect("valid spec");
+    let analysis = generator::analyse(&spec.system, &spec.settings.pipeline);
+    let parse = per_call(reps, || {
+        std::hint::black_box(spec::parse_spec(&text).unwrap());
+    });
+    let analyse = per_call(reps, || {
+        std::hint::black_box(generator::analyse(&spec.system, &spec.settings.pipeline));
+    });
+    let certificate = per_call(reps, || {
+        std::hint::black_box(spec::certificate_json(&spec, &analysis));
+    });
+    let end_to_end = per_call(reps, || {
+        let s = spec::parse_spec(&text).unwrap();
+        std::hint::black_box(spec::certify(&s).json);
+    });
+    println!(
+        "{{\"name\": \"{}\", \"reps\": {reps}, \"us_parse\": {parse:.2}, \"us_analyse\": {analyse:.2}, \"us_certificate_json\": {certificate:.2}, \"us_end_to_end\": {end_to_end:.2}}}",
+        spec.name
+    );
+}
