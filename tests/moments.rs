@@ -99,3 +99,26 @@ fn the_certified_constant_is_sharp_at_small_times() {
         }
     }
 }
+
+/// docs/errata.md: the paper's constants (Sigma^2 = sigma^2 for the rigid
+/// body and for the heavy top) do not bound the exact second moments. From
+/// the certified fastest direction, E|x_t|_P^2 exceeds e^{sigma^2 t} at t = 0.1
+/// (and stays under the engine's e^{Sigma^2 t}).
+#[test]
+fn paper_constants_are_violated_by_the_exact_moments() {
+    for (name, sigma2_paper) in [("rigid-body-major-axis.json", 0.09), ("heavy-top-asymmetric.json", 0.09)] {
+        let cert = spec::certify(&spec::parse_spec(&fixture(name)).unwrap());
+        let s = cert.analysis.stable.as_ref().unwrap();
+        let moments = SecondMoments::new(cert.analysis.linearisation.as_ref().unwrap());
+        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * (s.choice.sign as f64);
+        let t = 0.1;
+        let e = moments.expected_norm(&p, &s.growth.direction, t);
+        println!(
+            "{name}: E|x_t|_P^2 at t = {t} from the fastest direction = {e:.6}; paper bound e^(sigma^2 t) = {:.6}; engine bound e^(Sigma^2 t) = {:.6}",
+            (sigma2_paper * t).exp(),
+            (s.growth.sigma2 * t).exp()
+        );
+        assert!(e > (sigma2_paper * t).exp(), "{name}: the paper's bound holds here");
+        assert!(e <= (s.growth.sigma2 * t).exp() * (1.0 + 1e-12), "{name}: the engine's bound fails");
+    }
+}
