@@ -144,6 +144,16 @@ proptest! {
         let p = parse_expression(&text, &s).unwrap();
         let hess = p.hessian();
         let grad = p.gradient();
+        // The direct evaluations agree exactly with the symbolic derivatives.
+        let xq: Vec<Rational> = point.iter().map(|&x| exact::rational_from_f64(x).unwrap()).collect();
+        let hq = p.hessian_at(&xq);
+        let gq = p.gradient_at(&xq);
+        for i in 0..3 {
+            prop_assert_eq!(&gq[i], &grad[i].eval(&xq));
+            for j in 0..3 {
+                prop_assert_eq!(&hq[i][j], &hess[i][j].eval(&xq));
+            }
+        }
         let h = 1e-4;
         for i in 0..3 {
             // gradient by central differences, error O(h^2 |p'''|)
@@ -214,4 +224,31 @@ fn discovery_reports_skipped_degrees() {
     let report = discover_casimirs(&se3, 3, 30);
     assert_eq!(report.skipped_degrees, vec![3]);
     assert_eq!(report.casimirs.len(), 2);
+}
+
+/// Regression: on an abelian algebra every coordinate is a Casimir, the
+/// conserved gradients span g*, the restricted Hessian is 0×0, and the search
+/// used to panic inside nalgebra's eigen-solver on the empty matrix. Discovery
+/// on 20 coordinates also used to take minutes (dense exact elimination).
+#[test]
+fn regression_abelian_algebra_empty_restricted_hessian() {
+    let coords: Vec<String> = (0..20).map(|i| format!("x{i}")).collect();
+    let g = LieAlgebra::from_structure_constants("abelian", &coords, &[]).unwrap();
+    let report = discover_casimirs(&g, 4, 2000);
+    // 20 linear generators; every higher-degree polynomial is a product of them.
+    assert_eq!(report.casimirs.len(), 20);
+    assert!(report.casimirs.iter().all(|c| c.total_degree() == 1));
+    assert_eq!(report.skipped_degrees, vec![4]); // C(23, 4) = 8855 monomials > 2000
+    let spec = format!(
+        r#"{{"name": "abelian", "algebra": {{"coordinates": {coords:?}, "structure_constants": []}},
+             "hamiltonian": "{}", "equilibrium": [1{}], "noise": [[0, 1{}]]}}"#,
+        coords.iter().map(|c| format!("{c}^2")).collect::<Vec<_>>().join(" + "),
+        ", 0".repeat(19),
+        ", 0".repeat(18)
+    );
+    let cert = spec::certify(&spec::parse_spec(&spec).unwrap());
+    // Every point is an equilibrium, the noise is trivial (ad* = 0), so the
+    // norm is conserved: stable with Sigma^2 = 0.
+    assert_eq!(cert.json["verdict"], "stable");
+    assert_eq!(cert.analysis.sigma2(), Some(0.0));
 }

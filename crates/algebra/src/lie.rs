@@ -184,40 +184,34 @@ impl LieAlgebra {
         out
     }
 
-    /// The matrix of `ad_xi`: `(ad_xi)_{k b} = c^k_ab xi^a`.
-    pub fn ad_matrix(&self, xi: &[Rational]) -> Matrix {
+    /// Visit `(k, b, c^k_ab xi^a)` for every nonzero structure constant.
+    fn for_each_ad_entry(&self, xi: &[Rational], mut visit: impl FnMut(usize, usize, Rational)) {
         let n = self.dim();
         assert_eq!(xi.len(), n, "vector length");
-        let mut m = Matrix::zeros(n, n);
         for a in 0..n {
             if xi[a].is_zero() {
                 continue;
             }
             for b in 0..n {
                 for (k, c) in self.bracket_of_basis(a, b) {
-                    m[(*k, b)] += c * &xi[a];
+                    visit(*k, b, c * &xi[a]);
                 }
             }
         }
+    }
+
+    /// The matrix of `ad_xi`: `(ad_xi)_{k b} = c^k_ab xi^a`.
+    pub fn ad_matrix(&self, xi: &[Rational]) -> Matrix {
+        let mut m = Matrix::zeros(self.dim(), self.dim());
+        self.for_each_ad_entry(xi, |k, b, v| m[(k, b)] += v);
         m
     }
 
     /// The matrix of `ad*_xi` acting on `mu`: `(ad*_xi)_{b k} = c^k_ab xi^a`,
     /// i.e. the transpose of [`Self::ad_matrix`].
     pub fn coad_matrix(&self, xi: &[Rational]) -> Matrix {
-        let n = self.dim();
-        assert_eq!(xi.len(), n, "vector length");
-        let mut m = Matrix::zeros(n, n);
-        for a in 0..n {
-            if xi[a].is_zero() {
-                continue;
-            }
-            for b in 0..n {
-                for (k, c) in self.bracket_of_basis(a, b) {
-                    m[(b, *k)] += c * &xi[a];
-                }
-            }
-        }
+        let mut m = Matrix::zeros(self.dim(), self.dim());
+        self.for_each_ad_entry(xi, |k, b, v| m[(b, k)] += v);
         m
     }
 

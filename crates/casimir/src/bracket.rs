@@ -34,18 +34,24 @@ pub fn lie_poisson_bracket(algebra: &LieAlgebra, f: &Poly, g: &Poly) -> Poly {
             if dg[b].is_zero() {
                 continue;
             }
-            let bracket = algebra.bracket_of_basis(a, b);
-            if bracket.is_empty() {
-                continue;
+            if let Some(lambda_ab) = poisson_tensor_entry(algebra, a, b) {
+                out = out.add(&df[a].mul(&dg[b]).mul(&lambda_ab));
             }
-            let coefficients: Vec<_> = (0..n)
-                .map(|k| {
-                    bracket.iter().find(|(kk, _)| *kk == k).map_or_else(num_traits::Zero::zero, |(_, c)| c.clone())
-                })
-                .collect();
-            let lambda_ab = Poly::linear(&coefficients);
-            out = out.add(&df[a].mul(&dg[b]).mul(&lambda_ab));
         }
     }
     out
+}
+
+/// The linear polynomial `Lambda_ab(mu) = c^k_ab mu_k`, or `None` when
+/// `[e_a, e_b] = 0`.
+pub(crate) fn poisson_tensor_entry(algebra: &LieAlgebra, a: usize, b: usize) -> Option<Poly> {
+    let bracket = algebra.bracket_of_basis(a, b);
+    if bracket.is_empty() {
+        return None;
+    }
+    let mut coefficients = vec![exact::Rational::from(0); algebra.dim()];
+    for (k, c) in bracket {
+        coefficients[*k] = c.clone();
+    }
+    Some(Poly::linear(&coefficients))
 }

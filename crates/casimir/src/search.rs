@@ -102,6 +102,10 @@ pub(crate) fn symmetric_eigen(m: DMatrix<f64>) -> Option<SymmetricEigen<f64, nal
 /// Smallest eigenvalue, its eigenvector, and the largest absolute eigenvalue;
 /// `-inf` (never definite) if the eigen-solve fails.
 fn symmetric_extremes(m: &DMatrix<f64>) -> (f64, DVector<f64>, f64) {
+    if m.nrows() == 0 {
+        // The empty form is vacuously definite.
+        return (f64::INFINITY, DVector::zeros(0), 0.0);
+    }
     let Some(eig) = symmetric_eigen(m.clone()) else {
         return (f64::NEG_INFINITY, DVector::zeros(m.nrows()), f64::INFINITY);
     };

@@ -1,11 +1,10 @@
 //! A stochastic Lie–Poisson system with one equilibrium, validated exactly.
 
-use crate::bracket::lie_poisson_bracket;
+use crate::bracket::{lie_poisson_bracket, poisson_tensor_entry};
 use crate::error::SystemError;
 use crate::variation::SecondVariation;
 use algebra::LieAlgebra;
 use exact::{Matrix, Poly, Rational};
-use num_traits::Zero;
 
 /// Whether a conserved quantity is a Casimir or a first integral of `h`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -45,15 +44,9 @@ fn brackets_with_coordinates<'a>(algebra: &'a LieAlgebra, k: &Poly) -> impl Iter
             if ga.is_zero() {
                 continue;
             }
-            let bracket = algebra.bracket_of_basis(a, j);
-            if bracket.is_empty() {
-                continue;
+            if let Some(lambda_aj) = poisson_tensor_entry(algebra, a, j) {
+                out = out.add(&ga.mul(&lambda_aj));
             }
-            let mut coefficients = vec![Rational::zero(); n];
-            for (kk, c) in bracket {
-                coefficients[*kk] = c.clone();
-            }
-            out = out.add(&ga.mul(&Poly::linear(&coefficients)));
         }
         (j, out)
     })
@@ -121,9 +114,8 @@ impl System {
                 return Err(SystemError::NotConserved { index, bracket: b.to_string_with(algebra.coordinates()) });
             }
         }
-        let gradient_h: Vec<Rational> = hamiltonian.gradient().iter().map(|g| g.eval(&equilibrium)).collect();
-        let hessian_polys = hamiltonian.hessian();
-        let hessian_h = Matrix::from_fn(n, n, |i, j| hessian_polys[i][j].eval(&equilibrium));
+        let gradient_h = hamiltonian.gradient_at(&equilibrium);
+        let hessian_h = Matrix::from_rows(&hamiltonian.hessian_at(&equilibrium));
         Ok(System { algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise, gradient_h, hessian_h })
     }
 

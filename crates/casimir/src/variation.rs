@@ -50,11 +50,6 @@ pub struct SecondVariation {
     pub range_columns: Vec<usize>,
 }
 
-fn eval_matrix(polys: &[Vec<exact::Poly>], x: &[Rational]) -> Matrix {
-    let n = polys.len();
-    Matrix::from_fn(n, n, |i, j| polys[i][j].eval(x))
-}
-
 impl SecondVariation {
     pub(crate) fn new(system: &System) -> Option<Self> {
         let n = system.dim();
@@ -62,10 +57,9 @@ impl SecondVariation {
         let gradient_h = system.hamiltonian_gradient().to_vec();
         let hessian_h = system.hamiltonian_hessian().clone();
         let conserved = system.conserved();
-        let columns: Vec<Vec<Rational>> =
-            conserved.iter().map(|(_, k)| k.gradient().iter().map(|g| g.eval(mu)).collect()).collect();
+        let columns: Vec<Vec<Rational>> = conserved.iter().map(|(_, k)| k.gradient_at(mu)).collect();
         let gradients = Matrix::from_columns(n, &columns);
-        let hessians = conserved.iter().map(|(_, k)| eval_matrix(&k.hessian(), mu)).collect();
+        let hessians = conserved.iter().map(|(_, k)| Matrix::from_rows(&k.hessian_at(mu))).collect();
         let minus_grad: Vec<Rational> = gradient_h.iter().map(|g| -g.clone()).collect();
         let solution = gradients.solve_affine(&minus_grad)?;
         let family = MultiplierFamily { particular: solution.particular, directions: solution.directions };

@@ -246,6 +246,71 @@ impl Poly {
         g.iter().map(|gi| (0..self.nvars).map(|j| gi.derivative(j)).collect()).collect()
     }
 
+    /// The gradient evaluated at a rational point, without forming the
+    /// derivative polynomials.
+    pub fn gradient_at(&self, x: &[Rational]) -> Vec<Rational> {
+        assert_eq!(x.len(), self.nvars);
+        let mut g = vec![Rational::zero(); self.nvars];
+        for (m, c) in &self.terms {
+            for i in 0..self.nvars {
+                if m[i] == 0 {
+                    continue;
+                }
+                let mut t = c * Rational::from(m[i] as i64);
+                for (k, &e) in m.iter().enumerate() {
+                    let e = if k == i { e - 1 } else { e };
+                    if e > 0 {
+                        t *= x[k].pow(e as u32);
+                    }
+                }
+                g[i] += t;
+            }
+        }
+        g
+    }
+
+    /// The Hessian evaluated at a rational point, without forming the
+    /// derivative polynomials.
+    pub fn hessian_at(&self, x: &[Rational]) -> Vec<Vec<Rational>> {
+        assert_eq!(x.len(), self.nvars);
+        let n = self.nvars;
+        let mut h = vec![vec![Rational::zero(); n]; n];
+        let mut reduced: Monomial = smallvec![0; n];
+        for (m, c) in &self.terms {
+            for i in 0..n {
+                if m[i] == 0 {
+                    continue;
+                }
+                for j in i..n {
+                    let factor = if i == j { m[i] as i64 * (m[i] as i64 - 1) } else { m[i] as i64 * m[j] as i64 };
+                    if factor == 0 {
+                        continue;
+                    }
+                    reduced.copy_from_slice(m);
+                    reduced[i] -= 1;
+                    reduced[j] -= 1;
+                    let mut t = c * Rational::from(factor);
+                    for (k, &e) in reduced.iter().enumerate() {
+                        if e > 0 {
+                            if x[k].is_zero() {
+                                t = Rational::zero();
+                                break;
+                            }
+                            t *= x[k].pow(e as u32);
+                        }
+                    }
+                    if !t.is_zero() {
+                        h[i][j] += &t;
+                        if i != j {
+                            h[j][i] += t;
+                        }
+                    }
+                }
+            }
+        }
+        h
+    }
+
     /// Exact value at a rational point.
     pub fn eval(&self, x: &[Rational]) -> Rational {
         assert_eq!(x.len(), self.nvars);

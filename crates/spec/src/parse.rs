@@ -8,7 +8,7 @@ use crate::json::{
 use crate::settings::EngineSettings;
 use algebra::{builtin, builtin_names, AlgebraError, LieAlgebra};
 use casimir::{discover_casimirs, DiscoveryReport, System, SystemError};
-use exact::{parse_expression, Poly, Rational, Symbols};
+use exact::{parse_expression, Limits, Poly, Rational, Symbols};
 use serde_json::Value;
 use std::collections::BTreeMap;
 
@@ -123,7 +123,11 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
     let n = algebra.dim();
 
     // Parameters.
-    let mut symbols = Symbols::new(algebra.coordinates());
+    // Bounded so that derivatives of every expression stay cheap (a Hessian
+    // costs dim^2 passes over the terms): degree 16 and 5000 terms are far
+    // beyond mechanical Hamiltonians and Casimirs.
+    let limits = Limits { max_degree: 16, max_terms: 5000, ..Limits::default() };
+    let mut symbols = Symbols::new(algebra.coordinates()).with_limits(limits);
     let mut parameters = BTreeMap::new();
     if let Some(p) = map.get("parameters") {
         let ppath = child(root, "parameters");
