@@ -178,3 +178,19 @@ fn regression_schur_hang_on_slow_lagrange_top() {
     let rate = generator::closed_forms::lagrange_top_growth_rate(0.1, 2.71, 1835.0 / 3941.0).unwrap();
     assert!(rel(cert.analysis.instability.as_ref().unwrap().eigenvalue.re, rate) < 1e-9);
 }
+
+/// Sigma^2 is additive over noise fields (the generator is a sum of one
+/// quadratic form per field, each proportional to sigma_i^2), so two parallel
+/// fields sigma and 2 sigma act like one of amplitude sqrt(5) sigma:
+/// Sigma^2 = 5 * 0.27 = 1.35 for the major-axis body. It does not depend on
+/// |Pi_e| either (a_i and B do not), so Pi_e = (2, 0, 0) gives the same.
+#[test]
+fn sigma2_adds_over_parallel_noise_and_ignores_the_equilibrium_size() {
+    let base = fixture("rigid-body-major-axis.json");
+    let two_fields = base.replace(r#"[["sigma", 0, 0]]"#, r#"[["sigma", 0, 0], ["2*sigma", 0, 0]]"#);
+    let got = certify(&two_fields).analysis.sigma2().unwrap();
+    assert!(rel(got, 5.0 * 0.27) < 1e-13, "{got}");
+    let bigger = base.replace("[1, 0, 0]", "[2, 0, 0]");
+    let got = certify(&bigger).analysis.sigma2().unwrap();
+    assert!(rel(got, 0.27) < 1e-13, "{got}");
+}

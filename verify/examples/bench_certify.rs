@@ -1,7 +1,7 @@
 //! Time the phases of `certify` on one spec, for the side-by-side comparison
 //! with the numpy/scipy baseline (`bench/side_by_side.sh`) and for profilers.
 //!
-//! Usage: `bench_certify SPEC [REPS]`. Prints one JSON line with microseconds
+//! Usage: `bench_certify SPEC [REPS]` (`ONLY=analyse` times the analysis alone). Prints one JSON line with microseconds
 //! per certificate for: parsing the spec (JSON + exact polynomials + checks),
 //! the analysis (steps 1-8 of the pipeline: the scope of the numpy timing),
 //! building the certificate JSON, and the whole `certify` path end to end.
@@ -22,6 +22,14 @@ fn main() {
     let text = std::fs::read_to_string(&path).expect("read spec");
     let spec = spec::parse_spec(&text).expect("valid spec");
     let analysis = generator::analyse(&spec.system, &spec.settings.pipeline);
+    if std::env::var("ONLY").as_deref() == Ok("analyse") {
+        // For profilers: the analysis alone.
+        let us = per_call(reps, || {
+            std::hint::black_box(generator::analyse(&spec.system, &spec.settings.pipeline));
+        });
+        println!("{{\"name\": \"{}\", \"us_analyse\": {us:.2}}}", spec.name);
+        return;
+    }
     let parse = per_call(reps, || {
         std::hint::black_box(spec::parse_spec(&text).unwrap());
     });

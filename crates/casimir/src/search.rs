@@ -268,8 +268,11 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
     let base_radius = 4.0 * r0f.norm().max(1.0);
 
     let mut margins = [f64::NEG_INFINITY; 2];
-    let mut found: Option<(i8, Vec<f64>, f64)> = None;
+    let mut found: Option<(i8, Vec<f64>, f64, f64)> = None;
     for (slot, sign) in [(0usize, 1i8), (1, -1)] {
+        if found.is_some() {
+            break; // the positive sign is preferred when both are possible
+        }
         let mut radius = base_radius;
         let mut best = (vec![0.0; f], f64::NEG_INFINITY, f64::NEG_INFINITY);
         for _ in 0..=settings.max_expansions {
@@ -286,7 +289,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         margins[slot] = if k == 0 { 1.0 } else { best.2 };
         if found.is_none() && margins[slot] > settings.definiteness_tolerance {
             let t: Vec<f64> = best.0.iter().zip(&pencil.scales).map(|(u, s)| u / s).collect();
-            found = Some((sign, t, margins[slot]));
+            found = Some((sign, t, margins[slot], best.1));
         }
     }
     let not_found = || SearchOutcome::NotFound {
@@ -294,7 +297,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         best_negative_margin: margins[1],
         restricted_dimension: k,
     };
-    let Some((sign, t, relative_margin)) = found else {
+    let Some((sign, t, relative_margin, smallest_eigenvalue)) = found else {
         return not_found();
     };
     let t_rational = if f == 0 {
@@ -310,7 +313,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         }
     };
     let multipliers = family.at(&t_rational);
-    match choose_m(variation, &multipliers, sign) {
+    match choose_m(variation, &multipliers, sign, smallest_eigenvalue) {
         Some((m, p)) => SearchOutcome::Definite(CasimirChoice {
             sign,
             family_parameters: t_rational,
@@ -325,7 +328,15 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
 
 /// Pick `M = s mu E E^T` above the Schur-complement bound and confirm `P`
 /// exactly; `None` only if exact confirmation keeps failing.
-fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> Option<(Matrix, Matrix)> {
+///
+/// `restricted_min` is the smallest eigenvalue of `s Z^T P0 Z` found by the
+/// search; it sets the scale of the added block.
+fn choose_m(
+    variation: &SecondVariation,
+    multipliers: &[Rational],
+    sign: i8,
+    restricted_min: f64,
+) -> Option<(Matrix, Matrix)> {
     let r = variation.num_conserved();
     let base = variation.base(multipliers);
     let s = sign as f64;
@@ -358,12 +369,7 @@ fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> 
     let pencil = (&pencil + pencil.transpose()) * 0.5;
     let mu_star = symmetric_eigen(pencil)?.eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
     let w2_max = symmetric_eigen(w2)?.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
-    let floor = if z.ncols() > 0 {
-        let rz = z.transpose() * &sp0 * &z;
-        symmetric_extremes(&rz).0.max(f64::MIN_POSITIVE)
-    } else {
-        sp0.norm().max(1.0)
-    };
+    let floor = if z.ncols() > 0 { restricted_min.max(f64::MIN_POSITIVE) } else { sp0.norm().max(1.0) };
     let mut mu = 2.0 * mu_star.max(0.0) + floor / w2_max.max(f64::MIN_POSITIVE);
     if !mu.is_finite() || mu <= 0.0 {
         return None;
