@@ -13,7 +13,6 @@
 //! confirmed definite by an exact LDLᵀ test.
 
 use crate::variation::SecondVariation;
-use exact::BigInt;
 use exact::{best_rational_approximation, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use num_traits::{One, Zero};
@@ -200,20 +199,6 @@ impl Pencil {
     }
 }
 
-/// A short decimal `>= x` (for `x > 0`) with three significant digits, so that
-/// certificates stay readable.
-fn round_up_3_digits(x: f64) -> Rational {
-    let e = x.log10().floor() as i32 - 2;
-    let digits = (x / 10f64.powi(e)).ceil() as i64;
-    let digits = Rational::from_integer(digits.into());
-    let ten = BigInt::from(10);
-    if e >= 0 {
-        digits * Rational::from_integer(num_traits::pow(ten, e as usize))
-    } else {
-        digits / Rational::from_integer(num_traits::pow(ten, (-e) as usize))
-    }
-}
-
 /// Round the family parameters to rationals, trying finer denominators until
 /// the exact restricted Hessian keeps the wanted sign.
 fn rational_parameters(
@@ -375,7 +360,7 @@ fn choose_m(
         return None;
     }
     for _ in 0..40 {
-        let mu_rational = round_up_3_digits(mu);
+        let mu_rational = exact::decimal_at_least(mu, 3)?;
         let mut m = Matrix::zeros(r, r);
         let signed = if sign > 0 { mu_rational.clone() } else { -mu_rational.clone() };
         for &c in cols {

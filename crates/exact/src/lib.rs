@@ -35,7 +35,8 @@ mod rational;
 pub use matrix::{AffineSolution, Matrix};
 pub use num_bigint::BigInt;
 pub use number::{
-    best_rational_approximation, parse_number, rational_from_f64, rational_to_f64, NumberError, Rational,
+    best_rational_approximation, decimal_at_least, parse_number, rational_from_f64, rational_to_f64, NumberError,
+    Rational,
 };
 pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};
 pub use poly::{monomials_of_degree, Monomial, Poly};

@@ -400,6 +400,69 @@ impl Matrix {
     }
 }
 
+impl Matrix {
+    /// Whether `self` (or `-self` for `sign = -1`) is positive definite,
+    /// exactly. One LDLᵀ pass instead of the two [`Self::definiteness`] may take.
+    pub fn is_definite_with_sign(&self, sign: i8) -> bool {
+        assert!(self.is_symmetric(), "definiteness of a non-symmetric matrix");
+        if self.rows == 0 {
+            return false;
+        }
+        if sign > 0 {
+            positive_definite_exact(self)
+        } else {
+            positive_definite_exact(&self.scale(&-Rational::one()))
+        }
+    }
+
+    /// Exact positive-semidefiniteness test for a symmetric matrix.
+    ///
+    /// Symmetric elimination with diagonal pivoting: a negative diagonal entry
+    /// proves indefiniteness; a positive one is eliminated (the matrix is PSD
+    /// iff the Schur complement is); when every remaining diagonal entry is
+    /// zero the matrix is PSD iff the remaining block is zero. This handles
+    /// singular matrices (shared null directions) exactly, without tolerance.
+    ///
+    /// ```
+    /// use exact::{Matrix, Rational};
+    /// let q = |n: i64| Rational::from(n);
+    /// // [[1, 1], [1, 1]] is PSD and singular; [[0, 1], [1, 0]] is indefinite.
+    /// assert!(Matrix::from_rows(&[vec![q(1), q(1)], vec![q(1), q(1)]]).is_positive_semidefinite());
+    /// assert!(!Matrix::from_rows(&[vec![q(0), q(1)], vec![q(1), q(0)]]).is_positive_semidefinite());
+    /// assert!(Matrix::zeros(3, 3).is_positive_semidefinite());
+    /// ```
+    pub fn is_positive_semidefinite(&self) -> bool {
+        assert!(self.is_symmetric(), "semidefiniteness of a non-symmetric matrix");
+        let n = self.rows;
+        let mut m = self.clone();
+        let mut active: Vec<usize> = (0..n).collect();
+        while !active.is_empty() {
+            if active.iter().any(|&i| m[(i, i)].is_negative()) {
+                return false;
+            }
+            let Some(pos) = active.iter().position(|&i| m[(i, i)].is_positive()) else {
+                // All remaining diagonal entries are zero: PSD iff the block is zero.
+                return active.iter().all(|&i| active.iter().all(|&j| m[(i, j)].is_zero()));
+            };
+            let p = active.swap_remove(pos);
+            let pivot = m[(p, p)].clone();
+            for &i in &active {
+                if m[(i, p)].is_zero() {
+                    continue;
+                }
+                let f = &m[(i, p)] / &pivot;
+                for &j in &active {
+                    if !m[(p, j)].is_zero() {
+                        let v = &f * &m[(p, j)];
+                        m[(i, j)] -= v;
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
 fn positive_definite_exact(a: &Matrix) -> bool {
     let n = a.rows;
     let mut m = a.clone();
@@ -455,6 +518,22 @@ mod tests {
         assert_eq!(a.mul(&inv), Matrix::identity(2));
         let singular = Matrix::from_rows(&[vec![q(1), q(2)], vec![q(2), q(4)]]);
         assert!(singular.inverse().is_none());
+    }
+
+    #[test]
+    fn semidefinite_test_pairs() {
+        // diag(1, 0) with a coupling: [[1, 2], [2, 4]] is PSD (rank 1), but
+        // [[1, 2], [2, 3.99]] is not; [[0, 0], [0, -1]] is not.
+        let a = Matrix::from_rows(&[vec![q(1), q(2)], vec![q(2), q(4)]]);
+        assert!(a.is_positive_semidefinite());
+        let mut b = a.clone();
+        b[(1, 1)] = Rational::new_small(399, 100);
+        assert!(!b.is_positive_semidefinite());
+        let c = Matrix::from_rows(&[vec![q(0), q(0)], vec![q(0), q(-1)]]);
+        assert!(!c.is_positive_semidefinite());
+        // A zero diagonal with a nonzero off-diagonal in the same row is indefinite.
+        let d = Matrix::from_rows(&[vec![q(1), q(0), q(0)], vec![q(0), q(0), q(1)], vec![q(0), q(1), q(0)]]);
+        assert!(!d.is_positive_semidefinite());
     }
 
     #[test]

@@ -256,6 +256,39 @@ pub fn best_rational_approximation(x: f64, max_denominator: u64) -> Option<Ratio
     Some(if negative { -r } else { r })
 }
 
+/// The smallest decimal with `digits` significant digits that is `>= x`, as
+/// an exact rational (checked exactly against the double `x`). `None` for a
+/// non-finite or non-positive `x` or `digits` outside `1..=17`.
+///
+/// ```
+/// use exact::{decimal_at_least, Rational};
+/// assert_eq!(decimal_at_least(0.25, 3).unwrap(), Rational::new_small(1, 4));
+/// // The double nearest 0.27 is slightly above 27/100, so the bound is 0.271.
+/// assert_eq!(decimal_at_least(0.27, 3).unwrap(), Rational::new_small(271, 1000));
+/// assert_eq!(decimal_at_least(1234.5, 2).unwrap(), Rational::from(1300));
+/// assert!(decimal_at_least(1.0 / 3.0, 5).unwrap() >= exact::rational_from_f64(1.0 / 3.0).unwrap());
+/// ```
+pub fn decimal_at_least(x: f64, digits: u32) -> Option<Rational> {
+    if !x.is_finite() || x <= 0.0 || !(1..=17).contains(&digits) {
+        return None;
+    }
+    let exact_x = Rational::from_float(x)?;
+    let e = x.log10().floor() as i32 - (digits as i32 - 1);
+    let ten = BigInt::from(10);
+    let unit = if e >= 0 {
+        Rational::from_integer(num_traits::pow(ten, e as usize))
+    } else {
+        Rational::new(BigInt::from(1), num_traits::pow(ten, (-e) as usize))
+    };
+    // ceil(x / unit) computed exactly.
+    let q = &exact_x / &unit;
+    let mut n = q.to_integer();
+    if Rational::from_integer(n.clone()) < q {
+        n += 1;
+    }
+    Some(Rational::from_integer(n) * unit)
+}
+
 /// `1` as a rational (convenience).
 pub(crate) fn one() -> Rational {
     Rational::one()

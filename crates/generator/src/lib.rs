@@ -40,19 +40,23 @@
 //! ```
 #![warn(missing_docs)]
 
+mod certify;
 pub mod closed_forms;
 mod form;
 mod growth;
 mod instability;
 mod linearise;
 mod moments;
+mod optimise;
 mod pipeline;
 mod stopping;
 
+pub use certify::{certify_sigma2, sigma2_bound_holds, sigma2_gap, ExactSigma2};
 pub use form::{generator_form, GeneratorForm};
 pub use growth::{growth_constant, GrowthConstant, GrowthError};
 pub use instability::{find_instability, instability_from_spectrum, spectrum, Instability, SpectrumError};
 pub use linearise::{linearise, Linearisation};
 pub use moments::SecondMoments;
-pub use pipeline::{analyse, Analysis, Settings, StableEvidence, Verdict};
+pub use optimise::{optimise_choice, OptimiseSettings, Optimum};
+pub use pipeline::{analyse, Analysis, OptimumSummary, Settings, StableEvidence, Verdict};
 pub use stopping::StoppingTime;

@@ -1,10 +1,12 @@
 //! The whole finite-dimensional pipeline: from a validated [`System`] to a
 //! verdict with its evidence.
 
+use crate::certify::{certify_sigma2, ExactSigma2};
 use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{growth_constant, GrowthConstant};
 use crate::instability::{instability_from_spectrum, spectrum, Instability};
 use crate::linearise::{linearise, Linearisation};
+use crate::optimise::{optimise_choice, OptimiseSettings};
 use casimir::{find_definite_choice, CasimirChoice, SearchOutcome, SearchSettings, SecondVariation, System};
 use exact::Rational;
 use nalgebra::Complex;
@@ -14,8 +16,12 @@ use num_traits::Zero;
 /// records the settings it was made with.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
-    /// The search over the Casimir freedom.
+    /// The search over the Casimir freedom for a first definite choice.
     pub search: SearchSettings,
+    /// Whether to minimise `Sigma^2` over the Casimir freedom (default true).
+    pub optimise: bool,
+    /// The minimisation.
+    pub optimisation: OptimiseSettings,
     /// An eigenvalue of `A` proves linear instability only if its real part
     /// exceeds this times `max(1, |A|_F)`. Default `1e-6`: round-off moves a
     /// defective zero eigenvalue (Jordan block of size `k`) by about
@@ -25,7 +31,12 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { search: SearchSettings::default(), instability_tolerance: 1e-6 }
+        Settings {
+            search: SearchSettings::default(),
+            optimise: true,
+            optimisation: OptimiseSettings::default(),
+            instability_tolerance: 1e-6,
+        }
     }
 }
 
@@ -74,12 +85,45 @@ impl Verdict {
 /// The evidence of a `stable` verdict.
 #[derive(Clone, Debug)]
 pub struct StableEvidence {
-    /// The Casimir choice and the exact `P`.
+    /// The Casimir choice (optimised when possible) and the exact `P`.
     pub choice: CasimirChoice,
     /// `Q`, the drift residual and the paper's formula, exactly.
     pub form: GeneratorForm,
-    /// `Sigma^2` and the fastest-growing direction.
+    /// `lambda_max(Q, P)` in floating point and the fastest-growing direction.
     pub growth: GrowthConstant,
+    /// The certified rational `Sigma^2`, when the exact test succeeded.
+    pub exact: Option<ExactSigma2>,
+    /// The first definite choice found and its `Sigma^2` (floating point).
+    pub first_choice: CasimirChoice,
+    /// `max(0, lambda_max)` for the first definite choice.
+    pub first_sigma2: f64,
+    /// What the minimisation over the freedom found (`None` if it was not run
+    /// or did not improve on the first choice).
+    pub optimum: Option<OptimumSummary>,
+}
+
+/// What the minimisation over the Casimir freedom found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OptimumSummary {
+    /// Floating-point infimum of `Sigma^2` over the freedom.
+    pub infimum: f64,
+    /// Whether the chosen `P` attains it (else it is within the tolerance).
+    pub attained: bool,
+    /// Whether `Q` depends on `M`.
+    pub q_depends_on_m: bool,
+    /// How it was found.
+    pub method: &'static str,
+}
+
+impl StableEvidence {
+    /// The certified `Sigma^2`: the exact rational when available, else the
+    /// floating-point `max(0, lambda_max)`.
+    pub fn sigma2(&self) -> f64 {
+        match &self.exact {
+            Some(e) => exact::rational_to_f64(&e.value),
+            None => self.growth.sigma2,
+        }
+    }
 }
 
 /// Everything the pipeline found.
@@ -114,9 +158,9 @@ pub struct Analysis {
 }
 
 impl Analysis {
-    /// `Sigma^2` when the verdict is `stable`.
+    /// `Sigma^2` when the verdict is `stable` (the certified value).
     pub fn sigma2(&self) -> Option<f64> {
-        self.stable.as_ref().map(|s| s.growth.sigma2)
+        self.stable.as_ref().map(StableEvidence::sigma2)
     }
 }
 
@@ -220,20 +264,48 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         return analysis;
     }
     let form = generator_form(&linearisation, &choice.p);
-    match growth_constant(&choice.p, &form.q, choice.sign) {
-        Ok(growth) => {
-            analysis.verdict = Verdict::Stable;
-            analysis.reason = format!(
-                "the second variation is {} definite: formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t)",
-                if choice.sign > 0 { "positive" } else { "negative" }
-            );
-            analysis.stable = Some(StableEvidence { choice: choice.clone(), form, growth });
-        }
+    let first_growth = match growth_constant(&choice.p, &form.q, choice.sign) {
+        Ok(g) => g,
         Err(e) => {
             analysis.verdict = Verdict::Inconclusive;
             analysis.reason = format!("a definite second variation was found but Sigma^2 could not be computed: {e}");
+            return analysis;
         }
-    }
+    };
+    let variation = analysis.variation.as_ref().expect("set above");
+    let optimum = if settings.optimise {
+        optimise_choice(variation, &linearisation, choice, &first_growth, &settings.optimisation)
+    } else {
+        None
+    };
+    let (best_choice, best_form, best_growth, summary) = match optimum {
+        Some(o) => {
+            let form = generator_form(&linearisation, &o.choice.p);
+            let summary = OptimumSummary {
+                infimum: o.infimum,
+                attained: o.attained,
+                q_depends_on_m: o.q_depends_on_m,
+                method: o.method,
+            };
+            (o.choice, form, o.growth, Some(summary))
+        }
+        None => (choice.clone(), form, first_growth.clone(), None),
+    };
+    let exact = certify_sigma2(&best_choice.p, &best_form.q, best_choice.sign, best_growth.largest_eigenvalue.max(0.0));
+    analysis.verdict = Verdict::Stable;
+    analysis.reason = format!(
+        "the second variation is {} definite: formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t)",
+        if best_choice.sign > 0 { "positive" } else { "negative" }
+    );
+    analysis.stable = Some(StableEvidence {
+        choice: best_choice,
+        form: best_form,
+        growth: best_growth,
+        exact,
+        first_choice: choice.clone(),
+        first_sigma2: first_growth.sigma2,
+        optimum: summary,
+    });
     analysis
 }
 

@@ -70,20 +70,45 @@ fn complex(z: &Complex<f64>) -> Value {
 /// exact.
 fn level_and_checks(a: &Analysis) -> (&'static str, Value) {
     match a.verdict {
-        Verdict::Stable => (
-            "numerical",
-            json!({
-                "P_definite": "exact (rational LDL^T)",
-                "drift_residual": "exact (rational)",
-                "sigma2": "floating point (generalized symmetric eigenproblem)"
-            }),
-        ),
+        Verdict::Stable => match a.stable.as_ref().and_then(|s| s.exact.as_ref()) {
+            Some(e) => (
+                "exact",
+                obj! {
+                    "P_definite" => "exact (rational LDL^T)",
+                    "first_variation" => "exact (rational)",
+                    "drift_residual" => "exact (rational)",
+                    "sigma2" => if e.sharp {
+                        "exact: sigma2 * sP - sQ is positive semidefinite and singular (sigma2 = lambda_max)"
+                    } else {
+                        "exact: sigma2 * sP - sQ is positive semidefinite (sigma2 is an upper bound within 1e-10 of lambda_max)"
+                    },
+                },
+            ),
+            None => (
+                "numerical",
+                obj! {
+                    "P_definite" => "exact (rational LDL^T)",
+                    "drift_residual" => "exact (rational)",
+                    "sigma2" => "floating point only: the exact semidefiniteness test failed at every candidate",
+                },
+            ),
+        },
         Verdict::LinearlyUnstable => {
             ("numerical", json!({ "eigenvalue": "floating point (Schur form), real part above tolerance" }))
         }
         Verdict::NotAnEquilibrium => ("exact", json!({ "equilibrium_residual": "exact (rational)" })),
         Verdict::NoiseIncompatible => ("exact", json!({ "noise_residuals": "exact (rational)" })),
         Verdict::Inconclusive => ("numerical", json!({ "search": "floating point search; no claim is made" })),
+    }
+}
+
+fn choice_json(ch: &casimir::CasimirChoice) -> Value {
+    obj! {
+        "sign" => ch.sign as i64,
+        "family_parameters" => rationals(&ch.family_parameters),
+        "multipliers" => rationals(&ch.multipliers),
+        "M" => matrix(&ch.m),
+        "relative_margin" => float(ch.relative_margin),
     }
 }
 
@@ -204,19 +229,29 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
         );
     }
     if let Some(s) = &a.stable {
-        let ch = &s.choice;
-        put(
-            "casimir_choice",
-            obj! {
-                "sign" => ch.sign as i64,
-                "family_parameters" => rationals(&ch.family_parameters),
-                "multipliers" => rationals(&ch.multipliers),
-                "M" => matrix(&ch.m),
-                "relative_margin" => float(ch.relative_margin),
-                "note" => "first definite choice found (maximal Finsler margin); optimisation over the freedom is not yet done",
-            },
-        );
-        put("P", matrix(&ch.p));
+        put("casimir_choice", choice_json(&s.choice));
+        if let Some(e) = &s.exact {
+            put("sigma2_exact", Value::from(e.value.to_string()));
+            put("sigma2_sharp", Value::Bool(e.sharp));
+        }
+        let mut opt = Map::new();
+        opt.insert("first_definite_choice".into(), choice_json(&s.first_choice));
+        opt.insert("first_definite_sigma2".into(), float(s.first_sigma2));
+        match &s.optimum {
+            Some(o) => {
+                opt.insert("optimised".into(), Value::Bool(true));
+                opt.insert("infimum".into(), float(o.infimum));
+                opt.insert("attained".into(), Value::Bool(o.attained));
+                opt.insert("q_depends_on_M".into(), Value::Bool(o.q_depends_on_m));
+                opt.insert("method".into(), Value::from(o.method));
+                opt.insert("tolerance".into(), float(spec.settings.pipeline.optimisation.tolerance));
+            }
+            None => {
+                opt.insert("optimised".into(), Value::Bool(false));
+            }
+        }
+        put("optimisation", Value::Object(opt));
+        put("P", matrix(&s.choice.p));
         put("Q", matrix(&s.form.q));
         put(
             "residuals",
@@ -228,7 +263,6 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
         put(
             "growth",
             obj! {
-                "sigma2" => float(s.growth.sigma2),
                 "largest_generalized_eigenvalue" => float(s.growth.largest_eigenvalue),
                 "generalized_eigenvalues" => Value::Array(s.growth.eigenvalues.iter().map(|x| float(*x)).collect()),
                 "fastest_direction" => Value::Array(s.growth.direction.iter().map(|x| float(*x)).collect()),

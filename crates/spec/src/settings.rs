@@ -31,6 +31,9 @@ const KEYS: &[&str] = &[
     "instability_tolerance",
     "discovery_degree",
     "discovery_max_unknowns",
+    "optimise",
+    "optimisation_tolerance",
+    "optimisation_iterations",
 ];
 
 fn in_range<T: PartialOrd + std::fmt::Display>(v: T, lo: T, hi: T, path: &str) -> Result<T> {
@@ -63,7 +66,16 @@ impl EngineSettings {
                 "instability_tolerance" => s.pipeline.instability_tolerance = in_range(float(v, &p)?, 1e-15, 0.5, &p)?,
                 "discovery_degree" => s.discovery_degree = in_range(index_value(v, &p)?, 0, 8, &p)? as u32,
                 "discovery_max_unknowns" => s.discovery_max_unknowns = in_range(index_value(v, &p)?, 1, 20_000, &p)?,
-                _ => unreachable!("keys checked above"),
+                "optimise" => {
+                    s.pipeline.optimise = v.as_bool().ok_or_else(|| SpecError::new(&p, "expected true or false"))?;
+                }
+                "optimisation_tolerance" => {
+                    s.pipeline.optimisation.tolerance = in_range(float(v, &p)?, 1e-14, 0.1, &p)?
+                }
+                "optimisation_iterations" => {
+                    s.pipeline.optimisation.max_iterations = in_range(index_value(v, &p)?, 1, 100_000, &p)?
+                }
+                other => return Err(SpecError::new(&p, format!("unknown setting '{other}'"))),
             }
         }
         Ok(s)
@@ -81,6 +93,9 @@ impl EngineSettings {
             "instability_tolerance": self.pipeline.instability_tolerance,
             "discovery_degree": self.discovery_degree,
             "discovery_max_unknowns": self.discovery_max_unknowns,
+            "optimise": self.pipeline.optimise,
+            "optimisation_tolerance": self.pipeline.optimisation.tolerance,
+            "optimisation_iterations": self.pipeline.optimisation.max_iterations,
         })
     }
 }
