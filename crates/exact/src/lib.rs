@@ -31,6 +31,7 @@ mod number;
 mod parse;
 mod poly;
 mod rational;
+mod upoly;
 
 pub use matrix::{AffineSolution, Matrix};
 pub use num_bigint::BigInt;
@@ -41,3 +42,4 @@ pub use number::{
 pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};
 pub use poly::{monomials_of_degree, Monomial, Poly};
 pub use rational::integer_scale;
+pub use upoly::{char_poly, UPoly};

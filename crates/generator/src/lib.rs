@@ -49,6 +49,7 @@ mod linearise;
 mod moments;
 mod optimise;
 mod pipeline;
+mod spectral;
 mod stopping;
 
 pub use certify::{certify_sigma2, sigma2_bound_holds, sigma2_gap, ExactSigma2};
@@ -59,4 +60,5 @@ pub use linearise::{linearise, Linearisation};
 pub use moments::SecondMoments;
 pub use optimise::{optimise_choice, OptimiseSettings, Optimum};
 pub use pipeline::{analyse, Analysis, OptimumSummary, Settings, StableEvidence, Verdict};
+pub use spectral::{exact_spectrum_test, SpectralProof};
 pub use stopping::StoppingTime;

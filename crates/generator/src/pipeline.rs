@@ -7,6 +7,7 @@ use crate::growth::{growth_constant, GrowthConstant};
 use crate::instability::{instability_from_spectrum, spectrum, Instability};
 use crate::linearise::{linearise, Linearisation};
 use crate::optimise::{optimise_choice, OptimiseSettings};
+use crate::spectral::{exact_spectrum_test, SpectralProof};
 use casimir::{find_definite_choice, CasimirChoice, SearchOutcome, SearchSettings, SecondVariation, System};
 use exact::Rational;
 use nalgebra::Complex;
@@ -149,6 +150,8 @@ pub struct Analysis {
     pub instability: Option<Instability>,
     /// Why the spectrum of `A` could not be computed, if it could not.
     pub spectrum_error: Option<String>,
+    /// What exact arithmetic proves about the spectrum of `A`.
+    pub spectral_proof: Option<SpectralProof>,
     /// The second variation data (when multipliers exist).
     pub variation: Option<SecondVariation>,
     /// The outcome of the search over the Casimir freedom.
@@ -199,6 +202,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         spectrum: vec![],
         instability: None,
         spectrum_error: None,
+        spectral_proof: None,
         variation: None,
         search: None,
         stable: None,
@@ -240,6 +244,14 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         }
     }
 
+    let proof = exact_spectrum_test(&linearisation.a);
+    if proof == SpectralProof::ImaginaryAxis {
+        // Exact arithmetic rules out an unstable eigenvalue: any numerical
+        // one above the tolerance was round-off.
+        analysis.instability = None;
+    }
+    analysis.spectral_proof = Some(proof);
+
     let Some(variation) = system.second_variation() else {
         return conclude_without_form(
             analysis,
@@ -255,9 +267,9 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
             "no choice of multipliers and Casimir function makes the second variation definite",
         );
     };
-    if analysis.instability.is_some() {
+    if matches!(analysis.spectral_proof, Some(SpectralProof::Unstable { .. })) || analysis.instability.is_some() {
         // A conserved definite form rules out eigenvalues off the imaginary
-        // axis; both at once means a numerical breakdown. Claim nothing.
+        // axis; both at once means a breakdown somewhere. Claim nothing.
         analysis.verdict = Verdict::Inconclusive;
         analysis.reason =
             "contradictory evidence: a definite second variation was found, yet A appears to have an unstable eigenvalue".into();
@@ -310,15 +322,31 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
 }
 
 fn conclude_without_form(mut analysis: Analysis, why: &str) -> Analysis {
-    if let Some(inst) = &analysis.instability {
-        analysis.verdict = Verdict::LinearlyUnstable;
-        analysis.reason = format!(
-            "A has the eigenvalue {:.6e} {:+.6e}i with positive real part",
-            inst.eigenvalue.re, inst.eigenvalue.im
-        );
-    } else {
-        analysis.verdict = Verdict::Inconclusive;
-        analysis.reason = format!("{why}, and no eigenvalue of A has a real part above the tolerance");
+    match (&analysis.spectral_proof, &analysis.instability) {
+        (Some(SpectralProof::Unstable { real_pair }), _) => {
+            analysis.verdict = Verdict::LinearlyUnstable;
+            analysis.reason = format!(
+                "A has an eigenvalue with positive real part ({}; proved exactly by a Sturm sequence on its characteristic polynomial)",
+                if *real_pair { "a real pair ±l" } else { "a complex quadruple ±l, ±conj(l)" }
+            );
+        }
+        (Some(SpectralProof::ImaginaryAxis), _) => {
+            analysis.verdict = Verdict::Inconclusive;
+            analysis.reason = format!(
+                "{why}; every eigenvalue of A lies on the imaginary axis (proved exactly), so the equilibrium is spectrally stable, but that does not imply stability"
+            );
+        }
+        (_, Some(inst)) => {
+            analysis.verdict = Verdict::LinearlyUnstable;
+            analysis.reason = format!(
+                "A has the eigenvalue {:.6e} {:+.6e}i with positive real part",
+                inst.eigenvalue.re, inst.eigenvalue.im
+            );
+        }
+        _ => {
+            analysis.verdict = Verdict::Inconclusive;
+            analysis.reason = format!("{why}, and no eigenvalue of A has a real part above the tolerance");
+        }
     }
     analysis
 }

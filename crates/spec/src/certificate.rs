@@ -93,9 +93,16 @@ fn level_and_checks(a: &Analysis) -> (&'static str, Value) {
                 },
             ),
         },
-        Verdict::LinearlyUnstable => {
-            ("numerical", json!({ "eigenvalue": "floating point (Schur form), real part above tolerance" }))
-        }
+        Verdict::LinearlyUnstable => match a.spectral_proof {
+            Some(generator::SpectralProof::Unstable { .. }) => (
+                "exact",
+                obj! {
+                    "instability" => "exact: Sturm sequence on the characteristic polynomial of A",
+                    "eigenpair" => "floating point (faer), for information",
+                },
+            ),
+            _ => ("numerical", json!({ "eigenvalue": "floating point (faer), real part above tolerance" })),
+        },
         Verdict::NotAnEquilibrium => ("exact", json!({ "equilibrium_residual": "exact (rational)" })),
         Verdict::NoiseIncompatible => ("exact", json!({ "noise_residuals": "exact (rational)" })),
         Verdict::Inconclusive => ("numerical", json!({ "search": "floating point search; no claim is made" })),
@@ -202,6 +209,9 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
                 "spectrum" => Value::Array(a.spectrum.iter().map(complex).collect()),
             },
         );
+    }
+    if let Some(p) = &a.spectral_proof {
+        put("spectrum_proof", Value::from(p.as_str()));
     }
     if let Some(e) = &a.spectrum_error {
         put("spectrum_error", Value::from(e.as_str()));

@@ -66,6 +66,10 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
     // The recorded settings are the ones to reproduce.
     let settings = map.get("settings");
     spec.settings = EngineSettings::from_json(settings, "$.settings").map_err(CheckError::BadInput)?;
+    // 1. The claims, exactly, along the checker's own path.
+    crate::claims::verify_claims(&spec, cert)
+        .map_err(|f| fail(&f.path, format!("claim does not hold: {}", f.message)))?;
+    // 2. Everything else, by re-deriving the certificate and comparing.
     let rederived = certify(&spec);
     let mut expected = rederived.json.clone();
     let mut found = cert.clone();

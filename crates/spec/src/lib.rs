@@ -27,6 +27,7 @@
 
 mod certificate;
 mod check;
+mod claims;
 mod json;
 mod parse;
 mod pretty;
@@ -34,6 +35,7 @@ mod settings;
 
 pub use certificate::{certificate_json, certify, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION};
 pub use check::{check_certificate, check_certificate_value, CheckError, CheckReport, FLOAT_TOLERANCE};
+pub use claims::{verify_claims, ClaimFailure};
 pub use json::SpecError;
 pub use parse::{parse_spec, spec_from_value, CasimirSource, Spec, Stopping, MAX_NOISE_FIELDS};
 pub use pretty::to_pretty_json;

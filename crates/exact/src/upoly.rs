@@ -1,0 +1,336 @@
+//! Univariate polynomials over the rationals: characteristic polynomials
+//! (Hessenberg reduction) and Sturm sequences, for exact statements about
+//! where eigenvalues lie.
+
+use crate::matrix::Matrix;
+use crate::number::Rational;
+use num_traits::{One, Zero};
+use std::cmp::Ordering;
+
+/// A univariate polynomial `sum_k c_k x^k` (coefficients low to high, no
+/// trailing zeros; the zero polynomial is empty).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UPoly {
+    coefficients: Vec<Rational>,
+}
+
+impl UPoly {
+    /// From coefficients, low degree first.
+    pub fn new(mut coefficients: Vec<Rational>) -> Self {
+        while coefficients.last().is_some_and(Zero::is_zero) {
+            coefficients.pop();
+        }
+        UPoly { coefficients }
+    }
+
+    /// The zero polynomial.
+    pub fn zero() -> Self {
+        UPoly { coefficients: vec![] }
+    }
+
+    /// The constant 1.
+    pub fn one() -> Self {
+        UPoly::new(vec![Rational::one()])
+    }
+
+    /// `x`.
+    pub fn x() -> Self {
+        UPoly::new(vec![Rational::zero(), Rational::one()])
+    }
+
+    /// Coefficients, low degree first.
+    pub fn coefficients(&self) -> &[Rational] {
+        &self.coefficients
+    }
+
+    /// Degree (`None` for the zero polynomial).
+    pub fn degree(&self) -> Option<usize> {
+        self.coefficients.len().checked_sub(1)
+    }
+
+    /// Whether this is the zero polynomial.
+    pub fn is_zero(&self) -> bool {
+        self.coefficients.is_empty()
+    }
+
+    /// The leading coefficient (0 for the zero polynomial).
+    pub fn leading(&self) -> Rational {
+        self.coefficients.last().cloned().unwrap_or_else(Rational::zero)
+    }
+
+    /// Sum.
+    pub fn add(&self, o: &UPoly) -> UPoly {
+        let n = self.coefficients.len().max(o.coefficients.len());
+        UPoly::new(
+            (0..n)
+                .map(|i| {
+                    let a = self.coefficients.get(i).cloned().unwrap_or_else(Rational::zero);
+                    let b = o.coefficients.get(i).cloned().unwrap_or_else(Rational::zero);
+                    a + b
+                })
+                .collect(),
+        )
+    }
+
+    /// Multiply by a constant.
+    pub fn scale(&self, s: &Rational) -> UPoly {
+        UPoly::new(self.coefficients.iter().map(|c| c * s).collect())
+    }
+
+    /// Difference.
+    pub fn sub(&self, o: &UPoly) -> UPoly {
+        self.add(&o.scale(&-Rational::one()))
+    }
+
+    /// Product.
+    pub fn mul(&self, o: &UPoly) -> UPoly {
+        if self.is_zero() || o.is_zero() {
+            return UPoly::zero();
+        }
+        let mut c = vec![Rational::zero(); self.coefficients.len() + o.coefficients.len() - 1];
+        for (i, a) in self.coefficients.iter().enumerate() {
+            if a.is_zero() {
+                continue;
+            }
+            for (j, b) in o.coefficients.iter().enumerate() {
+                if !b.is_zero() {
+                    c[i + j] += a * b;
+                }
+            }
+        }
+        UPoly::new(c)
+    }
+
+    /// Derivative.
+    pub fn derivative(&self) -> UPoly {
+        UPoly::new(self.coefficients.iter().enumerate().skip(1).map(|(k, c)| c * Rational::from(k as i64)).collect())
+    }
+
+    /// Quotient and remainder of the division by a nonzero `d`.
+    ///
+    /// # Panics
+    /// If `d` is zero.
+    pub fn div_rem(&self, d: &UPoly) -> (UPoly, UPoly) {
+        assert!(!d.is_zero(), "division by the zero polynomial");
+        let dd = d.coefficients.len() - 1;
+        let lead_inv = d.leading().recip();
+        let mut r = self.coefficients.clone();
+        if r.len() <= dd {
+            return (UPoly::zero(), self.clone());
+        }
+        let mut q = vec![Rational::zero(); r.len() - dd];
+        for k in (0..q.len()).rev() {
+            let c = &r[k + dd] * &lead_inv;
+            if !c.is_zero() {
+                for (j, dc) in d.coefficients.iter().enumerate() {
+                    let v = &c * dc;
+                    r[k + j] -= v;
+                }
+            }
+            q[k] = c;
+        }
+        r.truncate(dd);
+        (UPoly::new(q), UPoly::new(r))
+    }
+
+    /// Monic greatest common divisor.
+    pub fn gcd(&self, o: &UPoly) -> UPoly {
+        let (mut a, mut b) = (self.clone(), o.clone());
+        while !b.is_zero() {
+            let r = a.div_rem(&b).1;
+            a = b;
+            b = r;
+        }
+        if a.is_zero() {
+            return a;
+        }
+        let l = a.leading().recip();
+        a.scale(&l)
+    }
+
+    /// The square-free part `p / gcd(p, p')` (same roots, all simple).
+    pub fn square_free(&self) -> UPoly {
+        if self.degree().unwrap_or(0) == 0 {
+            return self.clone();
+        }
+        let g = self.gcd(&self.derivative());
+        self.div_rem(&g).0
+    }
+
+    /// Value at a rational point.
+    pub fn eval(&self, x: &Rational) -> Rational {
+        let mut acc = Rational::zero();
+        for c in self.coefficients.iter().rev() {
+            acc = acc * x + c;
+        }
+        acc
+    }
+
+    /// Number of distinct real roots in the open interval `(a, b)`, by
+    /// Sturm's theorem. `None` bounds mean `-inf`/`+inf`. Endpoints that are
+    /// roots are not counted.
+    ///
+    /// ```
+    /// use exact::{Rational, UPoly};
+    /// // (x - 1)(x + 2)^2 = x^3 + 3x^2 - 4: distinct roots -2 and 1.
+    /// let p = UPoly::new(vec![Rational::from(-4), Rational::from(0), Rational::from(3), Rational::from(1)]);
+    /// assert_eq!(p.count_real_roots(None, None), 2);
+    /// assert_eq!(p.count_real_roots(None, Some(&Rational::from(0))), 1);
+    /// assert_eq!(p.count_real_roots(Some(&Rational::from(1)), None), 0); // endpoint excluded
+    /// ```
+    pub fn count_real_roots(&self, a: Option<&Rational>, b: Option<&Rational>) -> usize {
+        let p = self.square_free();
+        if p.degree().unwrap_or(0) == 0 {
+            return 0;
+        }
+        let mut seq = vec![p.clone(), p.derivative()];
+        loop {
+            let k = seq.len();
+            let r = seq[k - 2].div_rem(&seq[k - 1]).1;
+            if r.is_zero() {
+                break;
+            }
+            seq.push(r.scale(&-Rational::one()));
+        }
+        // Sign of each member at a point (or at -inf / +inf).
+        let sign_at = |x: Option<&Rational>, plus_infinity: bool| -> Vec<Ordering> {
+            seq.iter()
+                .map(|s| match x {
+                    Some(x) => s.eval(x).cmp(&Rational::zero()),
+                    None => {
+                        let lead = s.leading().cmp(&Rational::zero());
+                        let odd = s.degree().unwrap_or(0) % 2 == 1;
+                        if !plus_infinity && odd {
+                            lead.reverse()
+                        } else {
+                            lead
+                        }
+                    }
+                })
+                .collect()
+        };
+        let changes = |signs: Vec<Ordering>| {
+            let nz: Vec<Ordering> = signs.into_iter().filter(|s| *s != Ordering::Equal).collect();
+            nz.windows(2).filter(|w| w[0] != w[1]).count()
+        };
+        // Exclude endpoint roots: V(a) - V(b) counts roots in (a, b] when a is
+        // not a root; nudge past a root endpoint by counting it out.
+        let va = changes(sign_at(a, false));
+        let vb = changes(sign_at(b, true));
+        let total = va.saturating_sub(vb);
+        let b_is_root = b.is_some_and(|b| p.eval(b).is_zero());
+        total - usize::from(b_is_root && total > 0)
+    }
+}
+
+/// The characteristic polynomial `det(x I - A)` of a square rational matrix,
+/// by exact reduction to upper Hessenberg form and the Hessenberg recurrence
+/// (Cohen, *A Course in Computational Algebraic Number Theory*, Alg. 2.2.9).
+///
+/// ```
+/// use exact::{char_poly, Matrix, Rational};
+/// let q = |n: i64| Rational::from(n);
+/// let a = Matrix::from_rows(&[vec![q(0), q(1)], vec![q(-2), q(0)]]);
+/// // x^2 + 2
+/// assert_eq!(char_poly(&a).coefficients(), &[q(2), q(0), q(1)]);
+/// ```
+pub fn char_poly(a: &Matrix) -> UPoly {
+    let n = a.nrows();
+    assert_eq!(n, a.ncols(), "square matrix");
+    let mut h = a.clone();
+    // Reduce to upper Hessenberg form by similarity transformations.
+    for m in 1..n.saturating_sub(1) {
+        let Some(i) = (m..n).find(|&i| !h[(i, m - 1)].is_zero()) else { continue };
+        if i != m {
+            for k in 0..n {
+                let t = h[(i, k)].clone();
+                h[(i, k)] = h[(m, k)].clone();
+                h[(m, k)] = t;
+            }
+            for k in 0..n {
+                let t = h[(k, i)].clone();
+                h[(k, i)] = h[(k, m)].clone();
+                h[(k, m)] = t;
+            }
+        }
+        let pivot = h[(m, m - 1)].clone();
+        for j in (m + 1)..n {
+            if h[(j, m - 1)].is_zero() {
+                continue;
+            }
+            let u = &h[(j, m - 1)] / &pivot;
+            for k in 0..n {
+                let v = &u * &h[(m, k)];
+                h[(j, k)] -= v;
+            }
+            for k in 0..n {
+                let v = &u * &h[(k, j)];
+                h[(k, m)] += v;
+            }
+        }
+    }
+    // p_m = (x - h_mm) p_{m-1} - sum_{i<m} h_im (prod_{j=i+1..m} h_{j,j-1}) p_{i-1}  (1-based)
+    let mut p: Vec<UPoly> = vec![UPoly::one()];
+    for m in 1..=n {
+        let mut pm = UPoly::x().sub(&UPoly::new(vec![h[(m - 1, m - 1)].clone()])).mul(&p[m - 1]);
+        let mut t = Rational::one();
+        for i in (1..m).rev() {
+            t *= &h[(i, i - 1)];
+            if t.is_zero() {
+                break;
+            }
+            let c = &h[(i - 1, m - 1)] * &t;
+            if !c.is_zero() {
+                pm = pm.sub(&p[i - 1].scale(&c));
+            }
+        }
+        p.push(pm);
+    }
+    p.pop().unwrap_or_else(UPoly::one)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q(n: i64) -> Rational {
+        Rational::from(n)
+    }
+
+    /// Cayley–Hamilton: p(A) = 0, checked exactly.
+    fn evaluate_at_matrix(p: &UPoly, a: &Matrix) -> Matrix {
+        let n = a.nrows();
+        let mut acc = Matrix::zeros(n, n);
+        for c in p.coefficients().iter().rev() {
+            acc = acc.mul(a).add(&Matrix::identity(n).scale(c));
+        }
+        acc
+    }
+
+    #[test]
+    fn cayley_hamilton_on_awkward_matrices() {
+        // Zero subdiagonal (needs a row swap), repeated eigenvalues, rationals.
+        let mats = vec![
+            Matrix::from_rows(&[vec![q(0), q(1), q(2)], vec![q(0), q(0), q(3)], vec![q(4), q(0), q(0)]]),
+            Matrix::from_rows(&[vec![q(2), q(0), q(0)], vec![q(0), q(2), q(0)], vec![q(0), q(0), q(2)]]),
+            Matrix::from_fn(5, 5, |i, j| Rational::new_small((i * 7 + j * 3) as i64 % 5 - 2, (i + j + 1) as i64)),
+        ];
+        for a in mats {
+            let p = char_poly(&a);
+            assert_eq!(p.degree(), Some(a.nrows()));
+            assert!(p.leading() == q(1));
+            assert!(evaluate_at_matrix(&p, &a).is_zero(), "{a:?}");
+        }
+    }
+
+    #[test]
+    fn sturm_counts() {
+        // x^2 + 1 has no real root; x^2 - 2 has two; (x-1)^3 one distinct.
+        assert_eq!(UPoly::new(vec![q(1), q(0), q(1)]).count_real_roots(None, None), 0);
+        assert_eq!(UPoly::new(vec![q(-2), q(0), q(1)]).count_real_roots(None, None), 2);
+        let cube = UPoly::new(vec![q(-1), q(3), q(-3), q(1)]);
+        assert_eq!(cube.count_real_roots(None, None), 1);
+        assert_eq!(cube.count_real_roots(None, Some(&q(0))), 0);
+        assert_eq!(cube.count_real_roots(Some(&q(0)), Some(&q(2))), 1);
+    }
+}

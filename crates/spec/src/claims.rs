@@ -1,0 +1,428 @@
+//! The independent checker: verify a certificate's claims exactly, from the
+//! embedded spec and the recorded Casimir choice, along a code path of its
+//! own.
+//!
+//! Nothing here calls the pipeline (`generator::analyse`, the search, the
+//! optimisation, `generator_form`): `P`, `A`, `B_i` and `Q` are rebuilt from
+//! the polynomials and the structure constants with their textbook formulas,
+//!
+//! ```text
+//! P = D^2h + sum_j lambda_j D^2K_j + G M G^T,      G = [DK_j(mu_e)],
+//! A_bj = sum_{a,k} c^k_ab (D^2h_aj mu_k + delta_kj ∂_a h),   (B_i)_bk = sum_a c^k_ab sigma_i^a,
+//! Q = P A~ + A~^T P + sum_i B_i^T P B_i,            A~ = A + 1/2 sum_i B_i^2,
+//! ```
+//!
+//! and the claims are decided in exact rational arithmetic:
+//!
+//! * `stable`: the first variation `Dh + sum lambda_j DK_j = 0` at `mu_e`;
+//!   `sP ≻ 0` (LDLᵀ); the drift part `P A + A^T P = 0` (the linear flow
+//!   conserves `P`: formal stability); `S sP - sQ ⪰ 0` for the certified
+//!   rational `S = sigma2_exact` (exact semidefiniteness), and `S` not above
+//!   `lambda_max` by more than `1e-9` relative (tightness, in floating point);
+//!   the stored `P`, `Q` equal the rebuilt ones;
+//! * `not_an_equilibrium`: `ad*_{Dh(mu_e)} mu_e` recomputed, nonzero, equal to
+//!   the stored residual;
+//! * `noise_incompatible`: the residuals `ad*_{sigma_i} mu_e` recomputed, one of
+//!   them nonzero, equal to the stored ones, and each stored isotropy vector
+//!   annihilates `mu_e`;
+//! * `linearly_unstable`: the stored eigenpair satisfies `|A v - l v| <= 1e-8 |A|`
+//!   for the rebuilt `A`, with `Re l > 0`.
+
+use crate::parse::Spec;
+use exact::{parse_number, Matrix, Poly, Rational};
+use nalgebra::DMatrix;
+use num_traits::Zero;
+use serde_json::Value;
+
+/// A failed claim: the JSON path and why.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ClaimFailure {
+    /// Path of the field the claim is about.
+    pub path: String,
+    /// What does not hold.
+    pub message: String,
+}
+
+type Claim<T> = Result<T, ClaimFailure>;
+
+fn failure(path: &str, message: impl Into<String>) -> ClaimFailure {
+    ClaimFailure { path: path.to_string(), message: message.into() }
+}
+
+fn get<'a>(cert: &'a Value, path: &[&str]) -> Claim<&'a Value> {
+    let mut cur = cert;
+    let mut p = String::from("$");
+    for k in path {
+        p.push('.');
+        p.push_str(k);
+        cur = cur.get(*k).ok_or_else(|| failure(&p, "missing"))?;
+    }
+    Ok(cur)
+}
+
+fn rational(v: &Value, path: &str) -> Claim<Rational> {
+    let text = match v {
+        Value::String(s) => s.clone(),
+        Value::Number(n) => n.to_string(),
+        _ => return Err(failure(path, "expected a rational")),
+    };
+    parse_number(&text).map_err(|e| failure(path, e.to_string()))
+}
+
+fn rational_vector(v: &Value, path: &str) -> Claim<Vec<Rational>> {
+    v.as_array()
+        .ok_or_else(|| failure(path, "expected an array"))?
+        .iter()
+        .enumerate()
+        .map(|(i, x)| rational(x, &format!("{path}[{i}]")))
+        .collect()
+}
+
+fn rational_matrix(v: &Value, path: &str) -> Claim<Matrix> {
+    let rows: Vec<Vec<Rational>> = v
+        .as_array()
+        .ok_or_else(|| failure(path, "expected a matrix"))?
+        .iter()
+        .enumerate()
+        .map(|(i, r)| rational_vector(r, &format!("{path}[{i}]")))
+        .collect::<Claim<_>>()?;
+    let cols = rows.first().map_or(0, Vec::len);
+    if rows.iter().any(|r| r.len() != cols) {
+        return Err(failure(path, "ragged matrix"));
+    }
+    Ok(Matrix::from_rows(&rows))
+}
+
+/// The rebuilt linearisation and second-variation ingredients.
+struct Rebuilt {
+    n: usize,
+    gradient_h: Vec<Rational>,
+    hessian_h: Matrix,
+    a: Matrix,
+    b: Vec<Matrix>,
+}
+
+fn rebuild(spec: &Spec) -> Rebuilt {
+    let sys = &spec.system;
+    let alg = sys.algebra();
+    let n = alg.dim();
+    let mu = sys.equilibrium();
+    let gradient_h = sys.hamiltonian().gradient_at(mu);
+    let hessian_h = Matrix::from_rows(&sys.hamiltonian().hessian_at(mu));
+    // A_bj = sum_{a,k} c^k_ab (H_aj mu_k) + sum_a c^j_ab g_a
+    let mut a = Matrix::zeros(n, n);
+    for aa in 0..n {
+        for bb in 0..n {
+            for (k, c) in alg.bracket_of_basis(aa, bb) {
+                if !mu[*k].is_zero() {
+                    for j in 0..n {
+                        if !hessian_h[(aa, j)].is_zero() {
+                            let v = c * &hessian_h[(aa, j)] * &mu[*k];
+                            a[(bb, j)] += v;
+                        }
+                    }
+                }
+                if !gradient_h[aa].is_zero() {
+                    let v = c * &gradient_h[aa];
+                    a[(bb, *k)] += v;
+                }
+            }
+        }
+    }
+    let b = sys
+        .noise()
+        .iter()
+        .map(|sigma| {
+            let mut m = Matrix::zeros(n, n);
+            for aa in 0..n {
+                if sigma[aa].is_zero() {
+                    continue;
+                }
+                for bb in 0..n {
+                    for (k, c) in alg.bracket_of_basis(aa, bb) {
+                        let v = c * &sigma[aa];
+                        m[(bb, *k)] += v;
+                    }
+                }
+            }
+            m
+        })
+        .collect();
+    Rebuilt { n, gradient_h, hessian_h, a, b }
+}
+
+fn conserved(spec: &Spec) -> Vec<&Poly> {
+    spec.system.casimirs().iter().chain(spec.system.first_integrals().iter()).collect()
+}
+
+/// `ad*_{xi} mu` with explicit loops: `(ad*_xi mu)_b = sum c^k_ab xi^a mu_k`.
+fn coadjoint(spec: &Spec, xi: &[Rational], mu: &[Rational]) -> Vec<Rational> {
+    let alg = spec.system.algebra();
+    let n = alg.dim();
+    let mut out = vec![Rational::zero(); n];
+    for a in 0..n {
+        if xi[a].is_zero() {
+            continue;
+        }
+        for b in 0..n {
+            for (k, c) in alg.bracket_of_basis(a, b) {
+                if !mu[*k].is_zero() {
+                    out[b] += c * &xi[a] * &mu[*k];
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Verify the claims of a certificate against its (already parsed) spec.
+/// Returns the verification level actually established.
+pub fn verify_claims(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+    let verdict = get(cert, &["verdict"])?.as_str().ok_or_else(|| failure("$.verdict", "expected a string"))?;
+    let level = get(cert, &["level"])?.as_str().ok_or_else(|| failure("$.level", "expected a string"))?;
+    let established = match verdict {
+        "stable" => verify_stable(spec, cert, level)?,
+        "not_an_equilibrium" => verify_not_equilibrium(spec, cert)?,
+        "noise_incompatible" => verify_noise_incompatible(spec, cert)?,
+        "linearly_unstable" => verify_unstable(spec, cert)?,
+        "inconclusive" => "numerical",
+        other => return Err(failure("$.verdict", format!("unknown verdict '{other}'"))),
+    };
+    if level == "exact" && established != "exact" {
+        return Err(failure("$.level", format!("claims 'exact' but only '{established}' could be established")));
+    }
+    Ok(established)
+}
+
+fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<&'static str> {
+    let r = rebuild(spec);
+    let n = r.n;
+    let mu = spec.system.equilibrium();
+    let ks = conserved(spec);
+    let choice = get(cert, &["casimir_choice"])?;
+    let sign = match choice.get("sign").and_then(Value::as_i64) {
+        Some(1) => 1i8,
+        Some(-1) => -1i8,
+        _ => return Err(failure("$.casimir_choice.sign", "expected 1 or -1")),
+    };
+    let lambda = rational_vector(get(choice, &["multipliers"])?, "$.casimir_choice.multipliers")?;
+    if lambda.len() != ks.len() {
+        return Err(failure(
+            "$.casimir_choice.multipliers",
+            format!("{} multipliers for {} conserved quantities", lambda.len(), ks.len()),
+        ));
+    }
+    let m = rational_matrix(get(choice, &["M"])?, "$.casimir_choice.M")?;
+    if m.nrows() != ks.len() || m.ncols() != ks.len() || !m.is_symmetric() {
+        return Err(failure("$.casimir_choice.M", "expected a symmetric matrix, one row per conserved quantity"));
+    }
+    // First variation.
+    let grads: Vec<Vec<Rational>> = ks.iter().map(|k| k.gradient_at(mu)).collect();
+    let mut first = r.gradient_h.clone();
+    for (l, g) in lambda.iter().zip(&grads) {
+        for i in 0..n {
+            first[i] += l * &g[i];
+        }
+    }
+    if first.iter().any(|x| !x.is_zero()) {
+        return Err(failure(
+            "$.casimir_choice.multipliers",
+            "the first variation Dh + sum lambda_j DK_j does not vanish at mu_e",
+        ));
+    }
+    // P.
+    let mut p = r.hessian_h.clone();
+    for (l, k) in lambda.iter().zip(&ks) {
+        p.add_scaled_assign(l, &Matrix::from_rows(&k.hessian_at(mu)));
+    }
+    let g = Matrix::from_columns(n, &grads);
+    p = p.add(&g.mul(&m).mul(&g.transpose()));
+    if !p.is_definite_with_sign(sign) {
+        return Err(failure("$.casimir_choice", "the second variation P is not definite with the recorded sign"));
+    }
+    if rational_matrix(get(cert, &["P"])?, "$.P")? != p {
+        return Err(failure("$.P", "differs from the P rebuilt from the spec and the Casimir choice"));
+    }
+    // Q = P A~ + A~^T P + sum B^T P B.
+    let half = Rational::new_small(1, 2);
+    let mut a_tilde = r.a.clone();
+    for b in &r.b {
+        a_tilde.add_scaled_assign(&half, &b.mul(b));
+    }
+    let pa = p.mul(&a_tilde);
+    let mut q = pa.add(&pa.transpose());
+    for b in &r.b {
+        q = q.add(&b.transpose().mul(&p).mul(b));
+    }
+    if rational_matrix(get(cert, &["Q"])?, "$.Q")? != q {
+        return Err(failure("$.Q", "differs from the Q rebuilt from the spec and the Casimir choice"));
+    }
+    let drift = p.mul(&r.a);
+    if !drift.add(&drift.transpose()).is_zero() {
+        return Err(failure("$.residuals.drift", "P A + A^T P is not zero: P is not conserved by the linear flow"));
+    }
+    // Sigma^2.
+    let sigma2_float = get(cert, &["sigma2"])?.as_f64().ok_or_else(|| failure("$.sigma2", "expected a number"))?;
+    let Some(exact_value) = cert.get("sigma2_exact") else {
+        if level == "exact" {
+            return Err(failure("$.sigma2_exact", "missing for an exact certificate"));
+        }
+        return Ok("numerical");
+    };
+    let s = rational(exact_value, "$.sigma2_exact")?;
+    if (exact::rational_to_f64(&s) - sigma2_float).abs() > 1e-12 * sigma2_float.abs().max(1e-300) {
+        return Err(failure("$.sigma2", "differs from sigma2_exact"));
+    }
+    if s.is_negative() {
+        return Err(failure("$.sigma2_exact", "negative"));
+    }
+    let (sp, sq) =
+        if sign > 0 { (p.clone(), q.clone()) } else { (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1))) };
+    let gap = sp.scale(&s).sub(&sq);
+    if !gap.is_positive_semidefinite() {
+        return Err(failure("$.sigma2_exact", "sigma2 * sP - sQ is not positive semidefinite: the bound is false"));
+    }
+    let singular = gap.rank() < n;
+    if let Some(sharp) = cert.get("sigma2_sharp") {
+        let claimed = sharp.as_bool().ok_or_else(|| failure("$.sigma2_sharp", "expected a boolean"))?;
+        if claimed && !(singular || s.is_zero()) {
+            return Err(failure("$.sigma2_sharp", "claimed sharp, but sigma2 * sP - sQ is not singular"));
+        }
+    }
+    // Tightness (floating point): not above lambda_max by more than 1e-9.
+    let pf: DMatrix<f64> = sp.to_dmatrix();
+    let qf: DMatrix<f64> = sq.to_dmatrix();
+    let lmax =
+        generator::growth_constant(&sp, &sq, 1).map_err(|e| failure("$.sigma2", e.to_string()))?.largest_eigenvalue;
+    let sf = exact::rational_to_f64(&s);
+    let slack = 1e-9 * lmax.abs().max(sf.abs()) + 1e-12 * (qf.norm() / pf.norm().max(f64::MIN_POSITIVE));
+    if sf > lmax.max(0.0) + slack {
+        return Err(failure(
+            "$.sigma2_exact",
+            format!("not tight: {sf} exceeds lambda_max = {lmax} by more than 1e-9"),
+        ));
+    }
+    // The stopping time follows from sigma2.
+    if let Some(st) = cert.get("stopping") {
+        let eps = st
+            .get("epsilon")
+            .and_then(Value::as_f64)
+            .ok_or_else(|| failure("$.stopping.epsilon", "expected a number"))?;
+        let delta =
+            st.get("delta").and_then(Value::as_f64).ok_or_else(|| failure("$.stopping.delta", "expected a number"))?;
+        match st.get("T") {
+            Some(Value::String(t)) if t == "infinity" => {
+                if sf != 0.0 {
+                    return Err(failure("$.stopping.T", "infinite, but sigma2 is positive"));
+                }
+            }
+            Some(t) => {
+                let t = t.as_f64().ok_or_else(|| failure("$.stopping.T", "expected a number"))?;
+                let expected = (eps / delta).ln() / sf;
+                if (t - expected).abs() > 1e-9 * expected.abs() {
+                    return Err(failure("$.stopping.T", format!("is not ln(epsilon/delta)/sigma2 = {expected}")));
+                }
+            }
+            None => return Err(failure("$.stopping.T", "missing")),
+        }
+    }
+    Ok("exact")
+}
+
+fn verify_not_equilibrium(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+    let mu = spec.system.equilibrium();
+    let grad = spec.system.hamiltonian().gradient_at(mu);
+    let residual = coadjoint(spec, &grad, mu);
+    if residual.iter().all(Zero::is_zero) {
+        return Err(failure("$.verdict", "ad*_{Dh(mu_e)} mu_e is zero: mu_e is an equilibrium"));
+    }
+    if rational_vector(get(cert, &["equilibrium", "residual"])?, "$.equilibrium.residual")? != residual {
+        return Err(failure("$.equilibrium.residual", "differs from the recomputed residual"));
+    }
+    Ok("exact")
+}
+
+fn verify_noise_incompatible(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+    let mu = spec.system.equilibrium();
+    let residuals: Vec<Vec<Rational>> = spec.system.noise().iter().map(|s| coadjoint(spec, s, mu)).collect();
+    if residuals.iter().all(|r| r.iter().all(Zero::is_zero)) {
+        return Err(failure("$.verdict", "every ad*_{sigma_i} mu_e is zero: the noise is compatible"));
+    }
+    let stored = get(cert, &["noise", "residuals"])?
+        .as_array()
+        .ok_or_else(|| failure("$.noise.residuals", "expected an array"))?
+        .iter()
+        .enumerate()
+        .map(|(i, r)| rational_vector(r, &format!("$.noise.residuals[{i}]")))
+        .collect::<Claim<Vec<_>>>()?;
+    if stored != residuals {
+        return Err(failure("$.noise.residuals", "differ from the recomputed residuals"));
+    }
+    let basis = get(cert, &["noise", "isotropy_basis"])?
+        .as_array()
+        .ok_or_else(|| failure("$.noise.isotropy_basis", "expected an array"))?;
+    for (i, v) in basis.iter().enumerate() {
+        let path = format!("$.noise.isotropy_basis[{i}]");
+        let xi = rational_vector(v, &path)?;
+        if xi.len() != mu.len() || coadjoint(spec, &xi, mu).iter().any(|x| !x.is_zero()) {
+            return Err(failure(&path, "does not annihilate mu_e: not in the isotropy algebra"));
+        }
+    }
+    Ok("exact")
+}
+
+fn verify_unstable(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+    let r = rebuild(spec);
+    let proved = matches!(generator::exact_spectrum_test(&r.a), generator::SpectralProof::Unstable { .. });
+    let Some(inst) = cert.get("instability") else {
+        return if proved {
+            Ok("exact")
+        } else {
+            Err(failure("$.instability", "missing, and no exact proof of instability"))
+        };
+    };
+    let ev = get(inst, &["eigenvalue"])?;
+    let (re, im) = match (ev.get("re").and_then(Value::as_f64), ev.get("im").and_then(Value::as_f64)) {
+        (Some(re), Some(im)) => (re, im),
+        _ => return Err(failure("$.instability.eigenvalue", "expected {re, im}")),
+    };
+    if re <= 0.0 {
+        return Err(failure("$.instability.eigenvalue", "real part is not positive"));
+    }
+    let v: Vec<(f64, f64)> = get(inst, &["eigenvector"])?
+        .as_array()
+        .ok_or_else(|| failure("$.instability.eigenvector", "expected an array"))?
+        .iter()
+        .map(|z| {
+            (
+                z.get("re").and_then(Value::as_f64).unwrap_or(f64::NAN),
+                z.get("im").and_then(Value::as_f64).unwrap_or(f64::NAN),
+            )
+        })
+        .collect();
+    let a = r.a.to_dmatrix();
+    let n = r.n;
+    if v.len() != n || v.iter().any(|(x, y)| !x.is_finite() || !y.is_finite()) {
+        return Err(failure("$.instability.eigenvector", format!("expected {n} finite complex components")));
+    }
+    let norm = v.iter().map(|(x, y)| x * x + y * y).sum::<f64>().sqrt();
+    let mut residual = 0.0;
+    for i in 0..n {
+        let (mut x, mut y) = (0.0, 0.0);
+        for j in 0..n {
+            x += a[(i, j)] * v[j].0;
+            y += a[(i, j)] * v[j].1;
+        }
+        x -= re * v[i].0 - im * v[i].1;
+        y -= re * v[i].1 + im * v[i].0;
+        residual += x * x + y * y;
+    }
+    let residual = residual.sqrt() / norm.max(f64::MIN_POSITIVE);
+    if !(residual <= 1e-8 * a.norm().max(1.0)) {
+        return Err(failure(
+            "$.instability",
+            format!("|A v - l v| / |v| = {residual:e}: not an eigenpair of the rebuilt A"),
+        ));
+    }
+    Ok(if proved { "exact" } else { "numerical" })
+}
