@@ -418,7 +418,7 @@ fn verify_unstable(spec: &Spec, cert: &Value) -> Claim<&'static str> {
         residual += x * x + y * y;
     }
     let residual = residual.sqrt() / norm.max(f64::MIN_POSITIVE);
-    if !(residual <= 1e-8 * a.norm().max(1.0)) {
+    if residual.is_nan() || residual > 1e-8 * a.norm().max(1.0) {
         return Err(failure(
             "$.instability",
             format!("|A v - l v| / |v| = {residual:e}: not an eigenpair of the rebuilt A"),
