@@ -51,8 +51,8 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
     if specs.is_empty() {
         return Ok(Err(Failure::BadInput(format!("no specs found under {}", dir.display()))));
     }
-    let header = ["name", "verdict", "Sigma^2", "T(eps, delta)", "level", "certificate"];
-    let mut rows: Vec<[String; 6]> = Vec::new();
+    let header = ["name", "verdict", "Sigma^2", "first choice", "T(eps, delta)", "level", "certificate"];
+    let mut rows: Vec<[String; 7]> = Vec::new();
     let (mut bad, mut failed) = (0, 0);
     for path in &specs {
         let text = std::fs::read_to_string(path)?;
@@ -62,7 +62,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
                 bad += 1;
                 eprintln!("error: {}: {e}", path.display());
                 let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("?").to_string();
-                rows.push([name, "bad input".into(), "-".into(), "-".into(), "-".into(), "-".into()]);
+                rows.push([name, "bad input".into(), "-".into(), "-".into(), "-".into(), "-".into(), "-".into()]);
                 continue;
             }
         };
@@ -92,6 +92,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
             spec.name.clone(),
             j["verdict"].as_str().unwrap_or("?").to_string(),
             j.get("sigma2").map_or("-".into(), format_number),
+            j.get("optimisation").map_or("-".into(), |o| format_number(&o["first_definite_sigma2"])),
             j.get("stopping").map_or("-".into(), |s| format_number(&s["T"])),
             j["level"].as_str().unwrap_or("?").to_string(),
             status,

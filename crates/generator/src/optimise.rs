@@ -223,7 +223,9 @@ fn exact_choice(
     relative_margin: f64,
 ) -> Option<CasimirChoice> {
     let mut t_rational: Option<Vec<Rational>> = None;
-    for denominator in [1u64 << 8, 1 << 16, 1 << 24, 1 << 32, 1 << 40] {
+    // Fine denominators: near the optimum Sigma^2 is quadratic in t, and a
+    // coarse rounding would cost more than the tolerance.
+    for denominator in [1u64 << 24, 1 << 32, 1 << 40, 1 << 48] {
         let cand: Option<Vec<Rational>> = t
             .iter()
             .map(|&x| if x == 0.0 { Some(Rational::zero()) } else { best_rational_approximation(x, denominator) })

@@ -21,6 +21,10 @@ pub struct Settings {
     pub search: SearchSettings,
     /// Whether to minimise `Sigma^2` over the Casimir freedom (default true).
     pub optimise: bool,
+    /// Whether to prove the claims exactly (default true): the rational
+    /// `Sigma^2` bound and the exact spectral test. Without it the verdicts
+    /// rest on floating point and the level is `numerical`.
+    pub exact: bool,
     /// The minimisation.
     pub optimisation: OptimiseSettings,
     /// An eigenvalue of `A` proves linear instability only if its real part
@@ -35,6 +39,7 @@ impl Default for Settings {
         Settings {
             search: SearchSettings::default(),
             optimise: true,
+            exact: true,
             optimisation: OptimiseSettings::default(),
             instability_tolerance: 1e-6,
         }
@@ -244,13 +249,15 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         }
     }
 
-    let proof = exact_spectrum_test(&linearisation.a);
-    if proof == SpectralProof::ImaginaryAxis {
-        // Exact arithmetic rules out an unstable eigenvalue: any numerical
-        // one above the tolerance was round-off.
-        analysis.instability = None;
+    if settings.exact {
+        let proof = exact_spectrum_test(&linearisation.a);
+        if proof == SpectralProof::ImaginaryAxis {
+            // Exact arithmetic rules out an unstable eigenvalue: any numerical
+            // one above the tolerance was round-off.
+            analysis.instability = None;
+        }
+        analysis.spectral_proof = Some(proof);
     }
-    analysis.spectral_proof = Some(proof);
 
     let Some(variation) = system.second_variation() else {
         return conclude_without_form(
@@ -303,7 +310,11 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         }
         None => (choice.clone(), form, first_growth.clone(), None),
     };
-    let exact = certify_sigma2(&best_choice.p, &best_form.q, best_choice.sign, best_growth.largest_eigenvalue.max(0.0));
+    let exact = if settings.exact {
+        certify_sigma2(&best_choice.p, &best_form.q, best_choice.sign, best_growth.largest_eigenvalue.max(0.0))
+    } else {
+        None
+    };
     analysis.verdict = Verdict::Stable;
     analysis.reason = format!(
         "the second variation is {} definite: formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t)",

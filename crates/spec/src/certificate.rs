@@ -89,7 +89,7 @@ fn level_and_checks(a: &Analysis) -> (&'static str, Value) {
                 obj! {
                     "P_definite" => "exact (rational LDL^T)",
                     "drift_residual" => "exact (rational)",
-                    "sigma2" => "floating point only: the exact semidefiniteness test failed at every candidate",
+                    "sigma2" => "floating point only (exact certification switched off, or it failed at every candidate)",
                 },
             ),
         },

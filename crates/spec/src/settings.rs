@@ -32,6 +32,7 @@ const KEYS: &[&str] = &[
     "discovery_degree",
     "discovery_max_unknowns",
     "optimise",
+    "exact",
     "optimisation_tolerance",
     "optimisation_iterations",
 ];
@@ -69,6 +70,9 @@ impl EngineSettings {
                 "optimise" => {
                     s.pipeline.optimise = v.as_bool().ok_or_else(|| SpecError::new(&p, "expected true or false"))?;
                 }
+                "exact" => {
+                    s.pipeline.exact = v.as_bool().ok_or_else(|| SpecError::new(&p, "expected true or false"))?;
+                }
                 "optimisation_tolerance" => {
                     s.pipeline.optimisation.tolerance = in_range(float(v, &p)?, 1e-14, 0.1, &p)?
                 }
@@ -94,6 +98,7 @@ impl EngineSettings {
             "discovery_degree": self.discovery_degree,
             "discovery_max_unknowns": self.discovery_max_unknowns,
             "optimise": self.pipeline.optimise,
+            "exact": self.pipeline.exact,
             "optimisation_tolerance": self.pipeline.optimisation.tolerance,
             "optimisation_iterations": self.pipeline.optimisation.max_iterations,
         })
