@@ -35,8 +35,9 @@ fn pseudo_random(n: usize, seed: u64) -> Vec<f64> {
 
 #[test]
 fn there_are_stable_fixtures_to_check() {
-    // heavy top, Lagrange fast, Kubo, major, minor, so21
-    assert_eq!(stable_fixtures().len(), 6);
+    // heavy top, Lagrange fast, Lagrange with fluctuating gravity, Kubo,
+    // major, minor, so21
+    assert_eq!(stable_fixtures().len(), 7);
 }
 
 #[test]
