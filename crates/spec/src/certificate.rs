@@ -119,6 +119,15 @@ fn choice_json(ch: &casimir::CasimirChoice) -> Value {
     }
 }
 
+/// SHA-256 of the spec's compact JSON (keys sorted), in hex: any edit of the
+/// embedded spec changes it, so `check` notices a spec that was altered even
+/// where the altered spec would make the same claims true.
+pub fn spec_digest(spec: &Value) -> String {
+    use sha2::{Digest, Sha256};
+    let hash = Sha256::digest(spec.to_string().as_bytes());
+    hash.iter().map(|b| format!("{b:02x}")).collect()
+}
+
 /// Run the pipeline on a parsed spec and build the certificate.
 pub fn certify(spec: &Spec) -> Certificate {
     let analysis = analyse(&spec.system, &spec.settings.pipeline);
@@ -157,6 +166,8 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
             },
         );
     }
+    put("spec_sha256", Value::from(spec_digest(&spec.raw)));
+    put("hamiltonian", Value::from(system.hamiltonian().to_string_with(coords)));
     put("coordinates", Value::Array(coords.iter().map(|c| Value::from(c.as_str())).collect()));
     put(
         "equilibrium",

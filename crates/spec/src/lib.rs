@@ -33,7 +33,7 @@ mod parse;
 mod pretty;
 mod settings;
 
-pub use certificate::{certificate_json, certify, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION};
+pub use certificate::{certificate_json, certify, spec_digest, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION};
 pub use check::{check_certificate, check_certificate_value, CheckError, CheckReport, FLOAT_TOLERANCE};
 pub use claims::{verify_claims, ClaimFailure};
 pub use json::SpecError;
