@@ -58,7 +58,7 @@ fn every_fixture_rejects_single_number_alterations() {
         let mut c = cert.clone();
         let params = c["spec"]["parameters"].as_object_mut().unwrap();
         let key = params.keys().next().unwrap().clone();
-        let old = parse_number(&params[&key].to_string().trim_matches('"').to_string()).unwrap();
+        let old = parse_number(params[&key].to_string().trim_matches('"')).unwrap();
         params.insert(key.clone(), Value::String((old + &small).to_string()));
         family.push((format!("spec parameter {key}"), c));
 
