@@ -252,3 +252,41 @@ fn regression_abelian_algebra_empty_restricted_hessian() {
     assert_eq!(cert.json["verdict"], "stable");
     assert_eq!(cert.analysis.sigma2(), Some(0.0));
 }
+
+/// The verified floating-point test never accepts an indefinite matrix and
+/// accepts well-conditioned definite ones. Matrices Q diag(d) Q^T with a
+/// known spectrum d (Q a product of Givens rotations), paired: the same
+/// matrix with its smallest eigenvalue made -1e-10 (relative) must fail.
+#[test]
+fn verified_positive_definiteness_pairs() {
+    use generator::verified_positive_definite;
+    use nalgebra::DMatrix;
+    let build = |d: &[f64], seed: u64| -> DMatrix<f64> {
+        let n = d.len();
+        let mut q = DMatrix::<f64>::identity(n, n);
+        let mut s = seed;
+        for i in 0..n {
+            for j in (i + 1)..n {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let th = (s >> 11) as f64 / (1u64 << 53) as f64 * std::f64::consts::TAU;
+                let (c, sn) = (th.cos(), th.sin());
+                for k in 0..n {
+                    let (a, b) = (q[(k, i)], q[(k, j)]);
+                    q[(k, i)] = c * a - sn * b;
+                    q[(k, j)] = sn * a + c * b;
+                }
+            }
+        }
+        let m = &q * DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(d)) * q.transpose();
+        (&m + m.transpose()) * 0.5
+    };
+    for seed in 0..50u64 {
+        let n = 2 + (seed as usize % 7);
+        let mut d: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        assert!(verified_positive_definite(&build(&d, seed)), "seed {seed}: well-conditioned SPD not verified");
+        d[0] = -1e-10;
+        assert!(!verified_positive_definite(&build(&d, seed)), "seed {seed}: indefinite matrix verified");
+        d[0] = 0.0;
+        assert!(!verified_positive_definite(&build(&d, seed)), "seed {seed}: singular matrix verified");
+    }
+}

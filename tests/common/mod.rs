@@ -89,6 +89,13 @@ pub fn proptest_config(cases: u32, heavy: u32) -> ProptestConfig {
     ProptestConfig {
         cases: if cfg!(feature = "heavy-tests") { heavy } else { cases },
         rng_seed: proptest::test_runner::RngSeed::Fixed(0x5EC_CA51),
+        // The tests live outside the package's src/, so name the file directly.
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::Direct(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/proptest-regressions/",
+            env!("CARGO_CRATE_NAME"),
+            ".txt"
+        )))),
         ..ProptestConfig::default()
     }
 }

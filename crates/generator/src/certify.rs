@@ -34,12 +34,14 @@ pub fn sigma2_bound_holds(p: &Matrix, q: &Matrix, sign: i8, s: &Rational) -> boo
     !s.is_negative() && sigma2_gap(p, q, sign, s).is_positive_semidefinite()
 }
 
-/// Find a rational `S >= max(0, estimate)` as close to the estimate as the
-/// exact test allows, trying in turn: `0` (when the estimate is not
-/// positive), simple rationals near the estimate (which certify the sharp
-/// value when `lambda_max` is rational), and decimals just above it (relative
-/// margins `1e-14 .. 1e-10`). `None` if none passes (the floating-point
-/// estimate was off by more than `1e-10` relative).
+/// Find a rational `S >= max(0, lambda_max)` as close to it as the exact
+/// test allows, trying in turn: `0` (when the estimate is not positive),
+/// simple rationals near the estimate (which certify the sharp value when
+/// `lambda_max` is rational), decimals just above it (relative margins
+/// `1e-14 .. 1e-10`), and, when the floating-point estimate is off (an
+/// ill-conditioned `P`), an exact bisection that brackets `lambda_max` to
+/// `1e-13` relative with the exact test alone. `None` only if no finite
+/// bracket is found.
 ///
 /// ```
 /// use exact::{Matrix, Rational};
@@ -78,13 +80,63 @@ pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option
             }
         }
     }
-    for s in candidates {
-        let gap = sigma2_gap(p, q, sign, &s);
-        if !s.is_negative() && gap.is_positive_semidefinite() {
-            // S = 0 is the floored constant max(0, lambda_max) exactly.
-            let sharp = s.is_zero() || (gap.nrows() > 0 && gap.rank() < gap.nrows());
-            return Some(ExactSigma2 { value: s, sharp });
+    let accept = |s: &Rational| -> Option<ExactSigma2> {
+        let gap = sigma2_gap(p, q, sign, s);
+        if s.is_negative() || !gap.is_positive_semidefinite() {
+            return None;
+        }
+        // S = 0 is the floored constant max(0, lambda_max) exactly.
+        let sharp = s.is_zero() || (gap.nrows() > 0 && gap.rank() < gap.nrows());
+        Some(ExactSigma2 { value: s.clone(), sharp })
+    };
+    // Tight: sharp, or (1 - 1e-10) S no longer bounds Q.
+    let tight = |e: &ExactSigma2| {
+        e.sharp || !sigma2_bound_holds(p, q, sign, &(&e.value * Rational::new_small(9_999_999_999, 10_000_000_000)))
+    };
+    let mut upper: Option<Rational> = None;
+    for s in &candidates {
+        if let Some(e) = accept(s) {
+            if tight(&e) {
+                return Some(e);
+            }
+            upper = Some(e.value);
+            break;
         }
     }
-    None
+    // The floating-point estimate was off (an ill-conditioned P): bracket
+    // lambda_max exactly and bisect with the exact test, on short decimals.
+    let mut hi = match upper {
+        Some(u) => u,
+        None => {
+            let mut hi = decimal_at_least(estimate.max(1e-300) * 2.0 + 1e-12, 16)?;
+            let mut grow = 0;
+            while !sigma2_bound_holds(p, q, sign, &hi) {
+                hi = &hi * Rational::from(4) + Rational::new_small(1, 1_000_000);
+                grow += 1;
+                if grow > 60 {
+                    return None;
+                }
+            }
+            hi
+        }
+    };
+    let mut lo = Rational::zero();
+    if sigma2_bound_holds(p, q, sign, &lo) {
+        return accept(&lo);
+    }
+    for _ in 0..100 {
+        let (lf, hf) = (exact::rational_to_f64(&lo), exact::rational_to_f64(&hi));
+        if hf - lf <= 1e-13 * hf {
+            break;
+        }
+        let mid = decimal_at_least(0.5 * (lf + hf), 16)
+            .filter(|m| m > &lo && m < &hi)
+            .unwrap_or_else(|| (&lo + &hi) / Rational::from(2));
+        if sigma2_bound_holds(p, q, sign, &mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    accept(&hi)
 }

@@ -51,6 +51,7 @@ mod optimise;
 mod pipeline;
 mod spectral;
 mod stopping;
+mod verified;
 
 pub use certify::{certify_sigma2, sigma2_bound_holds, sigma2_gap, ExactSigma2};
 pub use form::{generator_form, GeneratorForm};
@@ -62,3 +63,4 @@ pub use optimise::{optimise_choice, OptimiseSettings, Optimum};
 pub use pipeline::{analyse, Analysis, OptimumSummary, Settings, StableEvidence, Verdict};
 pub use spectral::{exact_spectrum_test, SpectralProof};
 pub use stopping::StoppingTime;
+pub use verified::verified_positive_definite;

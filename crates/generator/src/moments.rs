@@ -43,6 +43,18 @@ impl SecondMoments {
         DMatrix::from_column_slice(n, n, out.as_slice())
     }
 
+    /// `d/dt E|x_t|_P^2` at `t = 0` from a deterministic start `x_0`:
+    /// `tr(P L(x_0 x_0^T))`, read off the moment equation itself (no finite
+    /// differences), so it is independent of the engine's `Q`.
+    pub fn rate_at_zero(&self, p: &DMatrix<f64>, x0: &[f64]) -> f64 {
+        let n = self.n;
+        let x = DMatrix::from_column_slice(n, 1, x0);
+        let s0 = &x * x.transpose();
+        let v = DMatrix::from_column_slice(n * n, 1, s0.as_slice());
+        let ds = &self.operator * v;
+        (p * DMatrix::from_column_slice(n, n, ds.as_slice())).trace()
+    }
+
     /// `E|x_t|_P^2 = tr(P S(t))` for a deterministic start `x_0`.
     ///
     /// ```

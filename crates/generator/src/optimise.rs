@@ -32,7 +32,9 @@ use num_traits::Zero;
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimiseSettings {
     /// Relative tolerance on `Sigma^2` between the certified value and the
-    /// infimum over the freedom. Default `1e-9`.
+    /// infimum over the freedom, when the infimum is only approached as `M`
+    /// grows. Default `1e-6`: closing the gap costs a conditioning of `P`
+    /// of about `1/tolerance`, and floating point must still resolve it.
     pub tolerance: f64,
     /// Iterations of the ellipsoid method. Default 3000.
     pub max_iterations: usize,
@@ -43,7 +45,7 @@ pub struct OptimiseSettings {
 
 impl Default for OptimiseSettings {
     fn default() -> Self {
-        OptimiseSettings { tolerance: 1e-9, max_iterations: 3000, max_doublings: 80 }
+        OptimiseSettings { tolerance: 1e-6, max_iterations: 3000, max_doublings: 60 }
     }
 }
 

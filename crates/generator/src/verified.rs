@@ -1,0 +1,94 @@
+//! A rigorous floating-point test of positive definiteness (the
+//! `verified_float` level, for data that is not rational).
+//!
+//! Criterion, in the spirit of Rump, *Verification of positive definiteness*
+//! (BIT 46, 2006), derived here from the standard backward error of the
+//! Cholesky factorisation (Higham, *Accuracy and Stability of Numerical
+//! Algorithms*, Thm 10.3): if floating-point Cholesky of `A~ = fl(A - cI)`
+//! (rounding to nearest, unit roundoff `u = 2^-53`) runs to completion, the
+//! computed factor satisfies `R^T R = A~ + dA` with
+//! `|dA| <= g |R^T||R|`, `g = gamma_{n+1} = (n+1)u / (1 - (n+1)u)`. Since
+//! `R^T R ⪰ 0` and `|| |R^T||R| ||_2 <= sum_i |r_i|^2 <= sum_i a~_ii / (1 - g)`,
+//!
+//! ```text
+//! A = A~ - D + cI ⪰ (c - g/(1-g) sum_i a~_ii - max_i |D_ii|) I,   |D_ii| <= u |a_ii - c|,
+//! ```
+//!
+//! where `D` is the rounding of the shifted diagonal. So `A ≻ 0` whenever
+//! `c > g/(1-g) (1+u) sum_i a_ii + u (max_i a_ii + c)`. The shift used below
+//! exceeds that bound by a factor absorbing the rounding in computing `c`
+//! itself, plus `4 (n+1)^3` times the smallest normal number to cover
+//! underflow (Higham's bound assumes none; each entry of `R^T R` is a sum of
+//! at most `n` products, each off by at most that much). The test is
+//! sufficient, never necessary: `false` means "not verified", not
+//! "indefinite".
+
+use nalgebra::DMatrix;
+
+/// Whether `a` (symmetric) is proved positive definite by a floating-point
+/// Cholesky of `a - cI` with the a-priori shift `c` of the module docs.
+///
+/// ```
+/// use nalgebra::DMatrix;
+/// use generator::verified_positive_definite;
+/// let a = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
+/// assert!(verified_positive_definite(&a));
+/// let b = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0 - 1e-20]);
+/// assert!(!verified_positive_definite(&b)); // singular to working precision
+/// ```
+pub fn verified_positive_definite(a: &DMatrix<f64>) -> bool {
+    let n = a.nrows();
+    if n == 0 || a.ncols() != n || a.iter().any(|x| !x.is_finite()) {
+        return false;
+    }
+    for i in 0..n {
+        for j in 0..i {
+            if a[(i, j)] != a[(j, i)] {
+                return false;
+            }
+        }
+        if a[(i, i)] <= 0.0 {
+            return false;
+        }
+    }
+    let u = f64::EPSILON / 2.0;
+    let nn = (n + 1) as f64;
+    if nn * u >= 0.01 {
+        return false; // the error bounds below assume (n+1)u is small
+    }
+    let g = nn * u / (1.0 - nn * u);
+    let trace: f64 = (0..n).map(|i| a[(i, i)]).sum();
+    let max_diag = (0..n).map(|i| a[(i, i)]).fold(0.0, f64::max);
+    // c0 >= g/(1-g) (1+u) trace + u max_diag, then c = c0 / (1 - u) so that
+    // c >= c0 + u c; inflate by (1 + 16 u) per rounded operation above.
+    let c0 = (g / (1.0 - g)) * (1.0 + u) * trace + u * max_diag;
+    let underflow = 4.0 * nn.powi(3) * f64::MIN_POSITIVE;
+    let c = (c0 / (1.0 - u) + underflow) * (1.0 + 16.0 * u);
+    if !c.is_finite() {
+        return false;
+    }
+    // Plain Cholesky (inner-product form), the algorithm the bound is about.
+    let mut r = DMatrix::<f64>::zeros(n, n);
+    for j in 0..n {
+        let mut s = a[(j, j)] - c;
+        for k in 0..j {
+            s -= r[(k, j)] * r[(k, j)];
+        }
+        if s.is_nan() || s <= 0.0 || !s.is_finite() {
+            return false;
+        }
+        let d = s.sqrt();
+        r[(j, j)] = d;
+        for i in (j + 1)..n {
+            let mut t = a[(j, i)];
+            for k in 0..j {
+                t -= r[(k, j)] * r[(k, i)];
+            }
+            r[(j, i)] = t / d;
+            if !r[(j, i)].is_finite() {
+                return false;
+            }
+        }
+    }
+    true
+}

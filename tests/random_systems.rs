@@ -1,0 +1,221 @@
+//! Random systems: random algebras from semidirect products, direct sums and
+//! rescalings of the builtins, random quadratic Hamiltonians made to have a
+//! chosen equilibrium, random compatible noise. Every certificate must pass
+//! the exact check, and every `stable` one must be confirmed by the exact
+//! second-moment equations: the bound holds at sampled times from several
+//! starts, and from the fastest direction the growth rate at t -> 0 is the
+//! largest generalized eigenvalue of the certified pair (P, Q) (sharp).
+//!
+//! 64 cases by default; `--features heavy-tests` runs 10,000 (CI, release).
+
+mod common;
+
+use algebra::{builtin, LieAlgebra};
+use common::*;
+use exact::{Matrix, Rational};
+use generator::SecondMoments;
+use nalgebra::{DMatrix, DVector};
+use num_traits::Zero;
+use proptest::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+static STABLE: AtomicUsize = AtomicUsize::new(0);
+static EXACT: AtomicUsize = AtomicUsize::new(0);
+static TOTAL: AtomicUsize = AtomicUsize::new(0);
+
+fn adjoint(g: &LieAlgebra) -> Vec<Matrix> {
+    (0..g.dim())
+        .map(|a| {
+            let mut e = vec![Rational::zero(); g.dim()];
+            e[a] = Rational::from(1);
+            g.ad_matrix(&e)
+        })
+        .collect()
+}
+
+/// The pool of constructions (dimension 3 to 6).
+fn construction(which: usize, scales: &[i64]) -> LieAlgebra {
+    let b = |n: &str| builtin(n).unwrap().algebra;
+    let names: Vec<String> = (0..6).map(|i| format!("v{i}")).collect();
+    let g = match which % 11 {
+        0 => b("so3"),
+        1 => b("se3"),
+        2 => b("sl2"),
+        3 => b("se2"),
+        4 => b("heisenberg"),
+        5 => b("so3").semidirect("so3-ad", &adjoint(&b("so3")), &names[..3]).unwrap(),
+        6 => b("sl2").semidirect("sl2-ad", &adjoint(&b("sl2")), &names[..3]).unwrap(),
+        7 => {
+            let sl2 = b("sl2");
+            let coad: Vec<Matrix> = adjoint(&sl2).iter().map(|m| m.transpose().scale(&Rational::from(-1))).collect();
+            sl2.semidirect("sl2-coad", &coad, &names[..3]).unwrap()
+        }
+        8 => b("so3").direct_sum(&b("sl2"), "so3+sl2").unwrap(),
+        9 => b("se2").direct_sum(&b("heisenberg"), "se2+h").unwrap(),
+        _ => b("so3").direct_sum(&b("so3").with_coordinates(&["L1", "L2", "L3"]).unwrap(), "so3+so3").unwrap(),
+    };
+    let n = g.dim();
+    let s: Vec<Rational> = (0..n).map(|i| Rational::from(scales[i % scales.len()])).collect();
+    g.rescaled(&s)
+}
+
+#[derive(Debug, Clone)]
+struct Case {
+    which: usize,
+    scales: Vec<i64>,
+    mu: Vec<i64>,
+    s: Vec<i64>,
+    xi: Vec<i64>,
+    noise: Vec<Vec<i64>>,
+}
+
+fn case() -> impl Strategy<Value = Case> {
+    (
+        0usize..11,
+        proptest::collection::vec(prop_oneof![Just(1i64), Just(2), Just(-1), Just(3)], 6),
+        proptest::collection::vec(-2i64..=2, 6),
+        proptest::collection::vec(-3i64..=3, 21),
+        proptest::collection::vec(-2i64..=2, 6),
+        proptest::collection::vec(proptest::collection::vec(-2i64..=2, 6), 0..=2),
+    )
+        .prop_map(|(which, scales, mu, s, xi, noise)| Case { which, scales, mu, s, xi, noise })
+}
+
+fn spec_text(c: &Case) -> Option<String> {
+    let g = construction(c.which, &c.scales);
+    let n = g.dim();
+    let mu: Vec<Rational> = c.mu[..n].iter().map(|&x| Rational::from(x)).collect();
+    let iso = g.isotropy_basis(&mu);
+    let combo = |coefs: &[i64]| -> Vec<Rational> {
+        let mut v = vec![Rational::zero(); n];
+        for (k, b) in iso.iter().enumerate() {
+            let cf = Rational::from(coefs[k % coefs.len()]);
+            for i in 0..n {
+                v[i] += &cf * &b[i];
+            }
+        }
+        v
+    };
+    // h = 1/2 x^T S x + b.x with b = xi - S mu, so that Dh(mu) = xi in g_mu.
+    let mut s = Matrix::zeros(n, n);
+    let mut k = 0;
+    for i in 0..n {
+        for j in i..n {
+            let v = Rational::from(c.s[k % c.s.len()]) + if i == j { Rational::from(2) } else { Rational::zero() };
+            s[(i, j)] = v.clone();
+            s[(j, i)] = v;
+            k += 1;
+        }
+    }
+    let xi = combo(&c.xi);
+    let smu = s.mul_vec(&mu);
+    let b: Vec<Rational> = xi.iter().zip(&smu).map(|(x, y)| x - y).collect();
+    let names: Vec<String> = (0..n).map(|i| format!("x{i}")).collect();
+    let mut terms = Vec::new();
+    for i in 0..n {
+        for j in i..n {
+            let coef = if i == j { &s[(i, j)] / Rational::from(2) } else { s[(i, j)].clone() };
+            if !coef.is_zero() {
+                terms.push(format!("({coef})*{}*{}", names[i], names[j]));
+            }
+        }
+        if !b[i].is_zero() {
+            terms.push(format!("({})*{}", b[i], names[i]));
+        }
+    }
+    if terms.is_empty() {
+        return None;
+    }
+    let noise: Vec<String> = c
+        .noise
+        .iter()
+        .map(|coefs| format!("[{}]", combo(coefs).iter().map(|x| format!("\"{x}\"")).collect::<Vec<_>>().join(", ")))
+        .collect();
+    let rows: Vec<String> =
+        g.structure_constant_rows().iter().map(|(a, b, k, c)| format!("[{a}, {b}, {k}, \"{c}\"]")).collect();
+    Some(format!(
+        r#"{{"name": "random-{}", "algebra": {{"coordinates": {:?}, "structure_constants": [{}]}},
+            "hamiltonian": "{}", "equilibrium": [{}], "noise": [{}],
+            "settings": {{"discovery_degree": 2}}}}"#,
+        g.name().replace(' ', "-"),
+        names,
+        rows.join(", "),
+        terms.join(" + "),
+        mu.iter().map(|x| format!("\"{x}\"")).collect::<Vec<_>>().join(", "),
+        noise.join(", ")
+    ))
+}
+
+fn confirm_with_moments(cert: &spec::Certificate) -> Result<(), TestCaseError> {
+    let s = cert.analysis.stable.as_ref().unwrap();
+    let moments = SecondMoments::new(cert.analysis.linearisation.as_ref().unwrap());
+    let p: DMatrix<f64> = s.choice.p.to_dmatrix() * (s.choice.sign as f64);
+    let sigma2 = s.sigma2();
+    let n = p.nrows();
+    let mut starts = vec![s.growth.direction.clone()];
+    for i in 0..n {
+        let mut e = vec![0.0; n];
+        e[i] = 1.0;
+        starts.push(e);
+    }
+    for x0 in &starts {
+        let v = DVector::from_column_slice(x0);
+        let norm0 = (v.transpose() * &p * &v)[(0, 0)];
+        for &t in &[0.01, 0.1, 1.0] {
+            let e = moments.expected_norm(&p, x0, t);
+            let bound = norm0 * (sigma2 * t).exp();
+            prop_assert!(e <= bound * (1.0 + 1e-8) + 1e-12 * norm0, "E = {} > bound {} at t = {}", e, bound, t);
+        }
+    }
+    // Sharpness at t -> 0: from the fastest direction (|v|_P = 1) the moment
+    // equation's own rate d/dt tr(P S) at 0 equals lambda_max, so no smaller
+    // constant bounds the growth near t = 0.
+    let lmax = s.growth.largest_eigenvalue;
+    let v = &s.growth.direction;
+    let vp = DVector::from_column_slice(v);
+    let pn = (vp.transpose() * &p * &vp)[(0, 0)];
+    let rate = moments.rate_at_zero(&p, v);
+    let scale = moments.operator().norm() * pn + lmax.abs();
+    // Floating point throughout, with P possibly ill-conditioned: agreement
+    // to 1e-6 of the scale of the moment operator.
+    prop_assert!((rate - lmax * pn).abs() <= 1e-6 * scale.max(1.0), "rate {} vs lambda_max {}", rate, lmax);
+    // The certified value is exact; lambda_max is floating point, accurate
+    // to about cond(P) * eps, and the optimiser may make P ill-conditioned
+    // (large Casimir terms), hence the 1e-8.
+    prop_assert!(sigma2 >= lmax.max(0.0) * (1.0 - 1e-8), "certified {} below lambda_max {}", sigma2, lmax);
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(proptest_config(64, 10_000))]
+
+    #[test]
+    fn random_certificates_check_and_stable_ones_are_confirmed(c in case()) {
+        let Some(text) = spec_text(&c) else { return Ok(()) };
+        let spec = match spec::parse_spec(&text) {
+            Ok(s) => s,
+            Err(e) => return Err(TestCaseError::fail(format!("generated spec rejected: {e}\n{text}"))),
+        };
+        let cert = spec::certify(&spec);
+        TOTAL.fetch_add(1, Ordering::Relaxed);
+        prop_assert!(spec::check_certificate_value(&cert.json).is_ok(), "check failed: {:?}\n{}", spec::check_certificate_value(&cert.json), text);
+        if cert.json["verdict"] == "stable" {
+            STABLE.fetch_add(1, Ordering::Relaxed);
+            if cert.json["level"] == "exact" {
+                EXACT.fetch_add(1, Ordering::Relaxed);
+            }
+            confirm_with_moments(&cert)?;
+        }
+    }
+}
+
+#[test]
+fn report_counts() {
+    // Runs after (or alongside) the property test; prints what was covered.
+    eprintln!(
+        "random systems so far: {} certified, {} stable ({} at level exact)",
+        TOTAL.load(Ordering::Relaxed),
+        STABLE.load(Ordering::Relaxed),
+        EXACT.load(Ordering::Relaxed)
+    );
+}
