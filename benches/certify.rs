@@ -1,7 +1,12 @@
-//! Criterion benchmark of the whole `certify` pipeline (spec text in,
-//! certificate JSON out) on the rigid body and the heavy top, grouped by
-//! dimension. The side-by-side numpy/scipy figure comes from
-//! `bench/numpy_pipeline.py --bench N` on the same specs.
+//! Criterion benchmarks of certification, grouped by dimension:
+//!
+//! * `certify/<spec>`: the whole path, spec text in, certificate JSON out
+//!   (exact level: optimal Casimir choice, rational Sigma^2, exact spectral test);
+//! * `analysis-exact/<spec>`: the analysis alone at the exact level;
+//! * `analysis-numeric/<spec>`: the analysis alone with the exact proofs
+//!   switched off (`settings.exact = false`): floating-point Sigma^2.
+//!
+//! The side-by-side numpy/scipy figure comes from `bench/side_by_side.sh`.
 #![allow(missing_docs)] // criterion_group! generates an undocumented function
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
@@ -11,28 +16,36 @@ fn fixture(name: &str) -> String {
     std::fs::read_to_string(format!("{}/../fixtures/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
 }
 
+const SPECS: [(usize, &str); 4] = [
+    (3, "rigid-body-major-axis"),
+    (6, "heavy-top-asymmetric"),
+    (6, "lagrange-top-fast"),
+    (6, "lagrange-top-fluctuating-gravity"),
+];
+
 fn certify_pipeline(c: &mut Criterion) {
     let mut group = c.benchmark_group("certify");
-    for (dim, name) in
-        [(3, "rigid-body-major-axis.json"), (6, "heavy-top-asymmetric.json"), (6, "lagrange-top-fast.json")]
-    {
-        let text = fixture(name);
-        group.bench_with_input(BenchmarkId::new(name.trim_end_matches(".json"), dim), &text, |b, text| {
+    for (dim, name) in SPECS {
+        let text = fixture(&format!("{name}.json"));
+        group.bench_with_input(BenchmarkId::new(name, dim), &text, |b, text| {
             b.iter(|| {
                 let spec = spec::parse_spec(black_box(text)).unwrap();
-                let cert = spec::certify(&spec);
-                black_box(cert.json)
+                black_box(spec::certify(&spec).json)
             })
         });
-        // The same, excluding JSON parsing and certificate building.
-        let spec = spec::parse_spec(&text).unwrap();
-        group.bench_with_input(
-            BenchmarkId::new(format!("{}-analysis-only", name.trim_end_matches(".json")), dim),
-            &spec,
-            |b, spec| b.iter(|| black_box(generator::analyse(&spec.system, &spec.settings.pipeline))),
-        );
     }
     group.finish();
+    for (label, exact) in [("analysis-exact", true), ("analysis-numeric", false)] {
+        let mut group = c.benchmark_group(label);
+        for (dim, name) in SPECS {
+            let mut spec = spec::parse_spec(&fixture(&format!("{name}.json"))).unwrap();
+            spec.settings.pipeline.exact = exact;
+            group.bench_with_input(BenchmarkId::new(name, dim), &spec, |b, spec| {
+                b.iter(|| black_box(generator::analyse(&spec.system, &spec.settings.pipeline)))
+            });
+        }
+        group.finish();
+    }
 }
 
 criterion_group!(benches, certify_pipeline);

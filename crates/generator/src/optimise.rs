@@ -31,21 +31,23 @@ use num_traits::Zero;
 /// Settings of the optimisation, with documented defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimiseSettings {
-    /// Relative tolerance on `Sigma^2` between the certified value and the
-    /// infimum over the freedom, when the infimum is only approached as `M`
-    /// grows. Default `1e-6`: closing the gap costs a conditioning of `P`
-    /// of about `1/tolerance`, and floating point must still resolve it.
+    /// Tolerance on `Sigma^2` between the certified value and the infimum
+    /// over the freedom when the infimum is only approached as `M` grows,
+    /// relative to the larger of the infimum and the first definite
+    /// choice's constant. Default `1e-6`: closing the gap costs a
+    /// conditioning of `P` of about `1/tolerance`, and floating point must
+    /// still resolve it.
     pub tolerance: f64,
     /// Iterations of the ellipsoid method. Default 3000.
     pub max_iterations: usize,
     /// Doublings of the Casimir-function scale `M` when approaching the
-    /// infimum. Default 80.
+    /// infimum (stopped early once they no longer help). Default 40.
     pub max_doublings: usize,
 }
 
 impl Default for OptimiseSettings {
     fn default() -> Self {
-        OptimiseSettings { tolerance: 1e-6, max_iterations: 3000, max_doublings: 60 }
+        OptimiseSettings { tolerance: 1e-6, max_iterations: 3000, max_doublings: 40 }
     }
 }
 
@@ -61,6 +63,9 @@ pub struct Optimum {
     /// Whether the choice attains the infimum (to round-off) rather than
     /// approaching it within the tolerance.
     pub attained: bool,
+    /// Whether the certified value is within the tolerance of the infimum
+    /// (false when reaching it would make `P` too ill-conditioned).
+    pub within_tolerance: bool,
     /// Whether `Q` depends on `M` (a conserved quantity that the noise does
     /// not conserve).
     pub q_depends_on_m: bool,
@@ -211,6 +216,23 @@ impl AffinePencil {
     }
 }
 
+/// `lambda_max / lambda_min` of a (hopefully) positive definite matrix;
+/// infinite when it is not.
+fn condition_number(m: &DMatrix<f64>) -> f64 {
+    match sym_eigen(m.clone()) {
+        Some(e) => {
+            let lo = e.eigenvalues.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            let hi = e.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+            if lo > 0.0 {
+                hi / lo
+            } else {
+                f64::INFINITY
+            }
+        }
+        None => f64::INFINITY,
+    }
+}
+
 fn signed(m: &Matrix, sign: i8) -> DMatrix<f64> {
     m.to_dmatrix() * (sign as f64)
 }
@@ -322,22 +344,38 @@ pub fn optimise_choice(
             (t, v.max(0.0))
         };
         // Grow K until lambda_max is within the tolerance of the infimum.
-        let target = infimum * (1.0 + settings.tolerance) + settings.tolerance * 1e-3;
+        // Within `tolerance` of the infimum, relative to the larger of the
+        // infimum and the first choice's constant (so an infimum of 0, which
+        // is only approached, is certified to tolerance * first_sigma2).
+        let target = infimum + settings.tolerance * infimum.max(first_growth.sigma2);
         let mut scale = Rational::from(1);
         let mut best: Option<(CasimirChoice, GrowthConstant)> = None;
         // With no independent conserved gradient there is no K to grow.
         let doublings = if rk == 0 { 1 } else { settings.max_doublings };
+        let mut stalled = 0;
         for _ in 0..doublings {
             let k = k_first.scale(&scale);
             if let Some(choice) = exact_choice(variation, sign, &t_best, &k, first.relative_margin) {
+                // Beyond a condition number of 1e8 floating point can no
+                // longer resolve P (the fastest direction, lambda_max): stop
+                // and keep the best so far; the certificate says the
+                // tolerance was not reached.
+                if condition_number(&signed(&choice.p, sign)) > 1e8 && best.is_some() {
+                    break;
+                }
                 let q = lq(&choice.p);
                 if let Ok(g) = growth_constant(&choice.p, &q, sign) {
                     let done = g.sigma2 <= target;
-                    let better = best.as_ref().is_none_or(|(_, b)| g.sigma2 < b.sigma2);
-                    if better {
+                    // Improvements below 1e-9 relative are round-off: growing K
+                    // further only ruins the conditioning of P.
+                    let improves = best.as_ref().is_none_or(|(_, b)| g.sigma2 < b.sigma2 * (1.0 - 1e-9));
+                    if improves {
                         best = Some((choice, g));
+                        stalled = 0;
+                    } else {
+                        stalled += 1;
                     }
-                    if done {
+                    if done || stalled >= 3 {
                         break;
                     }
                 }
@@ -349,12 +387,13 @@ pub fn optimise_choice(
             return None;
         }
         let attained = growth.sigma2 <= infimum * (1.0 + 1e-12) + 1e-15;
+        let within_tolerance = growth.sigma2 <= target;
         let method = if f == 0 {
             "restricted to ker G^T (no free multipliers)"
         } else {
             "restricted to ker G^T, ellipsoid over t"
         };
-        return Some(Optimum { choice, growth, infimum, attained, q_depends_on_m, method });
+        return Some(Optimum { choice, growth, infimum, attained, within_tolerance, q_depends_on_m, method });
     }
 
     // General case: Q depends on K. Minimise over theta = (t, K entries).
@@ -405,5 +444,13 @@ pub fn optimise_choice(
     if growth.sigma2 > first_growth.sigma2 {
         return None;
     }
-    Some(Optimum { choice, attained: !on_boundary, growth, infimum, q_depends_on_m, method: "ellipsoid over (t, M)" })
+    Some(Optimum {
+        choice,
+        attained: !on_boundary,
+        within_tolerance: !on_boundary,
+        growth,
+        infimum,
+        q_depends_on_m,
+        method: "ellipsoid over (t, M)",
+    })
 }

@@ -113,8 +113,10 @@ pub struct StableEvidence {
 pub struct OptimumSummary {
     /// Floating-point infimum of `Sigma^2` over the freedom.
     pub infimum: f64,
-    /// Whether the chosen `P` attains it (else it is within the tolerance).
+    /// Whether the chosen `P` attains it.
     pub attained: bool,
+    /// Whether the chosen `P` is within the tolerance of it.
+    pub within_tolerance: bool,
     /// Whether `Q` depends on `M`.
     pub q_depends_on_m: bool,
     /// How it was found.
@@ -303,6 +305,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
             let summary = OptimumSummary {
                 infimum: o.infimum,
                 attained: o.attained,
+                within_tolerance: o.within_tolerance,
                 q_depends_on_m: o.q_depends_on_m,
                 method: o.method,
             };

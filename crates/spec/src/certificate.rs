@@ -263,6 +263,7 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
                 opt.insert("optimised".into(), Value::Bool(true));
                 opt.insert("infimum".into(), float(o.infimum));
                 opt.insert("attained".into(), Value::Bool(o.attained));
+                opt.insert("within_tolerance".into(), Value::Bool(o.within_tolerance));
                 opt.insert("q_depends_on_M".into(), Value::Bool(o.q_depends_on_m));
                 opt.insert("method".into(), Value::from(o.method));
                 opt.insert("tolerance".into(), float(spec.settings.pipeline.optimisation.tolerance));
