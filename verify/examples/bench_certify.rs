@@ -3,8 +3,9 @@
 //!
 //! Usage: `bench_certify SPEC [REPS]` (`ONLY=analyse` times the analysis alone). Prints one JSON line with microseconds
 //! per certificate for: parsing the spec (JSON + exact polynomials + checks),
-//! the analysis (steps 1-8 of the pipeline: the scope of the numpy timing),
-//! building the certificate JSON, and the whole `certify` path end to end.
+//! the analysis at the exact level (default) and at the numeric level
+//! (`exact = false`: the scope of the numpy timing), building the
+//! certificate JSON, and the whole `certify` path end to end.
 use std::time::Instant;
 
 fn per_call(reps: usize, mut f: impl FnMut()) -> f64 {
@@ -36,6 +37,11 @@ fn main() {
     let analyse = per_call(reps, || {
         std::hint::black_box(generator::analyse(&spec.system, &spec.settings.pipeline));
     });
+    let mut numeric_spec = spec.clone();
+    numeric_spec.settings.pipeline.exact = false;
+    let analyse_numeric = per_call(reps, || {
+        std::hint::black_box(generator::analyse(&numeric_spec.system, &numeric_spec.settings.pipeline));
+    });
     let certificate = per_call(reps, || {
         std::hint::black_box(spec::certificate_json(&spec, &analysis));
     });
@@ -44,7 +50,7 @@ fn main() {
         std::hint::black_box(spec::certify(&s).json);
     });
     println!(
-        "{{\"name\": \"{}\", \"reps\": {reps}, \"us_parse\": {parse:.2}, \"us_analyse\": {analyse:.2}, \"us_certificate_json\": {certificate:.2}, \"us_end_to_end\": {end_to_end:.2}}}",
+        "{{\"name\": \"{}\", \"reps\": {reps}, \"us_parse\": {parse:.2}, \"us_analyse\": {analyse:.2}, \"us_analyse_numeric\": {analyse_numeric:.2}, \"us_certificate_json\": {certificate:.2}, \"us_end_to_end\": {end_to_end:.2}}}",
         spec.name
     );
 }

@@ -252,7 +252,10 @@ pub fn best_rational_approximation(x: f64, max_denominator: u64) -> Option<Ratio
     if q1 == 0 {
         return None;
     }
-    let r = Rational::new(BigInt::from(p1), BigInt::from(q1));
+    let r = match (i64::try_from(p1), i64::try_from(q1)) {
+        (Ok(p), Ok(q)) => Rational::new_small(p, q),
+        _ => Rational::new(BigInt::from(p1), BigInt::from(q1)),
+    };
     Some(if negative { -r } else { r })
 }
 

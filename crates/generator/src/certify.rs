@@ -58,28 +58,20 @@ pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option
     if !estimate.is_finite() {
         return None;
     }
-    let mut candidates: Vec<Rational> = Vec::new();
-    if estimate <= 1e-12 {
-        candidates.push(Rational::zero());
-    }
-    if estimate > 0.0 {
-        for denominator in [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000, 1 << 20, 1 << 30] {
-            if let Some(r) = best_rational_approximation(estimate, denominator) {
-                let rf = exact::rational_to_f64(&r);
-                if (rf - estimate).abs() <= 1e-13 * estimate && !candidates.contains(&r) {
-                    candidates.push(r);
-                }
-            }
-        }
-        if let Some(r) = rational_from_f64(estimate) {
-            candidates.push(r);
-        }
-        for margin in [1e-14, 1e-13, 1e-12, 1e-11, 1e-10] {
-            if let Some(r) = decimal_at_least(estimate * (1.0 + margin), 16) {
-                candidates.push(r);
-            }
-        }
-    }
+    // Candidates, generated lazily (most certificates accept the first).
+    let simple = [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000, 1 << 20, 1 << 30];
+    let margins = [1e-14, 1e-13, 1e-12, 1e-11, 1e-10];
+    let candidates = (estimate <= 1e-12)
+        .then(Rational::zero)
+        .into_iter()
+        .chain(simple.into_iter().filter(|_| estimate > 0.0).filter_map(|denominator| {
+            let r = best_rational_approximation(estimate, denominator)?;
+            ((exact::rational_to_f64(&r) - estimate).abs() <= 1e-13 * estimate).then_some(r)
+        }))
+        .chain((estimate > 0.0).then(|| rational_from_f64(estimate)).flatten())
+        .chain(
+            margins.into_iter().filter(|_| estimate > 0.0).filter_map(|m| decimal_at_least(estimate * (1.0 + m), 16)),
+        );
     let accept = |s: &Rational| -> Option<ExactSigma2> {
         let gap = sigma2_gap(p, q, sign, s);
         if s.is_negative() || !gap.is_positive_semidefinite() {
@@ -94,8 +86,13 @@ pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option
         e.sharp || !sigma2_bound_holds(p, q, sign, &(&e.value * Rational::new_small(9_999_999_999, 10_000_000_000)))
     };
     let mut upper: Option<Rational> = None;
-    for s in &candidates {
-        if let Some(e) = accept(s) {
+    let mut tried: Vec<Rational> = Vec::new();
+    for s in candidates {
+        if tried.contains(&s) {
+            continue;
+        }
+        tried.push(s.clone());
+        if let Some(e) = accept(&s) {
             if tight(&e) {
                 return Some(e);
             }

@@ -285,11 +285,17 @@ fn exact_choice(
 /// Minimise `Sigma^2` over the Casimir freedom, starting from a definite
 /// choice. Returns `None` only if no better-or-equal exact choice could be
 /// built (then the first choice stands).
+///
+/// `noise_conserves_all` says that every conserved quantity Poisson-commutes
+/// with every noise potential (exactly, as computed by
+/// [`casimir::System::noise_commutation`]); then `Q` cannot depend on `M`
+/// (the drift conserves them too), and the check of that is skipped.
 pub fn optimise_choice(
     variation: &SecondVariation,
     linearisation: &Linearisation,
     first: &CasimirChoice,
     first_growth: &GrowthConstant,
+    noise_conserves_all: bool,
     settings: &OptimiseSettings,
 ) -> Option<Optimum> {
     let sign = first.sign;
@@ -318,7 +324,10 @@ pub fn optimise_choice(
             k_dirs.push((a, b, y.mul(&e).mul(&y.transpose())));
         }
     }
-    let q_depends_on_m = k_dirs.iter().any(|(_, _, d)| !lq(d).is_zero());
+    // L(Y K Y^T) = Y K Y^T A~ + A~^T Y K Y^T + sum B^T Y K Y^T B vanishes when
+    // Y^T A = 0 (the drift conserves the quantities: always) and B^T Y = 0
+    // (the noise conserves them).
+    let q_depends_on_m = !noise_conserves_all && k_dirs.iter().any(|(_, _, d)| !lq(d).is_zero());
     let t0: Vec<f64> = first.family_parameters.iter().map(exact::rational_to_f64).collect();
     // K of the first choice, on the independent columns.
     let k_first = Matrix::from_fn(rk, rk, |a, b| first.m[(cols[a], cols[b])].clone());
@@ -343,6 +352,18 @@ pub fn optimise_choice(
             let (t, v) = pencil.minimise(&t0, radius, settings.max_iterations);
             (t, v.max(0.0))
         };
+        if f == 0 && first_growth.sigma2 <= infimum * (1.0 + 1e-12) + 1e-15 {
+            // The first choice already attains the infimum: nothing to rebuild.
+            return Some(Optimum {
+                choice: first.clone(),
+                growth: first_growth.clone(),
+                infimum,
+                attained: true,
+                within_tolerance: true,
+                q_depends_on_m,
+                method: "restricted to ker G^T (no free multipliers); the first choice attains it",
+            });
+        }
         // Grow K until lambda_max is within the tolerance of the infimum.
         // Within `tolerance` of the infimum, relative to the larger of the
         // infimum and the first choice's constant (so an infimum of 0, which

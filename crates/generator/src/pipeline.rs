@@ -295,13 +295,14 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     };
     let variation = analysis.variation.as_ref().expect("set above");
     let optimum = if settings.optimise {
-        optimise_choice(variation, &linearisation, choice, &first_growth, &settings.optimisation)
+        let noise_conserves_all = analysis.noise_commutation.iter().flatten().all(|&c| c);
+        optimise_choice(variation, &linearisation, choice, &first_growth, noise_conserves_all, &settings.optimisation)
     } else {
         None
     };
     let (best_choice, best_form, best_growth, summary) = match optimum {
         Some(o) => {
-            let form = generator_form(&linearisation, &o.choice.p);
+            let form = if o.choice.p == choice.p { form } else { generator_form(&linearisation, &o.choice.p) };
             let summary = OptimumSummary {
                 infimum: o.infimum,
                 attained: o.attained,
