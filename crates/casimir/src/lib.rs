@@ -46,6 +46,7 @@
 
 mod bracket;
 mod discover;
+mod ellipsoid;
 mod error;
 mod search;
 mod system;
@@ -53,6 +54,7 @@ mod variation;
 
 pub use bracket::lie_poisson_bracket;
 pub use discover::{discover_casimirs, DiscoveryReport};
+pub use ellipsoid::Ellipsoid;
 pub use error::SystemError;
 pub use search::{find_definite_choice, CasimirChoice, SearchOutcome, SearchSettings};
 pub use system::{ConservedKind, System};

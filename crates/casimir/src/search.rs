@@ -12,6 +12,7 @@
 //! `mu` above the Schur-complement bound, and the final rational `P` is
 //! confirmed definite by an exact LDLᵀ test.
 
+use crate::ellipsoid::Ellipsoid;
 use crate::variation::SecondVariation;
 use exact::{best_rational_approximation, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -152,14 +153,13 @@ impl Pencil {
         if f == 0 {
             return (best_u, best, best_rel);
         }
-        let mut c = vec![0.0; f];
-        // Shape matrix of the ellipsoid {x : (x-c)^T E^{-1} (x-c) <= 1}.
-        let mut e = DMatrix::<f64>::identity(f, f) * (radius * radius * f as f64);
+        let mut ellipsoid = Ellipsoid::ball(&vec![0.0; f], radius);
         for _ in 0..iterations {
+            let c = ellipsoid.centre().to_vec();
             let norm_c = c.iter().map(|x| x * x).sum::<f64>().sqrt();
-            // Cut direction a: keep {x : a^T (x - c) <= 0}.
-            let a: Vec<f64> = if norm_c > radius {
-                c.iter().map(|x| x / norm_c).collect()
+            // Keep {x : g . (x - c) >= 0}: towards the ball, or up the supergradient.
+            let g: Vec<f64> = if norm_c > radius {
+                c.iter().map(|x| -x / norm_c).collect()
             } else {
                 let (value, rel, g) = self.evaluate(sign, &c);
                 if value > best {
@@ -167,31 +167,9 @@ impl Pencil {
                     best_rel = rel;
                     best_u = c.clone();
                 }
-                let gnorm = g.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if gnorm == 0.0 {
-                    break;
-                }
-                g.iter().map(|x| -x / gnorm).collect()
+                g
             };
-            let a = DVector::from_vec(a);
-            let ea = &e * &a;
-            let aea = a.dot(&ea);
-            if aea <= 0.0 || !aea.is_finite() {
-                break;
-            }
-            let at = ea / aea.sqrt();
-            if f == 1 {
-                c[0] -= at[0] / 2.0;
-                e *= 0.25;
-            } else {
-                let nf = f as f64;
-                for i in 0..f {
-                    c[i] -= at[i] / (nf + 1.0);
-                }
-                e = (e - (&at * at.transpose()) * (2.0 / (nf + 1.0))) * (nf * nf / (nf * nf - 1.0));
-            }
-            let size = e.diagonal().iter().fold(0.0f64, |m, &d| m.max(d)).sqrt();
-            if size < 1e-13 * radius {
+            if !ellipsoid.cut(&g) || ellipsoid.size() < 1e-13 * radius {
                 break;
             }
         }

@@ -23,7 +23,7 @@
 use crate::form::generator_form;
 use crate::growth::{growth_constant, GrowthConstant};
 use crate::linearise::Linearisation;
-use casimir::{CasimirChoice, SecondVariation};
+use casimir::{CasimirChoice, Ellipsoid, SecondVariation};
 use exact::{best_rational_approximation, decimal_at_least, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use num_traits::Zero;
@@ -164,9 +164,9 @@ impl AffinePencil {
         if d == 0 {
             return (best_theta, best);
         }
-        let mut c = start.to_vec();
-        let mut e = DMatrix::<f64>::identity(d, d) * (radius * radius * d as f64);
+        let mut ellipsoid = Ellipsoid::ball(start, radius);
         for _ in 0..iterations {
+            let c = ellipsoid.centre().to_vec();
             let dist = c.iter().zip(start).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
             // Keep {x : g . (x - c) >= 0}.
             let g: Vec<f64> = if dist > radius {
@@ -186,29 +186,7 @@ impl AffinePencil {
                     }
                 }
             };
-            let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if gn == 0.0 || !gn.is_finite() {
-                break;
-            }
-            let a = DVector::from_iterator(d, g.iter().map(|x| -x / gn));
-            let ea = &e * &a;
-            let aea = a.dot(&ea);
-            if aea <= 0.0 || !aea.is_finite() {
-                break;
-            }
-            let at = ea / aea.sqrt();
-            if d == 1 {
-                c[0] -= at[0] / 2.0;
-                e *= 0.25;
-            } else {
-                let nf = d as f64;
-                for i in 0..d {
-                    c[i] -= at[i] / (nf + 1.0);
-                }
-                e = (e - (&at * at.transpose()) * (2.0 / (nf + 1.0))) * (nf * nf / (nf * nf - 1.0));
-            }
-            let size = e.diagonal().iter().fold(0.0f64, |m, &x| m.max(x)).sqrt();
-            if size < 1e-14 * (radius + 1.0) {
+            if !ellipsoid.cut(&g) || ellipsoid.size() < 1e-14 * (radius + 1.0) {
                 break;
             }
         }
