@@ -123,3 +123,44 @@ fn paper_constants_are_violated_by_the_exact_moments() {
         assert!(e <= (s.growth.sigma2 * t).exp() * (1.0 + 1e-12), "{name}: the engine's bound fails");
     }
 }
+
+/// The worst case over unit-P-norm starts is the largest generalized
+/// eigenvalue of (M(t), P): no start grows faster (checked against the
+/// basis vectors, the fastest direction and random starts), and it is
+/// attained; at t -> 0 it grows at rate lambda_max. The moment Lyapunov
+/// exponent never exceeds Sigma^2 (the bound holds for all t) and is 0 when
+/// Q = 0 (Kubo, Lagrange: the norm is conserved in mean).
+#[test]
+fn worst_case_growth_and_lyapunov_exponent() {
+    for (name, cert) in stable_fixtures() {
+        let s = cert.analysis.stable.as_ref().unwrap();
+        let m = SecondMoments::new(cert.analysis.linearisation.as_ref().unwrap());
+        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * (s.choice.sign as f64);
+        let n = p.nrows();
+        for &t in &[0.1, 1.0, 5.0] {
+            let worst = m.worst_case_growth(&p, t).unwrap();
+            assert!(worst <= (s.sigma2() * t).exp() * (1.0 + 1e-9), "{name}: worst {worst} above the bound");
+            let mut starts = vec![s.growth.direction.clone()];
+            for k in 0..6 {
+                starts.push(pseudo_random(n, 91 + k));
+            }
+            for x in &starts {
+                let v = DVector::from_column_slice(x);
+                let norm = (v.transpose() * &p * &v)[(0, 0)];
+                assert!(
+                    m.expected_norm(&p, x, t) <= worst * norm * (1.0 + 1e-9),
+                    "{name}: a start beats the worst case"
+                );
+            }
+        }
+        let h = 1e-6;
+        let rate = (m.worst_case_growth(&p, h).unwrap() - 1.0) / h;
+        assert!((rate - s.growth.largest_eigenvalue.max(0.0)).abs() < 1e-4 * (1.0 + rate.abs()), "{name}: rate {rate}");
+        let lyap = m.lyapunov_exponent().unwrap();
+        assert!(lyap <= s.sigma2() + 1e-9, "{name}: Lyapunov exponent {lyap} above Sigma^2");
+        if s.sigma2() == 0.0 {
+            assert!(lyap.abs() < 1e-9, "{name}: Lyapunov exponent {lyap}, expected 0");
+        }
+        eprintln!("{name}: Sigma^2 = {}, moment Lyapunov exponent = {lyap}", s.sigma2());
+    }
+}

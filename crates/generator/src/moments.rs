@@ -43,6 +43,68 @@ impl SecondMoments {
         DMatrix::from_column_slice(n, n, out.as_slice())
     }
 
+    /// The quadratic form `M(t)` with `E|x_t|_P^2 = x_0^T M(t) x_0` for every
+    /// start: the adjoint (backward Kolmogorov) evolution
+    /// `dM/dt = A~^T M + M A~ + sum_i B_i^T M B_i`, `M(0) = P`, i.e.
+    /// `vec M(t) = exp(L^T t) vec P`.
+    pub fn form_at(&self, p: &DMatrix<f64>, t: f64) -> DMatrix<f64> {
+        let n = self.n;
+        let propagator = (self.operator.transpose() * t).exp();
+        let v = DMatrix::from_column_slice(n * n, 1, p.as_slice());
+        let m = propagator * v;
+        let m = DMatrix::from_column_slice(n, n, m.as_slice());
+        (&m + m.transpose()) * 0.5
+    }
+
+    /// The worst case over initial perturbations of unit `P`-norm:
+    /// `max_{|x_0|_P = 1} E|x_t|_P^2 = lambda_max(M(t), P)` (`P` positive
+    /// definite). `None` if `P` is not.
+    ///
+    /// ```
+    /// use exact::{Matrix, Rational};
+    /// use generator::{Linearisation, SecondMoments};
+    /// use nalgebra::DMatrix;
+    /// // dx = x o dW in 1D: E x_t^2 = x_0^2 e^{2t}, so the worst case is e^{2t}.
+    /// let b = Matrix::from_rows(&[vec![Rational::from(1)]]);
+    /// let lin = Linearisation { a: Matrix::zeros(1, 1), a_tilde: b.scale(&Rational::new_small(1, 2)), noise: vec![b] };
+    /// let w = SecondMoments::new(&lin).worst_case_growth(&DMatrix::identity(1, 1), 0.5).unwrap();
+    /// assert!((w - 1f64.exp()).abs() < 1e-12);
+    /// ```
+    pub fn worst_case_growth(&self, p: &DMatrix<f64>, t: f64) -> Option<f64> {
+        let m = self.form_at(p, t);
+        let l = p.clone().cholesky()?.l();
+        let a = l.solve_lower_triangular(&m)?;
+        let c = l.solve_lower_triangular(&a.transpose())?;
+        let c = (&c + c.transpose()) * 0.5;
+        let e = nalgebra::SymmetricEigen::try_new(c, f64::EPSILON, 1000 * (self.n + 1))?;
+        Some(e.eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)))
+    }
+
+    /// The moment Lyapunov exponent `lim (1/t) log E|x_t|^2` (for a generic
+    /// start): the largest real part of the spectrum of `L` on symmetric
+    /// matrices (the invariant subspace second moments live in). `None` if
+    /// the eigenvalue iteration fails.
+    pub fn lyapunov_exponent(&self) -> Option<f64> {
+        let n = self.n;
+        // Basis E_ij (i <= j) of the symmetric matrices; coordinates s_ij = S_ij.
+        let pairs: Vec<(usize, usize)> = (0..n).flat_map(|i| (i..n).map(move |j| (i, j))).collect();
+        let m = pairs.len();
+        let mut l_sym = faer::Mat::<f64>::zeros(m, m);
+        for (c, &(i, j)) in pairs.iter().enumerate() {
+            let mut e = DMatrix::<f64>::zeros(n, n);
+            e[(i, j)] = 1.0;
+            e[(j, i)] = 1.0;
+            let v = DMatrix::from_column_slice(n * n, 1, e.as_slice());
+            let image = &self.operator * v;
+            let image = DMatrix::from_column_slice(n, n, image.as_slice());
+            for (r, &(a, b)) in pairs.iter().enumerate() {
+                l_sym[(r, c)] = image[(a, b)];
+            }
+        }
+        let ev = l_sym.eigenvalues().ok()?;
+        Some(ev.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max))
+    }
+
     /// `d/dt E|x_t|_P^2` at `t = 0` from a deterministic start `x_0`:
     /// `tr(P L(x_0 x_0^T))`, read off the moment equation itself (no finite
     /// differences), so it is independent of the engine's `Q`.

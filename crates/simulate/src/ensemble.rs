@@ -1,0 +1,381 @@
+//! Parallel ensembles that keep only statistics.
+
+use crate::model::Model;
+use crate::scheme::{LinearModel, Scheme, Stepper};
+use nalgebra::DMatrix;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+
+/// What is integrated.
+#[derive(Clone, Debug)]
+pub enum Target<'a> {
+    /// The nonlinear system from `mu0`, with a scheme.
+    Nonlinear {
+        /// The compiled system.
+        model: &'a Model,
+        /// The scheme.
+        scheme: Scheme,
+        /// The initial point.
+        mu0: Vec<f64>,
+    },
+    /// The linearised SDE from `x0` (a perturbation of `mu_e`).
+    Linear {
+        /// The linear SDE.
+        model: &'a LinearModel,
+        /// The initial perturbation.
+        x0: Vec<f64>,
+    },
+}
+
+/// The coordinate whose distribution is recorded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Observable {
+    /// Coordinate index.
+    pub index: usize,
+    /// Histogram range.
+    pub lo: f64,
+    /// Histogram range.
+    pub hi: f64,
+    /// Histogram bins.
+    pub bins: usize,
+}
+
+/// Ensemble settings.
+#[derive(Clone, Debug)]
+pub struct EnsembleSettings {
+    /// Number of paths.
+    pub paths: usize,
+    /// Time step.
+    pub dt: f64,
+    /// Final time.
+    pub t_end: f64,
+    /// Number of output times after 0.
+    pub outputs: usize,
+    /// Seed of the random streams (path `k` uses stream `k`).
+    pub seed: u64,
+    /// The recorded coordinate.
+    pub observable: Observable,
+    /// The norm matrix `sP` (for `|mu - mu_e|_P^2`) and `mu_e`, if any.
+    pub norm: Option<(DMatrix<f64>, Vec<f64>)>,
+    /// Threshold `eps` for the exceedance probability `P(|dmu|_P^2 > eps)`.
+    pub epsilon: Option<f64>,
+}
+
+/// Why an ensemble cannot run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum EnsembleError {
+    /// A parameter is out of range.
+    #[error("{field}: {message}")]
+    Invalid {
+        /// Which parameter.
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl EnsembleSettings {
+    /// Number of steps.
+    pub fn steps(&self) -> u64 {
+        (self.t_end / self.dt).round().max(1.0) as u64
+    }
+
+    /// Check the parameters (not the cost; see [`Self::path_steps`]).
+    pub fn validate(&self, dim: usize) -> Result<(), EnsembleError> {
+        let bad = |field, message: String| Err(EnsembleError::Invalid { field, message });
+        if self.paths == 0 {
+            return bad("paths", "must be at least 1".into());
+        }
+        if !(self.dt.is_finite() && self.dt > 0.0) {
+            return bad("dt", format!("must be a positive number, got {}", self.dt));
+        }
+        if !(self.t_end.is_finite() && self.t_end > 0.0) {
+            return bad("t_end", format!("must be a positive number, got {}", self.t_end));
+        }
+        if self.t_end / self.dt > 1e12 {
+            return bad("dt", format!("t_end/dt = {:e} steps per path is beyond reason", self.t_end / self.dt));
+        }
+        if self.outputs == 0 || self.outputs as u64 > self.steps() {
+            return bad("outputs", format!("must be between 1 and the number of steps ({})", self.steps()));
+        }
+        let o = &self.observable;
+        if o.index >= dim {
+            return bad("observable", format!("coordinate {} does not exist (dimension {dim})", o.index));
+        }
+        if o.bins == 0 || o.lo >= o.hi || !o.lo.is_finite() || !o.hi.is_finite() {
+            return bad("observable", "needs bins >= 1 and a finite range lo < hi".into());
+        }
+        if let Some(e) = self.epsilon {
+            if !(e.is_finite() && e > 0.0) {
+                return bad("epsilon", "must be positive".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// Total path-steps: the cost of the run.
+    pub fn path_steps(&self) -> f64 {
+        self.paths as f64 * self.steps() as f64
+    }
+}
+
+/// Statistics at the output times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnsembleStats {
+    /// Output times (starting at 0).
+    pub times: Vec<f64>,
+    /// Mean of every coordinate at each output time.
+    pub mean: Vec<Vec<f64>>,
+    /// Histogram of the observable at each output time.
+    pub histogram: Vec<Vec<u64>>,
+    /// Mean of `|mu - mu_e|_P^2` (or of `|x|_P^2`) at each output time.
+    pub norm_mean: Vec<f64>,
+    /// Standard error of that mean.
+    pub norm_std_error: Vec<f64>,
+    /// Fraction of paths with `|.|_P^2 > eps`.
+    pub exceedance: Vec<f64>,
+    /// Largest `|C(mu_t) - C(mu_0)|` over paths, times and Casimirs.
+    pub casimir_drift: f64,
+    /// Paths run.
+    pub paths: usize,
+    /// Steps per path.
+    pub steps: u64,
+}
+
+/// Paths per block: blocks are reduced in order, so results do not depend
+/// on how rayon schedules them.
+const BLOCK: usize = 256;
+
+struct Accumulator {
+    mean: Vec<Vec<f64>>,
+    histogram: Vec<Vec<u64>>,
+    norm_sum: Vec<f64>,
+    norm_sumsq: Vec<f64>,
+    exceed: Vec<u64>,
+    drift: f64,
+}
+
+impl Accumulator {
+    fn new(times: usize, dim: usize, bins: usize) -> Self {
+        Accumulator {
+            mean: vec![vec![0.0; dim]; times],
+            histogram: vec![vec![0; bins]; times],
+            norm_sum: vec![0.0; times],
+            norm_sumsq: vec![0.0; times],
+            exceed: vec![0; times],
+            drift: 0.0,
+        }
+    }
+
+    fn merge(&mut self, o: &Accumulator) {
+        for (a, b) in self.mean.iter_mut().zip(&o.mean) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        }
+        for (a, b) in self.histogram.iter_mut().zip(&o.histogram) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        }
+        for i in 0..self.norm_sum.len() {
+            self.norm_sum[i] += o.norm_sum[i];
+            self.norm_sumsq[i] += o.norm_sumsq[i];
+            self.exceed[i] += o.exceed[i];
+        }
+        self.drift = self.drift.max(o.drift);
+    }
+}
+
+struct Recorder<'s> {
+    settings: &'s EnsembleSettings,
+    pmat: Option<&'s DMatrix<f64>>,
+    centre: Option<&'s [f64]>,
+    diff: Vec<f64>,
+}
+
+impl Recorder<'_> {
+    fn record(&mut self, acc: &mut Accumulator, k: usize, state: &[f64]) {
+        for (m, x) in acc.mean[k].iter_mut().zip(state) {
+            *m += x;
+        }
+        let o = &self.settings.observable;
+        let v = state[o.index];
+        if v >= o.lo && v <= o.hi {
+            let bin = (((v - o.lo) / (o.hi - o.lo)) * o.bins as f64) as usize;
+            acc.histogram[k][bin.min(o.bins - 1)] += 1;
+        }
+        if let Some(p) = self.pmat {
+            let n = state.len();
+            for i in 0..n {
+                self.diff[i] = state[i] - self.centre.map_or(0.0, |c| c[i]);
+            }
+            let mut q = 0.0;
+            for i in 0..n {
+                let mut row = 0.0;
+                for j in 0..n {
+                    row += p[(i, j)] * self.diff[j];
+                }
+                q += self.diff[i] * row;
+            }
+            acc.norm_sum[k] += q;
+            acc.norm_sumsq[k] += q * q;
+            if self.settings.epsilon.is_some_and(|e| q > e) {
+                acc.exceed[k] += 1;
+            }
+        }
+    }
+}
+
+/// Run the ensemble. `progress` is called with the number of paths finished
+/// after each block (for a progress bar).
+pub fn run_ensemble(
+    target: &Target<'_>,
+    settings: &EnsembleSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<EnsembleStats, EnsembleError> {
+    let dim = match target {
+        Target::Nonlinear { model, mu0, .. } => {
+            if mu0.len() != model.dim() {
+                return Err(EnsembleError::Invalid { field: "mu0", message: "wrong length".into() });
+            }
+            model.dim()
+        }
+        Target::Linear { model, x0 } => {
+            if x0.len() != model.dim() {
+                return Err(EnsembleError::Invalid { field: "x0", message: "wrong length".into() });
+            }
+            model.dim()
+        }
+    };
+    settings.validate(dim)?;
+    let steps = settings.steps();
+    let stride = (steps / settings.outputs as u64).max(1);
+    let n_times = (steps / stride) as usize + 1;
+    let dt = settings.dt;
+    let sqdt = dt.sqrt();
+    let noise_count = match target {
+        Target::Nonlinear { model, .. } => model.noise_count(),
+        Target::Linear { model, .. } => model.noise_count(),
+    };
+    let blocks = settings.paths.div_ceil(BLOCK);
+    let run_block = |block: usize| -> Accumulator {
+        let mut acc = Accumulator::new(n_times, dim, settings.observable.bins);
+        let mut rec = Recorder {
+            settings,
+            pmat: settings.norm.as_ref().map(|(p, _)| p),
+            centre: match target {
+                Target::Nonlinear { .. } => settings.norm.as_ref().map(|(_, c)| c.as_slice()),
+                Target::Linear { .. } => None,
+            },
+            diff: vec![0.0; dim],
+        };
+        let mut dw = vec![0.0; noise_count];
+        let first = block * BLOCK;
+        let last = (first + BLOCK).min(settings.paths);
+        match target {
+            Target::Nonlinear { model, scheme, mu0 } => {
+                let c0 = model.casimir_values(mu0);
+                // The path loop, generic over the step so that the
+                // fixed-size kernels are inlined into it.
+                let mut paths = |step: &mut dyn FnMut(&mut [f64], &[f64])| {
+                    let mut mu = mu0.clone();
+                    for path in first..last {
+                        let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+                        rng.set_stream(path as u64);
+                        mu.copy_from_slice(mu0);
+                        rec.record(&mut acc, 0, &mu);
+                        for s in 1..=steps {
+                            for w in dw.iter_mut() {
+                                let z: f64 = StandardNormal.sample(&mut rng);
+                                *w = z * sqdt;
+                            }
+                            step(&mut mu, &dw);
+                            if s % stride == 0 {
+                                let k = (s / stride) as usize;
+                                if k < n_times {
+                                    rec.record(&mut acc, k, &mu);
+                                }
+                            }
+                        }
+                        for (c, c0) in model.casimir_values(&mu).iter().zip(&c0) {
+                            acc.drift = acc.drift.max((c - c0).abs());
+                        }
+                    }
+                };
+                match (*scheme, model.kernel3(), model.kernel6()) {
+                    (Scheme::LieHeun, Some(k), _) => paths(&mut |mu, dw| {
+                        let mut a = [mu[0], mu[1], mu[2]];
+                        k.step(&mut a, dt, dw);
+                        mu.copy_from_slice(&a);
+                    }),
+                    (Scheme::LieHeun, _, Some(k)) => paths(&mut |mu, dw| {
+                        let mut a = [mu[0], mu[1], mu[2], mu[3], mu[4], mu[5]];
+                        k.step(&mut a, dt, dw);
+                        mu.copy_from_slice(&a);
+                    }),
+                    _ => {
+                        let mut stepper = Stepper::new(model, *scheme);
+                        paths(&mut |mu, dw| stepper.step(mu, dt, dw))
+                    }
+                }
+            }
+            Target::Linear { model, x0 } => {
+                let mut x = x0.clone();
+                let mut kbuf = vec![0.0; dim * dim];
+                let mut ybuf = vec![0.0; 2 * dim];
+                for path in first..last {
+                    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+                    rng.set_stream(path as u64);
+                    x.copy_from_slice(x0);
+                    rec.record(&mut acc, 0, &x);
+                    for s in 1..=steps {
+                        for w in dw.iter_mut() {
+                            let z: f64 = StandardNormal.sample(&mut rng);
+                            *w = z * sqdt;
+                        }
+                        model.step(&mut x, dt, &dw, &mut kbuf, &mut ybuf);
+                        if s % stride == 0 {
+                            let k = (s / stride) as usize;
+                            if k < n_times {
+                                rec.record(&mut acc, k, &x);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        progress((last - first) as u64);
+        acc
+    };
+    let partial: Vec<Accumulator> = (0..blocks).into_par_iter().map(run_block).collect();
+    let mut total = Accumulator::new(n_times, dim, settings.observable.bins);
+    for p in &partial {
+        total.merge(p);
+    }
+    let np = settings.paths as f64;
+    let norm_mean: Vec<f64> = total.norm_sum.iter().map(|s| s / np).collect();
+    let norm_std_error = total
+        .norm_sumsq
+        .iter()
+        .zip(&norm_mean)
+        .map(|(sq, m)| {
+            let var = (sq / np - m * m).max(0.0) * np / (np - 1.0).max(1.0);
+            (var / np).sqrt()
+        })
+        .collect();
+    Ok(EnsembleStats {
+        times: (0..n_times).map(|k| k as f64 * stride as f64 * dt).collect(),
+        mean: total.mean.iter().map(|m| m.iter().map(|x| x / np).collect()).collect(),
+        histogram: total.histogram,
+        norm_mean,
+        norm_std_error,
+        exceedance: total.exceed.iter().map(|&c| c as f64 / np).collect(),
+        casimir_drift: total.drift,
+        paths: settings.paths,
+        steps,
+    })
+}
