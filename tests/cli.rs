@@ -313,3 +313,70 @@ fn tampered_verified_numbers_fail_check() {
         assert_eq!(out.status.code(), Some(1), "{what}: {}", stderr(&out));
     }
 }
+
+fn simulate(args: &[&str], threads: &str) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_verify"))
+        .arg("simulate")
+        .args(args)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .unwrap()
+}
+
+/// `verify simulate` writes the charts and the numbers; the same seed gives
+/// the same numbers on 1 and 2 threads.
+#[test]
+fn simulate_writes_charts_and_is_thread_independent() {
+    let base = std::env::temp_dir().join(format!("verify-sim-{}", std::process::id()));
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let mut reports = Vec::new();
+    for threads in ["1", "2"] {
+        let out = base.join(threads);
+        let o = simulate(
+            &[
+                spec.to_str().unwrap(),
+                "--paths",
+                "300",
+                "--dt",
+                "0.05",
+                "--t-end",
+                "5",
+                "--outputs",
+                "20",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            threads,
+        );
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        for f in ["-density.svg", "-density.png", "-growth.svg", "-growth.png", ".json", ".csv"] {
+            let p = out.join(format!("rigid-body-major-axis{f}"));
+            assert!(p.metadata().map(|m| m.len() > 100).unwrap_or(false), "{} missing", p.display());
+        }
+        let mut report: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("rigid-body-major-axis.json")).unwrap()).unwrap();
+        report["parameters"]["threads"] = Value::Null;
+        reports.push(report);
+    }
+    assert_eq!(reports[0], reports[1], "1 and 2 threads differ");
+}
+
+/// Bad simulation parameters: exit 2 with the option named, never a hang.
+#[test]
+fn simulate_rejects_bad_parameters() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let s = spec.to_str().unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (&[s, "--dt", "-0.1"], "--dt"),
+        (&[s, "--t-end", "1e9", "--dt", "1e-6"], "beyond reason"),
+        (&[s, "--paths", "0"], "--paths"),
+        (&[s, "--observable", "Pi9"], "--observable: unknown coordinate 'Pi9'"),
+        (&[s, "--t-end", "1e5", "--dt", "1e-4"], "would take about"),
+        (&[s, "--scheme", "rk4"], "--scheme"),
+    ];
+    for (args, message) in cases {
+        let o = simulate(args, "2");
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
+    }
+}

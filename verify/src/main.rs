@@ -5,7 +5,9 @@
 //! * `verify certify SPEC [-o CERT]` — certificate JSON on stdout (or CERT),
 //!   a short summary on stderr;
 //! * `verify check CERT...` — re-derive each certificate from its embedded
-//!   spec and compare.
+//!   spec and compare;
+//! * `verify simulate SPEC [--paths N --dt H --t-end T --observable NAME ...]` —
+//!   ensembles, exact moments and charts (SVG, PNG, JSON, CSV).
 //!
 //! Exit status: 0 success (whatever the verdict), 1 a certificate failed its
 //! check or an internal failure, 2 bad input (the message names the JSON path).
@@ -17,6 +19,8 @@ use spec::{check_certificate, parse_spec, CheckError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod plots;
+mod simulate_cmd;
 mod table;
 
 #[derive(Parser)]
@@ -42,6 +46,8 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Simulate the nonlinear and the linearised system and draw the charts.
+    Simulate(simulate_cmd::SimulateArgs),
     /// Re-check certificates.
     Check {
         /// Certificates (JSON).
@@ -51,7 +57,7 @@ enum Command {
 }
 
 /// An outcome that maps to an exit status.
-enum Failure {
+pub(crate) enum Failure {
     BadInput(String),
     Failed(String),
 }
@@ -149,6 +155,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Some(Command::Certify { spec, output }) => certify_command(&spec, output.as_deref()),
         Some(Command::Check { certificates }) => check_command(&certificates),
+        Some(Command::Simulate(args)) => simulate_cmd::run(&args),
         None => table::fixtures_table(&fixtures_dir(cli.fixtures), cli.write)
             .context("running the fixtures")
             .map_err(|e| Failure::Failed(format!("{e:#}")))
