@@ -82,11 +82,9 @@ fn fixed_size_kernels_agree_with_the_generic_stepper() {
                 .unwrap();
         // Drive the generic stepper by hand with the same increments.
         let mut generic = vec![0.0; mu0.len()];
-        use rand::SeedableRng;
         use rand_distr::Distribution;
         for path in 0..300u64 {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2026);
-            rng.set_stream(path);
+            let mut rng = simulate::path_rng(2026, path);
             let mut stepper = Stepper::new(&model, Scheme::LieHeun);
             let mut mu = mu0.clone();
             for _ in 0..100 {

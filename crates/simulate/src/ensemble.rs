@@ -1,11 +1,12 @@
 //! Parallel ensembles that keep only statistics.
 
+use crate::kernel::Kernel;
 use crate::model::Model;
 use crate::scheme::{LinearModel, Scheme, Stepper};
 use nalgebra::DMatrix;
 use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
 /// What is integrated.
@@ -145,6 +146,14 @@ pub struct EnsembleStats {
     pub steps: u64,
 }
 
+/// The random stream of one path: xoshiro256++ seeded (through SplitMix64,
+/// as `seed_from_u64` does) from the seed and the path index, so every path
+/// has its own stream whatever thread runs it.
+pub fn path_rng(seed: u64, path: u64) -> Xoshiro256PlusPlus {
+    // Mix the path index in with the golden-ratio increment of SplitMix64.
+    Xoshiro256PlusPlus::seed_from_u64(seed ^ path.wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(17))
+}
+
 /// Paths per block: blocks are reduced in order, so results do not depend
 /// on how rayon schedules them.
 const BLOCK: usize = 256;
@@ -230,6 +239,76 @@ impl Recorder<'_> {
     }
 }
 
+/// The loop bounds of one block.
+struct BlockRun {
+    first: usize,
+    last: usize,
+    steps: u64,
+    stride: u64,
+    n_times: usize,
+    dt: f64,
+    sqdt: f64,
+    seed: u64,
+}
+
+/// Paths advanced together by the fixed-size kernels. One step of one path
+/// is a chain of dependent floating-point operations (latency-bound); the
+/// steps of independent paths interleave in the processor, which roughly
+/// doubles the throughput. Each path keeps its own random stream, so the
+/// numbers are the same as one path at a time.
+const LANES: usize = 4;
+
+/// The path loop with a fixed-size kernel, monomorphised so the step is
+/// inlined and the states stay in registers.
+fn kernel_paths<const N: usize>(
+    k: &Kernel<N>,
+    b: &BlockRun,
+    mu0: &[f64],
+    c0: &[f64],
+    model: &Model,
+    rec: &mut Recorder<'_>,
+    acc: &mut Accumulator,
+) {
+    let noise = k.noise.len();
+    let mut start = [0.0; N];
+    start.copy_from_slice(mu0);
+    let mut first = b.first;
+    while first < b.last {
+        let lanes = LANES.min(b.last - first);
+        let mut rngs: Vec<_> = (0..lanes).map(|l| path_rng(b.seed, (first + l) as u64)).collect();
+        let mut mu = [start; LANES];
+        let mut dw = [[0.0f64; 8]; LANES];
+        for m in mu.iter().take(lanes) {
+            rec.record(acc, 0, m);
+        }
+        for s in 1..=b.steps {
+            for (l, rng) in rngs.iter_mut().enumerate() {
+                for w in dw[l].iter_mut().take(noise) {
+                    let z: f64 = StandardNormal.sample(rng);
+                    *w = z * b.sqdt;
+                }
+            }
+            for l in 0..lanes {
+                k.step(&mut mu[l], b.dt, &dw[l][..noise]);
+            }
+            if s % b.stride == 0 {
+                let t = (s / b.stride) as usize;
+                if t < b.n_times {
+                    for m in mu.iter().take(lanes) {
+                        rec.record(acc, t, m);
+                    }
+                }
+            }
+        }
+        for m in mu.iter().take(lanes) {
+            for (c, c0) in model.casimir_values(m).iter().zip(c0) {
+                acc.drift = acc.drift.max((c - c0).abs());
+            }
+        }
+        first += lanes;
+    }
+}
+
 /// Run the ensemble. `progress` is called with the number of paths finished
 /// after each block (for a progress bar).
 pub fn run_ensemble(
@@ -284,8 +363,7 @@ pub fn run_ensemble(
                 let mut paths = |step: &mut dyn FnMut(&mut [f64], &[f64])| {
                     let mut mu = mu0.clone();
                     for path in first..last {
-                        let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-                        rng.set_stream(path as u64);
+                        let mut rng = path_rng(settings.seed, path as u64);
                         mu.copy_from_slice(mu0);
                         rec.record(&mut acc, 0, &mu);
                         for s in 1..=steps {
@@ -306,17 +384,10 @@ pub fn run_ensemble(
                         }
                     }
                 };
+                let block = BlockRun { first, last, steps, stride, n_times, dt, sqdt, seed: settings.seed };
                 match (*scheme, model.kernel3(), model.kernel6()) {
-                    (Scheme::LieHeun, Some(k), _) => paths(&mut |mu, dw| {
-                        let mut a = [mu[0], mu[1], mu[2]];
-                        k.step(&mut a, dt, dw);
-                        mu.copy_from_slice(&a);
-                    }),
-                    (Scheme::LieHeun, _, Some(k)) => paths(&mut |mu, dw| {
-                        let mut a = [mu[0], mu[1], mu[2], mu[3], mu[4], mu[5]];
-                        k.step(&mut a, dt, dw);
-                        mu.copy_from_slice(&a);
-                    }),
+                    (Scheme::LieHeun, Some(k), _) => kernel_paths(&k, &block, mu0, &c0, model, &mut rec, &mut acc),
+                    (Scheme::LieHeun, _, Some(k)) => kernel_paths(&k, &block, mu0, &c0, model, &mut rec, &mut acc),
                     _ => {
                         let mut stepper = Stepper::new(model, *scheme);
                         paths(&mut |mu, dw| stepper.step(mu, dt, dw))
@@ -328,8 +399,7 @@ pub fn run_ensemble(
                 let mut kbuf = vec![0.0; dim * dim];
                 let mut ybuf = vec![0.0; 2 * dim];
                 for path in first..last {
-                    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-                    rng.set_stream(path as u64);
+                    let mut rng = path_rng(settings.seed, path as u64);
                     x.copy_from_slice(x0);
                     rec.record(&mut acc, 0, &x);
                     for s in 1..=steps {

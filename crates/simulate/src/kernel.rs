@@ -18,6 +18,9 @@ pub(crate) enum Fixed {
 pub(crate) struct Kernel<const N: usize> {
     pub(crate) group: Fixed,
     pub(crate) h: [[f64; N]; N],
+    /// `Some(diag H)` when `H` is diagonal (principal axes), which saves
+    /// most of the multiplications of the gradient.
+    pub(crate) diagonal: Option<[f64; N]>,
     pub(crate) b: [f64; N],
     pub(crate) noise: Vec<[f64; N]>,
 }
@@ -26,9 +29,18 @@ impl<const N: usize> Kernel<N> {
     #[inline(always)]
     fn gradient(&self, mu: &[f64; N]) -> [f64; N] {
         let mut g = self.b;
-        for i in 0..N {
-            for j in 0..N {
-                g[i] += self.h[i][j] * mu[j];
+        match &self.diagonal {
+            Some(d) => {
+                for i in 0..N {
+                    g[i] += d[i] * mu[i];
+                }
+            }
+            None => {
+                for i in 0..N {
+                    for j in 0..N {
+                        g[i] += self.h[i][j] * mu[j];
+                    }
+                }
             }
         }
         g

@@ -21,7 +21,8 @@
 //! the vector space, is the reference; it drifts off the orbit.
 //!
 //! [`run_ensemble`] runs many paths in parallel (rayon) with one random
-//! stream per path (ChaCha8, stream = path index) and fixed-size blocks
+//! stream per path ([`path_rng`]: xoshiro256++ seeded from the seed and the
+//! path index) and fixed-size blocks
 //! reduced in order, so the numbers do not depend on the thread count; it
 //! keeps only statistics at the output times.
 #![warn(missing_docs)]
@@ -31,6 +32,6 @@ mod kernel;
 mod model;
 mod scheme;
 
-pub use ensemble::{run_ensemble, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
+pub use ensemble::{path_rng, run_ensemble, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
 pub use model::Model;
 pub use scheme::{LinearModel, Scheme, Stepper};

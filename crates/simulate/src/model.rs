@@ -243,6 +243,9 @@ impl Model {
         }
         let mut bb = [0.0; N];
         bb.copy_from_slice(b);
+        if self.noise.len() > 8 {
+            return None; // the kernels keep the increments on the stack
+        }
         let noise = self
             .noise
             .iter()
@@ -252,7 +255,9 @@ impl Model {
                 a
             })
             .collect();
-        Some(Kernel { group, h: hh, b: bb, noise })
+        let diagonal =
+            (0..N).all(|i| (0..N).all(|j| i == j || hh[i][j] == 0.0)).then(|| std::array::from_fn(|i| hh[i][i]));
+        Some(Kernel { group, h: hh, diagonal, b: bb, noise })
     }
 
     /// The Casimirs at `mu` (to monitor their drift).
