@@ -115,7 +115,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let x0: Vec<f64> = direction.iter().map(|v| v * delta.sqrt()).collect();
     let mu0: Vec<f64> = mu_e.iter().zip(&x0).map(|(m, x)| m + x).collect();
     let model = Model::new(system);
-    let radius = mu0.iter().map(|x| x * x).sum::<f64>().sqrt().max(1.0);
+    let radius = mu0.iter().map(|x| x * x).sum::<f64>().sqrt().max(1.0); // before the pilot run
     let settings = EnsembleSettings {
         paths: args.paths,
         dt: args.dt,
@@ -145,6 +145,18 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             threads
         );
     }
+    // A pilot run (1% of the paths, at most 200) finds the range the
+    // observable actually explores, for the histogram.
+    let pilot = EnsembleSettings { paths: (args.paths / 100).clamp(1, 200), ..settings.clone() };
+    let extent = run_ensemble(&Target::Nonlinear { model: &model, scheme, mu0: mu0.clone() }, &pilot, &|_| {})
+        .map_err(|e| bad(format!("--{e}")))?
+        .observable_extent;
+    let half = 0.5 * (extent.1 - extent.0).max(1e-9);
+    let centre = 0.5 * (extent.0 + extent.1);
+    let settings = EnsembleSettings {
+        observable: Observable { lo: centre - 1.2 * half, hi: centre + 1.2 * half, ..settings.observable },
+        ..settings
+    };
     let bar = progress_bar(args.paths as u64 * runs as u64);
     let tick = |k: u64| {
         if let Some(b) = &bar {

@@ -140,6 +140,9 @@ pub struct EnsembleStats {
     pub exceedance: Vec<f64>,
     /// Largest `|C(mu_t) - C(mu_0)|` over paths, times and Casimirs.
     pub casimir_drift: f64,
+    /// Smallest and largest recorded value of the observable (inside or
+    /// outside the histogram range).
+    pub observable_extent: (f64, f64),
     /// Paths run.
     pub paths: usize,
     /// Steps per path.
@@ -165,6 +168,8 @@ struct Accumulator {
     norm_sumsq: Vec<f64>,
     exceed: Vec<u64>,
     drift: f64,
+    lo: f64,
+    hi: f64,
 }
 
 impl Accumulator {
@@ -176,6 +181,8 @@ impl Accumulator {
             norm_sumsq: vec![0.0; times],
             exceed: vec![0; times],
             drift: 0.0,
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
         }
     }
 
@@ -196,6 +203,8 @@ impl Accumulator {
             self.exceed[i] += o.exceed[i];
         }
         self.drift = self.drift.max(o.drift);
+        self.lo = self.lo.min(o.lo);
+        self.hi = self.hi.max(o.hi);
     }
 }
 
@@ -213,6 +222,8 @@ impl Recorder<'_> {
         }
         let o = &self.settings.observable;
         let v = state[o.index];
+        acc.lo = acc.lo.min(v);
+        acc.hi = acc.hi.max(v);
         if v >= o.lo && v <= o.hi {
             let bin = (((v - o.lo) / (o.hi - o.lo)) * o.bins as f64) as usize;
             acc.histogram[k][bin.min(o.bins - 1)] += 1;
@@ -445,6 +456,7 @@ pub fn run_ensemble(
         norm_std_error,
         exceedance: total.exceed.iter().map(|&c| c as f64 / np).collect(),
         casimir_drift: total.drift,
+        observable_extent: (total.lo, total.hi),
         paths: settings.paths,
         steps,
     })
