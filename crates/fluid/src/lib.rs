@@ -1,0 +1,4 @@
+//! Stochastic 2D Euler about shear flows (the paper's §4.3).
+#![warn(missing_docs)]
+
+pub mod expr;
