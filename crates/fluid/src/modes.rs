@@ -1,0 +1,390 @@
+//! One x-mode of the linearised stochastic vorticity equation.
+//!
+//! About the shear flow `U(y)` (vorticity `omega_e = -U'`), the perturbation
+//! `omega = Re(w(y) e^{ikx})` obeys
+//!
+//! ```text
+//! dw = A w dt + sum_j B_j w o dW^j,   A = -ik (U + U'' L^-1),   B_j = -ik eta_j(y),
+//! ```
+//!
+//! with `L^-1` the stream-function solve. On the grid of [`crate::grid`],
+//! `A = -ik R`, `R = diag(U) + diag(U''/m) K`, `K = M L^-1` the energy matrix.
+//!
+//! The energy–Casimir–momentum form is `V = s (e K + M diag(w))`: `e = 1`
+//! (energy), `w = Phi''(omega_e) = (U + c)/U''` from the Casimir
+//! `int Phi(omega)` with Galilean shift `c`, `s = ±1` its sign; `e = 0`
+//! gives the pseudomomentum `int w^2/U''` (Casimir plus momentum alone).
+//!
+//! **The generator form in closed form.** Both `K` and `M diag(w)` are
+//! real symmetric, `A` and `B_j` are `-ik` times real matrices, and
+//! `sym(V A) = 0` exactly on this grid (`K` symmetric and `w U'' = U + c` at
+//! every node), so the generator form of the finite-dimensional pipeline,
+//! `Q = sym(V A~) + sum_j B_j^H V B_j` (Itô `A~`), reduces to
+//!
+//! ```text
+//! Q = -(k^2/2) sum_j [E_j, [E_j, V]],   (Q)_ab = -(k^2/2) s e sum_j (eta_j(y_a) - eta_j(y_b))^2 K_ab,
+//! ```
+//!
+//! `E_j = diag(eta_j)`. The diagonal Casimir part commutes with every `E_j` and
+//! drops out: the Casimir contributes nothing to `Q`. The tests compare this
+//! with the generator crate's general formula on the real embedding.
+
+use crate::banded::{BandedCholesky, SymBanded};
+use crate::grid::{Boundary, YGrid};
+use crate::lanczos::{largest_eigenvalue, Ritz};
+use nalgebra::DMatrix;
+
+/// The profile and the noise at the grid nodes.
+#[derive(Clone, Debug)]
+pub struct Coefficients {
+    /// `U(y_a)`.
+    pub u: Vec<f64>,
+    /// `U''(y_a)`.
+    pub upp: Vec<f64>,
+    /// `eta_j(y_a)` for each noise field `j`.
+    pub eta: Vec<Vec<f64>>,
+}
+
+/// `V = sign (energy K + M diag(w))`.
+#[derive(Clone, Debug)]
+pub struct Form {
+    /// Coefficient of the energy (1 or 0).
+    pub energy: f64,
+    /// The Casimir weight `Phi''(omega_e(y_a))`.
+    pub w: Vec<f64>,
+    /// `+1` or `-1`: the sign that makes `V` positive.
+    pub sign: f64,
+}
+
+/// Why a per-mode computation could not be done.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModeError {
+    /// `V` is not positive definite for this mode (numerically).
+    #[error("the form is not definite for x-wavenumber {k}")]
+    NotDefinite {
+        /// The wavenumber.
+        k: f64,
+    },
+}
+
+/// Sigma^2 of one mode, from the Lanczos process.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModeSigma2 {
+    /// Largest generalised eigenvalue of `(Q, V)` (not floored).
+    pub lambda_max: f64,
+    /// The Lanczos data.
+    pub ritz: Ritz,
+}
+
+/// One x-mode `e^{ikx}` on a grid.
+#[derive(Clone, Copy, Debug)]
+pub struct Mode<'g> {
+    grid: &'g YGrid,
+    k: f64,
+}
+
+impl<'g> Mode<'g> {
+    /// Mode of wavenumber `k > 0`.
+    pub fn new(grid: &'g YGrid, k: f64) -> Self {
+        Mode { grid, k }
+    }
+
+    /// The wavenumber.
+    pub fn k(&self) -> f64 {
+        self.k
+    }
+
+    /// The real matrix `R` with `A = -ik R` (dense).
+    pub fn drift_matrix(&self, coef: &Coefficients) -> DMatrix<f64> {
+        let k = self.grid.energy_matrix(self.k);
+        let m = self.grid.weights();
+        let n = self.grid.n();
+        DMatrix::from_fn(n, n, |a, b| coef.upp[a] / m[a] * k[(a, b)] + if a == b { coef.u[a] } else { 0.0 })
+    }
+
+    /// `V` (dense, vorticity coordinates).
+    pub fn form_matrix(&self, form: &Form) -> DMatrix<f64> {
+        let m = self.grid.weights();
+        let mut v = self.grid.energy_matrix(self.k) * (form.sign * form.energy);
+        for a in 0..self.grid.n() {
+            v[(a, a)] += form.sign * m[a] * form.w[a];
+        }
+        v
+    }
+
+    /// `Q` of `V` by the closed form of the module docs (dense).
+    pub fn generator_matrix(&self, form: &Form, coef: &Coefficients) -> DMatrix<f64> {
+        let kmat = self.grid.energy_matrix(self.k);
+        let c = -0.5 * self.k * self.k * form.sign * form.energy;
+        DMatrix::from_fn(self.grid.n(), self.grid.n(), |a, b| {
+            let d: f64 = coef.eta.iter().map(|e| (e[a] - e[b]).powi(2)).sum();
+            c * d * kmat[(a, b)]
+        })
+    }
+
+    /// The Hermitian part of `V A` (imaginary, so returned as the real
+    /// antisymmetric matrix `(k/2)(V R - R^T V)` with `sym(VA) = -i` times it):
+    /// zero for an energy–Casimir–momentum form.
+    pub fn drift_residual(&self, form: &Form, coef: &Coefficients) -> DMatrix<f64> {
+        let v = self.form_matrix(form);
+        let r = self.drift_matrix(coef);
+        (&v * &r - r.transpose() * &v) * (self.k / 2.0)
+    }
+
+    /// Largest generalised eigenvalue of `(Q, V)` by Lanczos on
+    /// `C^-1 Q C^-T`, `V = C C^T`: banded in stream-function coordinates for
+    /// walls, dense Cholesky for periodic grids.
+    pub fn sigma2(&self, form: &Form, coef: &Coefficients, tol: f64) -> Result<ModeSigma2, ModeError> {
+        let n = self.grid.n();
+        let max_iter = 600;
+        if form.energy == 0.0 {
+            // Q = 0 identically (module docs); V must still be definite.
+            let m = self.grid.weights();
+            if (0..n).any(|a| !(form.sign * form.w[a] * m[a] > 0.0)) {
+                return Err(ModeError::NotDefinite { k: self.k });
+            }
+            let ritz = Ritz { value: 0.0, residual: 0.0, iterations: 0, scale: 0.0 };
+            return Ok(ModeSigma2 { lambda_max: 0.0, ritz });
+        }
+        let ritz = match self.grid.boundary() {
+            Boundary::Walls => {
+                let ops = WallOps::new(self.grid, self.k, form, coef).ok_or(ModeError::NotDefinite { k: self.k })?;
+                let mut y = vec![0.0; n];
+                let mut scratch = WallScratch::new(n);
+                largest_eigenvalue(
+                    n,
+                    |x, out| {
+                        y.copy_from_slice(x);
+                        ops.v_factor.solve_upper(&mut y);
+                        ops.q_psi(&y, out, &mut scratch);
+                        ops.v_factor.solve_lower(out);
+                    },
+                    tol,
+                    max_iter,
+                )
+            }
+            Boundary::Periodic => {
+                let v = self.form_matrix(form);
+                let q = self.generator_matrix(form, coef);
+                let chol = nalgebra::Cholesky::new(v).ok_or(ModeError::NotDefinite { k: self.k })?;
+                let l = chol.l();
+                largest_eigenvalue(
+                    n,
+                    |x, out| {
+                        let mut y = nalgebra::DVector::from_column_slice(x);
+                        l.tr_solve_lower_triangular_mut(&mut y);
+                        let mut z = &q * y;
+                        l.solve_lower_triangular_mut(&mut z);
+                        out.copy_from_slice(z.as_slice());
+                    },
+                    tol,
+                    max_iter,
+                )
+            }
+        };
+        Ok(ModeSigma2 { lambda_max: ritz.value, ritz })
+    }
+
+    /// The dense check at this grid: `V ≻ 0` and `sigma2_bar V - Q ≻ 0`,
+    /// each by the rigorous floating-point Cholesky test of the generator
+    /// crate. Returns `(form_definite, inequality)`.
+    pub fn verify(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
+        let v = self.form_matrix(form);
+        let v = symmetrise(v);
+        let definite = generator::verified_positive_definite(&v);
+        if form.energy == 0.0 {
+            // V diagonal, Q = 0: the inequality 0 <= sigma2_bar V holds for sigma2_bar >= 0.
+            return (definite, definite && sigma2_bar >= 0.0);
+        }
+        let q = self.generator_matrix(form, coef);
+        let g = symmetrise(v * sigma2_bar - q);
+        (definite, definite && generator::verified_positive_definite(&g))
+    }
+}
+
+fn symmetrise(a: DMatrix<f64>) -> DMatrix<f64> {
+    let t = a.transpose();
+    (a + t) * 0.5
+}
+
+/// The walls operators in stream-function coordinates `omega = M^-1 L psi`:
+/// `V_psi = s (e L + L diag(w/m) L)` (banded) and
+/// `Q_psi = -(k^2/2) s e sum_j (L E_j^2 + E_j^2 L - 2 L E_j L^-1 E_j L)`.
+struct WallOps {
+    l: SymBanded,
+    l_factor: BandedCholesky,
+    v_factor: BandedCholesky,
+    eta: Vec<Vec<f64>>,
+    eta2: Vec<f64>,
+    coef_q: f64,
+}
+
+struct WallScratch {
+    ly: Vec<f64>,
+    t: Vec<f64>,
+    t2: Vec<f64>,
+}
+
+impl WallScratch {
+    fn new(n: usize) -> Self {
+        WallScratch { ly: vec![0.0; n], t: vec![0.0; n], t2: vec![0.0; n] }
+    }
+}
+
+impl WallOps {
+    fn new(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients) -> Option<Self> {
+        let l = grid.helmholtz(k)?;
+        let l_factor = l.cholesky().ok()?;
+        let m = grid.weights();
+        let wm: Vec<f64> = form.w.iter().zip(m).map(|(w, m)| w / m).collect();
+        let v = l.times(form.energy).plus(&l.sandwich(&wm)).times(form.sign);
+        let v_factor = v.cholesky().ok()?;
+        let n = grid.n();
+        let eta2 = (0..n).map(|a| coef.eta.iter().map(|e| e[a] * e[a]).sum()).collect();
+        Some(WallOps { l, l_factor, v_factor, eta: coef.eta.clone(), eta2, coef_q: -0.5 * k * k * form.sign * form.energy })
+    }
+
+    fn q_psi(&self, y: &[f64], out: &mut [f64], s: &mut WallScratch) {
+        let n = y.len();
+        self.l.mul_vec(y, &mut s.ly);
+        // L (sum E^2) y + (sum E^2) L y
+        for a in 0..n {
+            s.t[a] = self.eta2[a] * y[a];
+        }
+        self.l.mul_vec(&s.t, out);
+        for a in 0..n {
+            out[a] += self.eta2[a] * s.ly[a];
+        }
+        // - 2 sum_j L E_j L^-1 E_j L y
+        for e in &self.eta {
+            for a in 0..n {
+                s.t[a] = e[a] * s.ly[a];
+            }
+            self.l_factor.solve(&mut s.t);
+            for a in 0..n {
+                s.t[a] *= e[a];
+            }
+            self.l.mul_vec(&s.t, &mut s.t2);
+            for a in 0..n {
+                out[a] -= 2.0 * s.t2[a];
+            }
+        }
+        for o in out.iter_mut() {
+            *o *= self.coef_q;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use exact::{Matrix as ExactMatrix, Rational};
+    use nalgebra::SymmetricEigen;
+
+    fn setup(boundary: Boundary, ny: usize) -> (YGrid, Coefficients) {
+        let (a, b) = (0.0, std::f64::consts::PI);
+        let g = YGrid::new(boundary, a, b, ny);
+        let y = g.nodes();
+        let coef = Coefficients {
+            // U = y^2/2 + sin(y)/10, U'' = 1 - sin(y)/10 > 0
+            u: y.iter().map(|y| 0.5 * y * y + 0.1 * y.sin()).collect(),
+            upp: y.iter().map(|y| 1.0 - 0.1 * y.sin()).collect(),
+            eta: vec![y.iter().map(|y| 0.4 * (2.0 * y).sin()).collect(), y.iter().map(|y| 0.1 * y).collect()],
+        };
+        (g, coef)
+    }
+
+    /// The real embedding of `-ik X` acting on `(Re w, Im w)`: `[[0, kX], [-kX, 0]]`.
+    fn embed_minus_ik(k: f64, x: &DMatrix<f64>) -> DMatrix<f64> {
+        let n = x.nrows();
+        let mut out = DMatrix::zeros(2 * n, 2 * n);
+        out.view_mut((0, n), (n, n)).copy_from(&(x * k));
+        out.view_mut((n, 0), (n, n)).copy_from(&(x * -k));
+        out
+    }
+
+    fn to_exact(m: &DMatrix<f64>) -> ExactMatrix {
+        ExactMatrix::from_rows(
+            &(0..m.nrows())
+                .map(|i| (0..m.ncols()).map(|j| Rational::from_float(m[(i, j)]).unwrap()).collect())
+                .collect::<Vec<_>>(),
+        )
+    }
+
+    #[test]
+    fn closed_form_q_equals_the_generator_crates_formula() {
+        // The generator crate's Q (exact arithmetic on the float entries) of
+        // the real-embedded A, B_j must equal blockdiag(Q, Q) of the closed form.
+        for boundary in [Boundary::Walls, Boundary::Periodic] {
+            let (g, coef) = setup(boundary, 16);
+            let mode = Mode::new(&g, 2.0);
+            let form = Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+            let n = g.n();
+            let r = mode.drift_matrix(&coef);
+            let a = embed_minus_ik(2.0, &r);
+            let noise: Vec<DMatrix<f64>> = coef.eta.iter().map(|e| embed_minus_ik(2.0, &DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(e)))).collect();
+            let v = mode.form_matrix(&form);
+            let mut v2 = DMatrix::zeros(2 * n, 2 * n);
+            v2.view_mut((0, 0), (n, n)).copy_from(&v);
+            v2.view_mut((n, n), (n, n)).copy_from(&v);
+            let half = Rational::new(1.into(), 2.into());
+            let mut a_tilde = to_exact(&a);
+            let noise_exact: Vec<ExactMatrix> = noise.iter().map(to_exact).collect();
+            for b in &noise_exact {
+                a_tilde = a_tilde.add(&b.mul(b).scale(&half));
+            }
+            let lin = generator::Linearisation { a: to_exact(&a), a_tilde, noise: noise_exact };
+            let gf = generator::generator_form(&lin, &to_exact(&v2));
+            let q_general = gf.q.to_dmatrix();
+            let q = mode.generator_matrix(&form, &coef);
+            let mut q2 = DMatrix::zeros(2 * n, 2 * n);
+            q2.view_mut((0, 0), (n, n)).copy_from(&q);
+            q2.view_mut((n, n), (n, n)).copy_from(&q);
+            let scale = q2.norm();
+            assert!((&q_general - &q2).norm() < 1e-10 * scale, "{boundary:?}: {}", (&q_general - &q2).norm() / scale);
+            // the drift part of the general formula is the discretisation's residual: zero to rounding
+            let drift = gf.drift_residual.to_dmatrix();
+            assert!(drift.norm() < 1e-12 * v.norm() * 2.0, "{}", drift.norm());
+        }
+    }
+
+    #[test]
+    fn a_wrong_casimir_weight_leaves_a_drift_residual() {
+        let (g, coef) = setup(Boundary::Walls, 32);
+        let mode = Mode::new(&g, 1.0);
+        let right = Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+        // Two wrong second variations: the energy alone (no Casimir), and a
+        // weight that is not Phi''(omega_e) for the equilibrium.
+        let energy_only = Form { energy: 1.0, w: vec![0.0; g.n()], sign: 1.0 };
+        let distorted = Form { energy: 1.0, w: right.w.iter().zip(g.nodes()).map(|(w, y)| w * (1.0 + 0.3 * (3.0 * y).sin())).collect(), sign: 1.0 };
+        let v = mode.form_matrix(&right).norm();
+        let r_right = mode.drift_residual(&right, &coef).norm();
+        assert!(r_right < 1e-13 * v, "{r_right} vs {v}");
+        for wrong in [energy_only, distorted] {
+            let r_wrong = mode.drift_residual(&wrong, &coef).norm();
+            assert!(r_wrong > 1e-3 * v, "{r_wrong} vs {v}");
+        }
+    }
+
+    #[test]
+    fn lanczos_matches_dense_generalised_eigenvalues() {
+        for boundary in [Boundary::Walls, Boundary::Periodic] {
+            let (g, coef) = setup(boundary, 48);
+            let mode = Mode::new(&g, 1.5);
+            let form = Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+            let v = mode.form_matrix(&form);
+            let q = mode.generator_matrix(&form, &coef);
+            let l = nalgebra::Cholesky::new(v.clone()).unwrap().l();
+            let linv = l.clone().try_inverse().unwrap();
+            let t = &linv * &q * linv.transpose();
+            let dense = SymmetricEigen::new((&t + t.transpose()) * 0.5).eigenvalues.max();
+            let est = mode.sigma2(&form, &coef, 1e-12).unwrap();
+            assert!((est.lambda_max - dense).abs() < 1e-8 * dense.abs().max(1e-12), "{boundary:?}: {} vs {dense}", est.lambda_max);
+            let (def, ineq) = mode.verify(&form, &coef, dense * (1.0 + 1e-6) + 1e-12);
+            assert!(def && ineq);
+            let (_, ineq_low) = mode.verify(&form, &coef, dense * (1.0 - 1e-3));
+            assert!(!ineq_low, "a bound below the eigenvalue must not verify");
+        }
+    }
+}
