@@ -15,7 +15,7 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use serde_json::Value;
-use spec::{check_certificate, parse_spec, CheckError};
+use spec::{check_certificate, parse_any_spec, CheckError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -68,15 +68,15 @@ fn read(path: &Path) -> Result<String, Failure> {
 
 fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failure> {
     let text = read(spec_path)?;
-    let spec = parse_spec(&text).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
-    let cert = spec::certify(&spec);
-    let pretty = spec::to_pretty_json(&cert.json);
+    let spec = parse_any_spec(&text).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
+    let cert = spec.certify();
+    let pretty = spec::to_pretty_json(&cert);
     match output {
         Some(path) => std::fs::write(path, pretty)
             .map_err(|e| Failure::Failed(format!("{}: cannot write: {e}", path.display())))?,
         None => print!("{pretty}"),
     }
-    eprintln!("{}", summary(&cert.json));
+    eprintln!("{}", summary(&cert));
     Ok(())
 }
 

@@ -2,7 +2,7 @@
 
 use crate::Failure;
 use serde_json::Value;
-use spec::{check_certificate, parse_spec, CheckError};
+use spec::{check_certificate, parse_any_spec, CheckError};
 use std::path::{Path, PathBuf};
 
 /// A number (or the string "infinity") in a compact form.
@@ -56,7 +56,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
     let (mut bad, mut failed) = (0, 0);
     for path in &specs {
         let text = std::fs::read_to_string(path)?;
-        let spec = match parse_spec(&text) {
+        let spec = match parse_any_spec(&text) {
             Ok(s) => s,
             Err(e) => {
                 bad += 1;
@@ -66,10 +66,10 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
                 continue;
             }
         };
-        let cert = spec::certify(&spec);
+        let cert = spec.certify();
         let cpath = cert_path(path);
         if write {
-            std::fs::write(&cpath, spec::to_pretty_json(&cert.json))?;
+            std::fs::write(&cpath, spec::to_pretty_json(&cert))?;
         }
         let status = match std::fs::read_to_string(&cpath) {
             Err(_) => "missing".to_string(),
@@ -87,12 +87,16 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
                 }
             },
         };
-        let j = &cert.json;
+        let j = &cert;
+        let first_choice = j
+            .pointer("/optimisation/first_definite_sigma2")
+            .or_else(|| j.pointer("/paper/choice_sigma2"))
+            .map_or("-".into(), format_number);
         rows.push([
-            spec.name.clone(),
+            spec.name().to_string(),
             j["verdict"].as_str().unwrap_or("?").to_string(),
             j.get("sigma2").map_or("-".into(), format_number),
-            j.get("optimisation").map_or("-".into(), |o| format_number(&o["first_definite_sigma2"])),
+            first_choice,
             j.get("stopping").map_or("-".into(), |s| format_number(&s["T"])),
             j["level"].as_str().unwrap_or("?").to_string(),
             status,

@@ -155,7 +155,7 @@ impl SymBanded {
                     s -= c[i * b1 + (i - k)] * c[j * b1 + (j - k)];
                 }
                 if i == j {
-                    if !(s > 0.0) || !s.is_finite() {
+                    if s.is_nan() || s <= 0.0 || !s.is_finite() {
                         return Err(BandedError::NonPositivePivot { index: i, value: s });
                     }
                     c[i * b1] = s.sqrt();

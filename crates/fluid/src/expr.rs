@@ -117,7 +117,11 @@ impl Parser<'_> {
         while let Some(c @ (b'+' | b'-')) = self.peek() {
             self.i += 1;
             let rhs = self.term()?;
-            acc = if c == b'+' { Expr::Add(Box::new(acc), Box::new(rhs)) } else { Expr::Sub(Box::new(acc), Box::new(rhs)) };
+            acc = if c == b'+' {
+                Expr::Add(Box::new(acc), Box::new(rhs))
+            } else {
+                Expr::Sub(Box::new(acc), Box::new(rhs))
+            };
         }
         self.depth -= 1;
         Ok(acc)
@@ -128,7 +132,11 @@ impl Parser<'_> {
         while let Some(c @ (b'*' | b'/')) = self.peek() {
             self.i += 1;
             let rhs = self.unary()?;
-            acc = if c == b'*' { Expr::Mul(Box::new(acc), Box::new(rhs)) } else { Expr::Div(Box::new(acc), Box::new(rhs)) };
+            acc = if c == b'*' {
+                Expr::Mul(Box::new(acc), Box::new(rhs))
+            } else {
+                Expr::Div(Box::new(acc), Box::new(rhs))
+            };
         }
         Ok(acc)
     }
@@ -159,7 +167,9 @@ impl Parser<'_> {
             self.i += 1;
             let at = self.i;
             let e = self.unary()?;
-            let v = e.constant().ok_or_else(|| ExprError { message: "the exponent must be a constant integer".into(), position: at })?;
+            let v = e
+                .constant()
+                .ok_or_else(|| ExprError { message: "the exponent must be a constant integer".into(), position: at })?;
             if v.fract() != 0.0 || v.abs() > 64.0 {
                 return err("the exponent must be an integer between -64 and 64", at);
             }
@@ -230,7 +240,8 @@ impl Parser<'_> {
                     _ => match self.params.get(name) {
                         Some(v) => Ok(Expr::Num(*v)),
                         None => {
-                            let known: Vec<&str> = ["y", "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
+                            let known: Vec<&str> =
+                                ["y", "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
                             err(format!("unknown symbol '{name}' (known: {})", known.join(", ")), start)
                         }
                     },
@@ -255,7 +266,9 @@ impl Expr {
         match self {
             Expr::Num(_) => false,
             Expr::Y => true,
-            Expr::Add(a, b) | Expr::Sub(a, b) | Expr::Mul(a, b) | Expr::Div(a, b) => a.depends_on_y() || b.depends_on_y(),
+            Expr::Add(a, b) | Expr::Sub(a, b) | Expr::Mul(a, b) | Expr::Div(a, b) => {
+                a.depends_on_y() || b.depends_on_y()
+            }
             Expr::Pow(a, _) | Expr::Neg(a) | Expr::Call(_, a) => a.depends_on_y(),
         }
     }
@@ -286,29 +299,82 @@ impl Expr {
     /// `d/dy`, symbolically.
     pub fn derivative(&self) -> Expr {
         use Expr::*;
-        let b = Box::new;
         match self {
             Num(_) => Num(0.0),
             Y => Num(1.0),
-            Add(x, z) => Add(b(x.derivative()), b(z.derivative())),
-            Sub(x, z) => Sub(b(x.derivative()), b(z.derivative())),
-            Mul(x, z) => Add(b(Mul(b(x.derivative()), z.clone())), b(Mul(x.clone(), b(z.derivative())))),
-            Div(x, z) => Div(
-                b(Sub(b(Mul(b(x.derivative()), z.clone())), b(Mul(x.clone(), b(z.derivative()))))),
-                b(Pow(z.clone(), 2)),
-            ),
-            Pow(x, n) => Mul(b(Mul(b(Num(*n as f64)), b(Pow(x.clone(), n - 1)))), b(x.derivative())),
-            Neg(x) => Neg(b(x.derivative())),
+            Add(x, z) => add(x.derivative(), z.derivative()),
+            Sub(x, z) => sub(x.derivative(), z.derivative()),
+            Mul(x, z) => add(mul(x.derivative(), (**z).clone()), mul((**x).clone(), z.derivative())),
+            Div(x, z) => {
+                div(sub(mul(x.derivative(), (**z).clone()), mul((**x).clone(), z.derivative())), pow((**z).clone(), 2))
+            }
+            // d/dy x^0 = 0 exactly (not 0 * x^-1, which is NaN at x = 0)
+            Pow(x, n) => mul(mul(Num(*n as f64), pow((**x).clone(), n - 1)), x.derivative()),
+            Neg(x) => neg(x.derivative()),
             Call(f, x) => {
                 let outer = match f {
                     Func::Sin => Call(Func::Cos, x.clone()),
-                    Func::Cos => Neg(b(Call(Func::Sin, x.clone()))),
+                    Func::Cos => neg(Call(Func::Sin, x.clone())),
                     Func::Exp => Call(Func::Exp, x.clone()),
-                    Func::Sqrt => Div(b(Num(0.5)), b(Call(Func::Sqrt, x.clone()))),
+                    Func::Sqrt => div(Num(0.5), Call(Func::Sqrt, x.clone())),
                 };
-                Mul(b(outer), b(x.derivative()))
+                mul(outer, x.derivative())
             }
         }
+    }
+}
+
+// Constructors that fold the zeros and ones derivatives produce, so that
+// repeated derivatives stay small and never form `0 * x^-1`.
+fn add(a: Expr, b: Expr) -> Expr {
+    match (&a, &b) {
+        (Expr::Num(x), _) if *x == 0.0 => b,
+        (_, Expr::Num(y)) if *y == 0.0 => a,
+        (Expr::Num(x), Expr::Num(y)) => Expr::Num(x + y),
+        _ => Expr::Add(Box::new(a), Box::new(b)),
+    }
+}
+
+fn sub(a: Expr, b: Expr) -> Expr {
+    match (&a, &b) {
+        (_, Expr::Num(y)) if *y == 0.0 => a,
+        (Expr::Num(x), _) if *x == 0.0 => neg(b),
+        (Expr::Num(x), Expr::Num(y)) => Expr::Num(x - y),
+        _ => Expr::Sub(Box::new(a), Box::new(b)),
+    }
+}
+
+fn mul(a: Expr, b: Expr) -> Expr {
+    match (&a, &b) {
+        (Expr::Num(x), _) | (_, Expr::Num(x)) if *x == 0.0 => Expr::Num(0.0),
+        (Expr::Num(x), _) if *x == 1.0 => b,
+        (_, Expr::Num(y)) if *y == 1.0 => a,
+        (Expr::Num(x), Expr::Num(y)) => Expr::Num(x * y),
+        _ => Expr::Mul(Box::new(a), Box::new(b)),
+    }
+}
+
+fn div(a: Expr, b: Expr) -> Expr {
+    match (&a, &b) {
+        (Expr::Num(x), _) if *x == 0.0 => Expr::Num(0.0),
+        (_, Expr::Num(y)) if *y == 1.0 => a,
+        _ => Expr::Div(Box::new(a), Box::new(b)),
+    }
+}
+
+fn pow(a: Expr, n: i32) -> Expr {
+    match n {
+        0 => Expr::Num(1.0),
+        1 => a,
+        _ => Expr::Pow(Box::new(a), n),
+    }
+}
+
+fn neg(a: Expr) -> Expr {
+    match a {
+        Expr::Num(x) => Expr::Num(-x),
+        Expr::Neg(inner) => *inner,
+        other => Expr::Neg(Box::new(other)),
     }
 }
 
@@ -347,6 +413,15 @@ mod tests {
                 assert!((fd2 - dd.eval(y)).abs() < 1e-4 * (1.0 + fd2.abs()), "{text}: {fd2} vs {}", dd.eval(y));
             }
         }
+    }
+
+    #[test]
+    fn repeated_derivatives_of_powers_are_finite_at_zero() {
+        // y^2: third derivative 0, not 0 * y^-1 = NaN at y = 0 (regression)
+        let e = parse("y^2 + y", &BTreeMap::new()).unwrap();
+        let d3 = e.derivative().derivative().derivative();
+        assert_eq!(d3.eval(0.0), 0.0);
+        assert_eq!(e.derivative().derivative().eval(0.0), 2.0);
     }
 
     #[test]

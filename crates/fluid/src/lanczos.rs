@@ -40,7 +40,9 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
     // A fixed start vector with components in every direction that a smooth
     // or a grid-scale eigenvector could have (deterministic: certificates
     // must be reproducible).
-    let mut v: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * ((i as f64) * 0.7548776662).sin() + 0.25 * ((i * i) as f64 * 0.5698402910).cos()).collect();
+    let mut v: Vec<f64> = (0..n)
+        .map(|i| 1.0 + 0.5 * ((i as f64) * 0.7548776662).sin() + 0.25 * ((i * i) as f64 * 0.5698402910).cos())
+        .collect();
     normalise(&mut v);
     let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m_max);
     let mut alpha: Vec<f64> = Vec::with_capacity(m_max);
@@ -73,17 +75,14 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
                 }
             });
             let eig = SymmetricEigen::new(t);
-            let (imax, &theta) = eig
-                .eigenvalues
-                .iter()
-                .enumerate()
-                .max_by(|a, b| a.1.total_cmp(b.1))
-                .expect("non-empty");
+            let (imax, &theta) =
+                eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).expect("non-empty");
             let scale = eig.eigenvalues.iter().fold(0.0f64, |s, x| s.max(x.abs()));
             let last_component = eig.eigenvectors[(steps - 1, imax)];
             let residual = (b * last_component).abs();
             last = Ritz { value: theta, residual, iterations: steps, scale };
-            if residual <= tol * scale.max(f64::MIN_POSITIVE) || b <= 1e-14 * scale.max(f64::MIN_POSITIVE) || steps == n {
+            if residual <= tol * scale.max(f64::MIN_POSITIVE) || b <= 1e-14 * scale.max(f64::MIN_POSITIVE) || steps == n
+            {
                 return last;
             }
         }
@@ -122,13 +121,25 @@ mod tests {
     #[test]
     fn agrees_with_dense_eigenvalues_on_a_random_symmetric_matrix() {
         let n = 60;
-        let a = DMatrix::from_fn(n, n, |i, j| (((i * 31 + j * 17) % 23) as f64 - 11.0) + (((j * 31 + i * 17) % 23) as f64 - 11.0));
+        let a = DMatrix::from_fn(n, n, |i, j| {
+            (((i * 31 + j * 17) % 23) as f64 - 11.0) + (((j * 31 + i * 17) % 23) as f64 - 11.0)
+        });
         let dense = SymmetricEigen::new(a.clone()).eigenvalues.max();
-        let r = largest_eigenvalue(n, |x, y| y.copy_from_slice((&a * nalgebra::DVector::from_column_slice(x)).as_slice()), 1e-12, 200);
+        let r = largest_eigenvalue(
+            n,
+            |x, y| y.copy_from_slice((&a * nalgebra::DVector::from_column_slice(x)).as_slice()),
+            1e-12,
+            200,
+        );
         assert!((r.value - dense).abs() < 1e-9 * dense.abs(), "{} vs {dense}", r.value);
         // a shifted matrix has a different top eigenvalue: the comparison can fail
         let b = &a + DMatrix::<f64>::identity(n, n) * 5.0;
-        let r2 = largest_eigenvalue(n, |x, y| y.copy_from_slice((&b * nalgebra::DVector::from_column_slice(x)).as_slice()), 1e-12, 200);
+        let r2 = largest_eigenvalue(
+            n,
+            |x, y| y.copy_from_slice((&b * nalgebra::DVector::from_column_slice(x)).as_slice()),
+            1e-12,
+            200,
+        );
         assert!((r2.value - dense - 5.0).abs() < 1e-9 * dense.abs());
     }
 }

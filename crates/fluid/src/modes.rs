@@ -141,7 +141,7 @@ impl<'g> Mode<'g> {
         if form.energy == 0.0 {
             // Q = 0 identically (module docs); V must still be definite.
             let m = self.grid.weights();
-            if (0..n).any(|a| !(form.sign * form.w[a] * m[a] > 0.0)) {
+            if (0..n).any(|a| (form.sign * form.w[a] * m[a]).is_nan() || form.sign * form.w[a] * m[a] <= 0.0) {
                 return Err(ModeError::NotDefinite { k: self.k });
             }
             let ritz = Ritz { value: 0.0, residual: 0.0, iterations: 0, scale: 0.0 };
@@ -241,8 +241,11 @@ impl WallOps {
         let v = l.times(form.energy).plus(&l.sandwich(&wm)).times(form.sign);
         let v_factor = v.cholesky().ok()?;
         let n = grid.n();
-        let eta2 = (0..n).map(|a| coef.eta.iter().map(|e| e[a] * e[a]).sum()).collect();
-        Some(WallOps { l, l_factor, v_factor, eta: coef.eta.clone(), eta2, coef_q: -0.5 * k * k * form.sign * form.energy })
+        // A constant noise field is a multiple of the identity and drops out
+        // of Q = -(k^2/2) sum [E, [E, V]] exactly; leaving it in would only add rounding.
+        let eta: Vec<Vec<f64>> = coef.eta.iter().filter(|e| e.iter().any(|x| *x != e[0])).cloned().collect();
+        let eta2 = (0..n).map(|a| eta.iter().map(|e| e[a] * e[a]).sum()).collect();
+        Some(WallOps { l, l_factor, v_factor, eta, eta2, coef_q: -0.5 * k * k * form.sign * form.energy })
     }
 
     fn q_psi(&self, y: &[f64], out: &mut [f64], s: &mut WallScratch) {
@@ -319,11 +322,16 @@ mod tests {
         for boundary in [Boundary::Walls, Boundary::Periodic] {
             let (g, coef) = setup(boundary, 16);
             let mode = Mode::new(&g, 2.0);
-            let form = Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+            let form =
+                Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
             let n = g.n();
             let r = mode.drift_matrix(&coef);
             let a = embed_minus_ik(2.0, &r);
-            let noise: Vec<DMatrix<f64>> = coef.eta.iter().map(|e| embed_minus_ik(2.0, &DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(e)))).collect();
+            let noise: Vec<DMatrix<f64>> = coef
+                .eta
+                .iter()
+                .map(|e| embed_minus_ik(2.0, &DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(e))))
+                .collect();
             let v = mode.form_matrix(&form);
             let mut v2 = DMatrix::zeros(2 * n, 2 * n);
             v2.view_mut((0, 0), (n, n)).copy_from(&v);
@@ -353,11 +361,16 @@ mod tests {
     fn a_wrong_casimir_weight_leaves_a_drift_residual() {
         let (g, coef) = setup(Boundary::Walls, 32);
         let mode = Mode::new(&g, 1.0);
-        let right = Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+        let right =
+            Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
         // Two wrong second variations: the energy alone (no Casimir), and a
         // weight that is not Phi''(omega_e) for the equilibrium.
         let energy_only = Form { energy: 1.0, w: vec![0.0; g.n()], sign: 1.0 };
-        let distorted = Form { energy: 1.0, w: right.w.iter().zip(g.nodes()).map(|(w, y)| w * (1.0 + 0.3 * (3.0 * y).sin())).collect(), sign: 1.0 };
+        let distorted = Form {
+            energy: 1.0,
+            w: right.w.iter().zip(g.nodes()).map(|(w, y)| w * (1.0 + 0.3 * (3.0 * y).sin())).collect(),
+            sign: 1.0,
+        };
         let v = mode.form_matrix(&right).norm();
         let r_right = mode.drift_residual(&right, &coef).norm();
         assert!(r_right < 1e-13 * v, "{r_right} vs {v}");
@@ -372,7 +385,8 @@ mod tests {
         for boundary in [Boundary::Walls, Boundary::Periodic] {
             let (g, coef) = setup(boundary, 48);
             let mode = Mode::new(&g, 1.5);
-            let form = Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+            let form =
+                Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
             let v = mode.form_matrix(&form);
             let q = mode.generator_matrix(&form, &coef);
             let l = nalgebra::Cholesky::new(v.clone()).unwrap().l();
@@ -380,7 +394,11 @@ mod tests {
             let t = &linv * &q * linv.transpose();
             let dense = SymmetricEigen::new((&t + t.transpose()) * 0.5).eigenvalues.max();
             let est = mode.sigma2(&form, &coef, 1e-12).unwrap();
-            assert!((est.lambda_max - dense).abs() < 1e-8 * dense.abs().max(1e-12), "{boundary:?}: {} vs {dense}", est.lambda_max);
+            assert!(
+                (est.lambda_max - dense).abs() < 1e-8 * dense.abs().max(1e-12),
+                "{boundary:?}: {} vs {dense}",
+                est.lambda_max
+            );
             let (def, ineq) = mode.verify(&form, &coef, dense * (1.0 + 1e-6) + 1e-12);
             assert!(def && ineq);
             let (_, ineq_low) = mode.verify(&form, &coef, dense * (1.0 - 1e-3));

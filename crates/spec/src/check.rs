@@ -59,6 +59,9 @@ pub fn check_certificate(text: &str) -> Result<CheckReport, CheckError> {
 /// Check a certificate given as a JSON value.
 pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
+    if map.get("spec").is_some_and(crate::fluid::is_fluid_spec) {
+        return crate::fluid::check_fluid_certificate(cert);
+    }
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     let mut spec = spec_from_value(spec_value).map_err(|e| {
         CheckError::BadInput(SpecError::new(format!("$.spec{}", e.path.trim_start_matches('$')), e.message))
@@ -91,7 +94,7 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
     })
 }
 
-fn fail(path: &str, message: String) -> CheckError {
+pub(crate) fn fail(path: &str, message: String) -> CheckError {
     CheckError::Failed { path: path.to_string(), message }
 }
 
@@ -245,6 +248,17 @@ fn check_direction(pair: (Option<Value>, Option<Value>), analysis: &generator::A
 /// `1e-9` of the largest number in the enclosing array (round-off zeros in a
 /// vector are compared against the vector's scale, not their own).
 fn compare(expected: &Value, found: &Value, path: &str, floor: f64) -> Result<(), CheckError> {
+    compare_with(expected, found, path, floor, FLOAT_TOLERANCE)
+}
+
+/// [`compare`] with relative tolerance `tol` for floating-point numbers.
+pub(crate) fn compare_with(
+    expected: &Value,
+    found: &Value,
+    path: &str,
+    floor: f64,
+    tol: f64,
+) -> Result<(), CheckError> {
     match (expected, found) {
         (Value::Object(e), Value::Object(f)) => {
             for (k, ev) in e {
@@ -253,7 +267,7 @@ fn compare(expected: &Value, found: &Value, path: &str, floor: f64) -> Result<()
                     continue; // a newer engine may re-check an older certificate
                 }
                 match f.get(k) {
-                    Some(fv) => compare(ev, fv, &p, floor)?,
+                    Some(fv) => compare_with(ev, fv, &p, floor, tol)?,
                     None => return Err(fail(&p, "missing in the certificate".into())),
                 }
             }
@@ -269,9 +283,9 @@ fn compare(expected: &Value, found: &Value, path: &str, floor: f64) -> Result<()
             if e.len() != f.len() {
                 return Err(fail(path, format!("re-derived {} entries, certificate has {}", e.len(), f.len())));
             }
-            let floor = floor.max(FLOAT_TOLERANCE * max_abs_number(expected));
+            let floor = floor.max(tol * max_abs_number(expected));
             for (i, (ev, fv)) in e.iter().zip(f).enumerate() {
-                compare(ev, fv, &format!("{path}[{i}]"), floor)?;
+                compare_with(ev, fv, &format!("{path}[{i}]"), floor, tol)?;
             }
             Ok(())
         }
@@ -286,7 +300,7 @@ fn compare(expected: &Value, found: &Value, path: &str, floor: f64) -> Result<()
                 }
                 return Ok(());
             }
-            if !y.is_finite() || (x - y).abs() > (FLOAT_TOLERANCE * x.abs().max(y.abs())).max(floor) {
+            if !y.is_finite() || (x - y).abs() > (tol * x.abs().max(y.abs())).max(floor) {
                 return Err(fail(path, format!("re-derived {x:e}, certificate says {y:e}")));
             }
             Ok(())

@@ -28,6 +28,7 @@
 mod certificate;
 mod check;
 mod claims;
+mod fluid;
 mod json;
 mod parse;
 mod pretty;
@@ -36,7 +37,57 @@ mod settings;
 pub use certificate::{certificate_json, certify, spec_digest, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION};
 pub use check::{check_certificate, check_certificate_value, CheckError, CheckReport, FLOAT_TOLERANCE};
 pub use claims::{verify_claims, ClaimFailure};
+pub use fluid::{
+    certify_fluid, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value, is_fluid_spec,
+    parse_fluid_spec, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
+};
 pub use json::SpecError;
 pub use parse::{parse_spec, spec_from_value, CasimirSource, Spec, Stopping, MAX_NOISE_FIELDS};
 pub use pretty::to_pretty_json;
 pub use settings::EngineSettings;
+
+/// A spec of either kind: a Lie–Poisson system (finite-dimensional) or a
+/// shear flow (`"fluid": {...}`).
+#[derive(Clone, Debug)]
+pub enum AnySpec {
+    /// A finite-dimensional system.
+    Lie(Box<Spec>),
+    /// A fluid.
+    Fluid(Box<FluidSpec>),
+}
+
+impl AnySpec {
+    /// The spec's name.
+    pub fn name(&self) -> &str {
+        match self {
+            AnySpec::Lie(s) => &s.name,
+            AnySpec::Fluid(s) => &s.name,
+        }
+    }
+
+    /// Run the matching pipeline and return the certificate JSON.
+    pub fn certify(&self) -> serde_json::Value {
+        match self {
+            AnySpec::Lie(s) => certify(s).json,
+            AnySpec::Fluid(s) => certify_fluid(s),
+        }
+    }
+}
+
+/// Parse either kind of spec from JSON text (a top-level `fluid` object
+/// selects the fluid pipeline).
+///
+/// ```
+/// let fluid = r#"{"name": "f", "fluid": {"model": "incompressible", "x_period": 6.283185307179586,
+///   "y_interval": [-1, 1], "boundary": "walls", "shear_flow": "y^2", "noise": ["y"], "ny": 16, "x_modes": 2}}"#;
+/// assert!(matches!(spec::parse_any_spec(fluid).unwrap(), spec::AnySpec::Fluid(_)));
+/// ```
+pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    if is_fluid_spec(&value) {
+        fluid_spec_from_value(value).map(|s| AnySpec::Fluid(Box::new(s)))
+    } else {
+        spec_from_value(value).map(|s| AnySpec::Lie(Box::new(s)))
+    }
+}

@@ -336,7 +336,7 @@ fn algebra_error(e: AlgebraError, path: &str) -> SpecError {
     SpecError::new(at, e.to_string())
 }
 
-fn read_stopping(v: &Value, path: &str) -> Result<Stopping> {
+pub(crate) fn read_stopping(v: &Value, path: &str) -> Result<Stopping> {
     let map = as_object(v, path)?;
     check_keys(map, &["epsilon", "delta"], path)?;
     let epsilon = float(required(map, "epsilon", path)?, &child(path, "epsilon"))?;

@@ -1,0 +1,533 @@
+//! Fluid specs (`"fluid": {...}`): 2D Euler about a shear flow, and their
+//! certificates.
+//!
+//! ```
+//! let text = r#"{
+//!   "name": "channel",
+//!   "fluid": {"model": "incompressible", "x_period": "2*pi", "y_interval": [0, "pi"],
+//!             "boundary": "walls", "shear_flow": "sin(y)", "noise": ["0.3*cos(y)"],
+//!             "ny": 64, "x_modes": 4}
+//! }"#;
+//! let spec = spec::parse_fluid_spec(text).unwrap();
+//! let cert = spec::certify_fluid(&spec);
+//! assert_eq!(cert["verdict"], "stable");
+//! spec::check_fluid_certificate(&cert).unwrap();
+//! let bad = text.replace("\"ny\": 64", "\"ny\": 60");
+//! assert_eq!(spec::parse_fluid_spec(&bad).unwrap_err().path, "$.fluid.ny");
+//! ```
+
+use crate::certificate::{spec_digest, CERTIFICATE_VERSION, ENGINE_VERSION};
+use crate::check::{compare_with, fail, CheckError, CheckReport};
+use crate::json::{
+    as_array, as_object, as_str, check_keys, child, expression_text, index, required, type_name, Result, SpecError,
+};
+use crate::parse::Stopping;
+use fluid::analysis::{analyse, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings};
+use fluid::expr::{parse, Expr};
+use fluid::grid::{Boundary, ELEMENT_DEGREE};
+use fluid::profile::{Profile, ProfileError};
+use generator::StoppingTime;
+use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
+
+/// Relative tolerance when re-checking the floating-point fields of a
+/// fluid certificate (Lanczos and banded solves are deterministic, but the
+/// largest grids are ill-conditioned enough that another CPU's rounding may
+/// move the eighth digit).
+pub const FLUID_TOLERANCE: f64 = 1e-6;
+
+/// Smallest and largest accepted `ny`.
+pub const NY_RANGE: (usize, usize) = (16, 4096);
+
+/// Largest accepted number of x-modes.
+pub const MAX_X_MODES: usize = 2048;
+
+/// A parsed fluid spec.
+#[derive(Clone, Debug)]
+pub struct FluidSpec {
+    /// `name`.
+    pub name: String,
+    /// The spec as given.
+    pub raw: Value,
+    /// The problem.
+    pub problem: FluidProblem,
+    /// The stopping question.
+    pub stopping: Option<Stopping>,
+    /// Numerical settings.
+    pub settings: FluidSettings,
+}
+
+const TOP_KEYS: &[&str] = &["name", "description", "parameters", "fluid", "stopping", "settings"];
+const FLUID_KEYS: &[&str] =
+    &["model", "x_period", "y_interval", "boundary", "shear_flow", "sound_speed", "noise", "ny", "x_modes"];
+
+/// Whether a spec value is a fluid spec (has a `fluid` object at the top).
+pub fn is_fluid_spec(v: &Value) -> bool {
+    v.get("fluid").is_some()
+}
+
+/// Parse a fluid spec from text.
+pub fn parse_fluid_spec(text: &str) -> Result<FluidSpec> {
+    let value: Value = serde_json::from_str(text).map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    fluid_spec_from_value(value)
+}
+
+fn expr(v: &Value, path: &str, params: &BTreeMap<String, f64>) -> Result<Expr> {
+    let text = expression_text(v, path)?;
+    parse(&text, params).map_err(|e| SpecError::new(path, format!("in '{text}': {e}")))
+}
+
+fn constant(v: &Value, path: &str, params: &BTreeMap<String, f64>) -> Result<f64> {
+    let e = expr(v, path, params)?;
+    let x = e.constant().ok_or_else(|| SpecError::new(path, "must be a constant (it may not depend on y)"))?;
+    if !x.is_finite() {
+        return Err(SpecError::new(path, format!("is not finite ({x})")));
+    }
+    Ok(x)
+}
+
+fn integer(v: &Value, path: &str) -> Result<usize> {
+    let n = v
+        .as_u64()
+        .ok_or_else(|| SpecError::new(path, format!("expected a positive integer, found {}", describe(v))))?;
+    usize::try_from(n).map_err(|_| SpecError::new(path, "too large"))
+}
+
+fn describe(v: &Value) -> String {
+    match v {
+        Value::Number(n) => format!("{n}"),
+        other => type_name(other).to_string(),
+    }
+}
+
+/// Parse a fluid spec from a JSON value.
+pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
+    let root = "$";
+    let map = as_object(&value, root)?;
+    check_keys(map, TOP_KEYS, root)?;
+    let name = as_str(required(map, "name", root)?, &child(root, "name"))?.to_string();
+    if name.trim().is_empty() {
+        return Err(SpecError::new(child(root, "name"), "must not be empty"));
+    }
+    if let Some(d) = map.get("description") {
+        as_str(d, &child(root, "description"))?;
+    }
+    let mut params = BTreeMap::new();
+    if let Some(p) = map.get("parameters") {
+        let ppath = child(root, "parameters");
+        for (key, v) in as_object(p, &ppath)? {
+            let kpath = child(&ppath, key);
+            let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+                && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !valid || ["y", "pi", "sin", "cos", "exp", "sqrt"].contains(&key.as_str()) {
+                return Err(SpecError::new(
+                    kpath,
+                    format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi or a function)"),
+                ));
+            }
+            let x = constant(v, &kpath, &params)?;
+            params.insert(key.clone(), x);
+        }
+    }
+    let fpath = child(root, "fluid");
+    let f = as_object(required(map, "fluid", root)?, &fpath)?;
+    check_keys(f, FLUID_KEYS, &fpath)?;
+    let mpath = child(&fpath, "model");
+    let model_name = as_str(required(f, "model", &fpath)?, &mpath)?;
+    let spath = child(&fpath, "sound_speed");
+    let model = match model_name {
+        "incompressible" => {
+            if f.contains_key("sound_speed") {
+                return Err(SpecError::new(spath, "only a compressible model has a sound speed"));
+            }
+            FluidModel::Incompressible
+        }
+        "compressible" => {
+            let c = constant(required(f, "sound_speed", &fpath)?, &spath, &params)?;
+            if c <= 0.0 {
+                return Err(SpecError::new(spath, format!("must be positive, got {c}")));
+            }
+            FluidModel::Compressible { sound_speed: c }
+        }
+        other => {
+            return Err(SpecError::new(
+                mpath,
+                format!("unknown model '{other}' (expected incompressible or compressible)"),
+            ))
+        }
+    };
+    let xpath = child(&fpath, "x_period");
+    let x_period = constant(required(f, "x_period", &fpath)?, &xpath, &params)?;
+    if x_period <= 0.0 {
+        return Err(SpecError::new(xpath, format!("must be positive, got {x_period}")));
+    }
+    let ipath = child(&fpath, "y_interval");
+    let iv = as_array(required(f, "y_interval", &fpath)?, &ipath)?;
+    if iv.len() != 2 {
+        return Err(SpecError::new(&ipath, format!("expected [a, b], got {} entries", iv.len())));
+    }
+    let a = constant(&iv[0], &index(&ipath, 0), &params)?;
+    let b = constant(&iv[1], &index(&ipath, 1), &params)?;
+    if a >= b {
+        return Err(SpecError::new(index(&ipath, 1), format!("must exceed the left end {a}, got {b}")));
+    }
+    let bpath = child(&fpath, "boundary");
+    let boundary = match as_str(required(f, "boundary", &fpath)?, &bpath)? {
+        "walls" => Boundary::Walls,
+        "periodic" => Boundary::Periodic,
+        other => return Err(SpecError::new(bpath, format!("unknown boundary '{other}' (expected walls or periodic)"))),
+    };
+    let upath = child(&fpath, "shear_flow");
+    let u = expr(required(f, "shear_flow", &fpath)?, &upath, &params)?;
+    let npath = child(&fpath, "noise");
+    let noise_list = as_array(required(f, "noise", &fpath)?, &npath)?;
+    if noise_list.len() > crate::parse::MAX_NOISE_FIELDS {
+        return Err(SpecError::new(
+            &npath,
+            format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
+        ));
+    }
+    let noise =
+        noise_list.iter().enumerate().map(|(i, v)| expr(v, &index(&npath, i), &params)).collect::<Result<Vec<_>>>()?;
+    let nypath = child(&fpath, "ny");
+    let ny = integer(required(f, "ny", &fpath)?, &nypath)?;
+    if ny < NY_RANGE.0 {
+        return Err(SpecError::new(
+            nypath,
+            format!("ny = {ny} is too small: at least {} points are needed", NY_RANGE.0),
+        ));
+    }
+    if ny > NY_RANGE.1 {
+        return Err(SpecError::new(nypath, format!("ny = {ny} is too large (at most {})", NY_RANGE.1)));
+    }
+    match boundary {
+        Boundary::Walls if ny % ELEMENT_DEGREE != 0 => {
+            return Err(SpecError::new(
+                nypath,
+                format!("with walls ny must be a multiple of the element degree {ELEMENT_DEGREE} (ny / {ELEMENT_DEGREE} spectral elements), got {ny}"),
+            ))
+        }
+        Boundary::Periodic if ny % 2 != 0 => return Err(SpecError::new(nypath, format!("with a periodic interval ny must be even, got {ny}"))),
+        _ => {}
+    }
+    let kpath = child(&fpath, "x_modes");
+    let x_modes = integer(required(f, "x_modes", &fpath)?, &kpath)?;
+    if x_modes == 0 || x_modes > MAX_X_MODES {
+        return Err(SpecError::new(kpath, format!("must be between 1 and {MAX_X_MODES}, got {x_modes}")));
+    }
+    let profile = Profile::new(u, noise, (a, b), boundary);
+    // Profile checks up front so the error names the spec field.
+    profile.check(&[]).map_err(|e| profile_error(e, &fpath))?;
+    let stopping = match map.get("stopping") {
+        None => None,
+        Some(v) => Some(crate::parse::read_stopping(v, &child(root, "stopping"))?),
+    };
+    let settings = read_settings(map.get("settings"), &child(root, "settings"))?;
+    let problem = FluidProblem { model, profile, x_period, ny, x_modes };
+    Ok(FluidSpec { name, raw: value, problem, stopping, settings })
+}
+
+fn profile_error(e: ProfileError, fpath: &str) -> SpecError {
+    let field = |what: &str| -> String {
+        let base = what.trim_end_matches('\'');
+        if let Some(rest) = base.strip_prefix("noise[") {
+            format!("{fpath}.noise[{}", rest)
+        } else {
+            format!("{fpath}.{base}")
+        }
+    };
+    match &e {
+        ProfileError::NotFinite { what, y } => {
+            let derivative = what.matches('\'').count();
+            let which =
+                if derivative == 0 { String::new() } else { format!(" (its derivative of order {derivative})") };
+            SpecError::new(field(what), format!("is not finite at y = {y}{which} on the interval"))
+        }
+        ProfileError::NotPeriodic { what, .. } => SpecError::new(field(what), e.to_string()),
+        _ => SpecError::new(fpath, e.to_string()),
+    }
+}
+
+fn read_settings(v: Option<&Value>, path: &str) -> Result<FluidSettings> {
+    let mut s = FluidSettings::default();
+    let Some(v) = v else { return Ok(s) };
+    let map = as_object(v, path)?;
+    check_keys(map, &["lanczos_tolerance", "convergence_from", "instability_ny"], path)?;
+    if let Some(t) = map.get("lanczos_tolerance") {
+        let p = child(path, "lanczos_tolerance");
+        let x = t.as_f64().ok_or_else(|| SpecError::new(&p, format!("expected a number, found {}", describe(t))))?;
+        if !(1e-14..=1e-3).contains(&x) {
+            return Err(SpecError::new(p, format!("must be between 1e-14 and 1e-3, got {x}")));
+        }
+        s.lanczos_tolerance = x;
+    }
+    if let Some(t) = map.get("convergence_from") {
+        let p = child(path, "convergence_from");
+        let n = integer(t, &p)?;
+        if !(16..=4096).contains(&n) || n % ELEMENT_DEGREE != 0 {
+            return Err(SpecError::new(
+                p,
+                format!("must be a multiple of {ELEMENT_DEGREE} between 16 and 4096, got {n}"),
+            ));
+        }
+        s.convergence_from = n;
+    }
+    if let Some(t) = map.get("instability_ny") {
+        let p = child(path, "instability_ny");
+        let n = integer(t, &p)?;
+        if !(32..=1024).contains(&n) || n % ELEMENT_DEGREE != 0 {
+            return Err(SpecError::new(
+                p,
+                format!("must be a multiple of {ELEMENT_DEGREE} between 32 and 1024, got {n}"),
+            ));
+        }
+        s.instability_ny = n;
+    }
+    Ok(s)
+}
+
+fn settings_json(s: &FluidSettings) -> Value {
+    json!({ "lanczos_tolerance": s.lanczos_tolerance, "convergence_from": s.convergence_from, "instability_ny": s.instability_ny })
+}
+
+fn float(x: f64) -> Value {
+    if x.is_finite() {
+        Value::from(x)
+    } else {
+        Value::String(
+            if x > 0.0 {
+                "infinity"
+            } else if x < 0.0 {
+                "-infinity"
+            } else {
+                "nan"
+            }
+            .into(),
+        )
+    }
+}
+
+fn opt(x: Option<f64>) -> Value {
+    x.map_or(Value::Null, float)
+}
+
+/// Run the fluid pipeline and build the certificate JSON.
+pub fn certify_fluid(spec: &FluidSpec) -> Value {
+    match analyse(&spec.problem, &spec.settings) {
+        Ok(a) => fluid_certificate_json(spec, &a),
+        // The profile was checked at parse time on a fine sample; the grid
+        // nodes are checked again here and can still hit a singularity.
+        Err(e) => {
+            let mut c = Map::new();
+            c.insert("certificate_version".into(), Value::from(CERTIFICATE_VERSION));
+            c.insert("engine".into(), json!({"name": "verify", "version": ENGINE_VERSION}));
+            c.insert("name".into(), Value::from(spec.name.as_str()));
+            c.insert("kind".into(), Value::from("fluid"));
+            c.insert("verdict".into(), Value::from("inconclusive"));
+            c.insert("reason".into(), Value::from(format!("the profile cannot be discretised: {e}")));
+            c.insert("level".into(), Value::from("none"));
+            c.insert("spec_sha256".into(), Value::from(spec_digest(&spec.raw)));
+            c.insert("settings".into(), settings_json(&spec.settings));
+            c.insert("spec".into(), spec.raw.clone());
+            Value::Object(c)
+        }
+    }
+}
+
+/// The certificate JSON of an analysis.
+pub fn fluid_certificate_json(spec: &FluidSpec, a: &FluidAnalysis) -> Value {
+    let p = &spec.problem;
+    let mut c = Map::new();
+    let mut put = |k: &str, v: Value| {
+        c.insert(k.to_string(), v);
+    };
+    put("certificate_version", Value::from(CERTIFICATE_VERSION));
+    put("engine", json!({"name": "verify", "version": ENGINE_VERSION}));
+    put("name", Value::from(spec.name.as_str()));
+    put("kind", Value::from("fluid"));
+    put("verdict", Value::from(a.verdict.as_str()));
+    put("reason", Value::from(a.reason.as_str()));
+    put("level", Value::from(a.verification));
+    put(
+        "checks",
+        json!({
+            "sigma2": match a.verification {
+                "exact_structure" => "exact: the form is diagonal (a Casimir-momentum or enstrophy form) or the noise is a multiple of the identity, so Q = 0 identically for the discretised operators",
+                "verified_float" => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite by a floating-point Cholesky with rounding accounted for (Rump-style), for the floating-point matrices as computed; sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
+                "float" => "floating point only: the dense verified check did not pass",
+                _ => "no claim is made",
+            },
+            "discretisation": "the claims are about the discretised linear SDE; the convergence table shows how they move under refinement",
+        }),
+    );
+    if let Some(s2) = a.sigma2 {
+        put("sigma2", float(s2));
+    }
+    if let Some(u) = a.sigma2_upper {
+        put("sigma2_upper", float(u));
+    }
+    if let (Some(stop), Some(s2)) = (spec.stopping, a.sigma2_upper.or(a.sigma2)) {
+        let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
+        put(
+            "stopping",
+            json!({
+                "epsilon": stop.epsilon,
+                "delta": stop.delta,
+                "T": st.time().map_or(Value::String("infinity".into()), float),
+                "bound": "P(|dw_t|_V^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dw_0|_V^2 = delta, with Sigma^2 = sigma2_upper",
+            }),
+        );
+    }
+    put("spec_sha256", Value::from(spec_digest(&spec.raw)));
+    put("model", Value::from(p.model.as_str()));
+    put(
+        "formulation",
+        Value::from(match p.model {
+            FluidModel::Incompressible => "vorticity: dw = -ik (U + U'' L^-1) w dt - sum_j ik eta_j w o dW^j per x-mode exp(ikx), L = k^2 - d^2/dy^2 with psi = 0 at walls",
+            FluidModel::Compressible { .. } => "momentum-density m = rho u and density rho, noise acting by the coadjoint action (Lie derivative) of (eta_j(y), 0)",
+        }),
+    );
+    let unknowns = match p.profile.boundary {
+        Boundary::Walls => p.ny - 1,
+        Boundary::Periodic => p.ny,
+    };
+    put(
+        "discretisation",
+        json!({
+            "x": format!("Fourier modes m = 1..{} (k = 2 pi m / x_period); m = 0 is frozen (A = B = 0)", p.x_modes),
+            "y": match p.profile.boundary {
+                Boundary::Walls => format!("continuous Galerkin spectral elements of degree {ELEMENT_DEGREE} with Gauss-Lobatto-Legendre quadrature, {} elements", p.ny / ELEMENT_DEGREE),
+                Boundary::Periodic => "Fourier collocation".to_string(),
+            },
+            "ny": p.ny,
+            "unknowns_per_mode": unknowns,
+            "x_modes": p.x_modes,
+        }),
+    );
+    put(
+        "form",
+        json!({
+            "kind": a.form.kind,
+            "energy_coefficient": a.form.energy,
+            "galilean_shift": opt(a.form.galilean_shift),
+            "sign": a.form.sign,
+            "casimir_weight": a.form.casimir_weight,
+        }),
+    );
+    put(
+        "modes",
+        Value::Array(
+            a.modes
+                .iter()
+                .map(|m| {
+                    json!({
+                        "m": m.m, "k": float(m.k), "sigma2": float(m.sigma2), "sigma2_upper": opt(m.sigma2_upper),
+                        "form_verified": m.form_verified, "lanczos_iterations": m.iterations,
+                    })
+                })
+                .collect(),
+        ),
+    );
+    put(
+        "convergence",
+        Value::Array(
+            a.convergence
+                .iter()
+                .map(
+                    |r| json!({"ny": r.ny, "sigma2": opt(r.sigma2), "sigma2_paper_choice": opt(r.sigma2_paper_choice)}),
+                )
+                .collect(),
+        ),
+    );
+    put(
+        "paper",
+        json!({
+            "bound": float(a.paper_bound),
+            "bound_formula": "sup_y sum_k eta_k'(y)^2 (the paper's eq. (eta-bound))",
+            "choice_sigma2": opt(a.paper_choice_sigma2),
+            "choice": "energy + Casimir with Phi'' = U/U'' (no Galilean shift, c = 0), when that form is definite",
+        }),
+    );
+    put(
+        "optimisation",
+        json!({
+            "over": "the Galilean (momentum) multiplier c and the energy coefficient of e H + C_Phi + c M",
+            "shift_curve": a.shift_curve.iter().map(|(c, s)| json!({"c": float(*c), "sigma2": float(*s)})).collect::<Vec<_>>(),
+            "infimum": opt(a.sigma2),
+            "attained_by": a.form.kind,
+        }),
+    );
+    if let Some(r) = a.drift_residual {
+        put("drift_residual", float(r));
+    }
+    if let Some(u) = &a.instability {
+        put(
+            "instability",
+            json!({"m": u.m, "k": float(u.k), "growth_rate": float(u.growth_rate), "growth_rate_half_resolution": float(u.growth_rate_coarse), "ny": u.ny}),
+        );
+    }
+    if let Some(cr) = &a.compressible {
+        put(
+            "compressible",
+            json!({
+                "sound_speed": float(cr.sound_speed),
+                "noise_residuals": cr.noise_residuals.iter().map(|x| float(*x)).collect::<Vec<_>>(),
+                "noise_residual_formula": "sup_y |U eta_k'|: the y-momentum (grad sigma)^T m put into the equilibrium by noise field k",
+                "compatible_noise": "eta constant wherever U != 0",
+                "galilean_shift_interval": cr.shift_interval.map_or(Value::Null, |(lo, hi)| json!([float(lo), float(hi)])),
+                "incompressible_verdict": cr.incompressible_verdict.as_str(),
+                "incompressible_sigma2": opt(cr.incompressible_sigma2),
+            }),
+        );
+    }
+    put("settings", settings_json(&spec.settings));
+    put("spec", spec.raw.clone());
+    Value::Object(c)
+}
+
+/// Re-check a fluid certificate: independent claims, then re-derivation and
+/// comparison (floating-point fields to [`FLUID_TOLERANCE`]).
+pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+    let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
+    let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
+    let mut spec = fluid_spec_from_value(spec_value).map_err(|e| {
+        CheckError::BadInput(SpecError::new(format!("$.spec{}", e.path.trim_start_matches('$')), e.message))
+    })?;
+    spec.settings = read_settings(map.get("settings"), "$.settings").map_err(CheckError::BadInput)?;
+    // Independent claims first.
+    if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {
+        return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
+    }
+    if let (Some(s), Some(u)) =
+        (cert.get("sigma2").and_then(Value::as_f64), cert.get("sigma2_upper").and_then(Value::as_f64))
+    {
+        if s > u {
+            return Err(fail("$.sigma2_upper", format!("is below sigma2 ({u} < {s})")));
+        }
+    }
+    let bound = spec.problem.profile.paper_bound();
+    if let Some(b) = cert.pointer("/paper/bound").and_then(Value::as_f64) {
+        if (b - bound).abs() > 1e-12 * bound.abs().max(1.0) {
+            return Err(fail("$.paper.bound", format!("recomputed {bound:e}, certificate says {b:e}")));
+        }
+    }
+    if let Some(table) = cert.get("convergence").and_then(Value::as_array) {
+        let expected = table_resolutions(spec.problem.ny, spec.settings.convergence_from);
+        let found: Vec<u64> = table.iter().filter_map(|r| r.get("ny").and_then(Value::as_u64)).collect();
+        if !found.is_empty() && found != expected.iter().map(|n| *n as u64).collect::<Vec<_>>() {
+            return Err(fail("$.convergence", format!("resolutions {found:?} are not the table's {expected:?}")));
+        }
+    }
+    let analysis = analyse(&spec.problem, &spec.settings).map_err(|e| fail("$.spec.fluid", e.to_string()))?;
+    let expected = fluid_certificate_json(&spec, &analysis);
+    let mut found = cert.clone();
+    if let Some(o) = found.as_object_mut() {
+        o.remove("engine");
+    }
+    let mut expected = expected;
+    if let Some(o) = expected.as_object_mut() {
+        o.remove("engine");
+    }
+    compare_with(&expected, &found, "$", 0.0, FLUID_TOLERANCE)?;
+    Ok(CheckReport { name: spec.name.clone(), verdict: analysis.verdict.as_str().to_string(), sigma2: analysis.sigma2 })
+}
