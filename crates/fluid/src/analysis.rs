@@ -332,8 +332,8 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
             let sigma2 = s.lambda_max.max(0.0);
             let mut upper = None;
             let mut form_verified = false;
-            let mut margin = 1e-6;
-            for _ in 0..4 {
+            let mut margin = 1e-8;
+            for _ in 0..5 {
                 let bar = sigma2 * (1.0 + margin) + margin * 1e-3 * s.ritz.scale + s.ritz.residual;
                 let (def, ineq) = mode.verify(&form, &coef, bar);
                 form_verified = def;

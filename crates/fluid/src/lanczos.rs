@@ -95,6 +95,159 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
     last
 }
 
+/// Largest eigenvalue of the symmetric-definite pencil `(Q, V)` by Lanczos
+/// on `V^-1 Q` in the `V` inner product: `apply_q`, `apply_v` give `Q x`,
+/// `V x`, and `solve_v` solves `V x = b` (it may be inexact: the reported
+/// value is the Rayleigh quotient `x^T Q x / x^T V x` of the final Ritz
+/// vector, computed with `apply_q` and `apply_v` directly, so it is a lower
+/// estimate of the largest eigenvalue up to rounding in those products).
+///
+/// ```
+/// use fluid::lanczos::largest_generalized_eigenvalue;
+/// // Q = diag(1..=50), V = diag(2): eigenvalues i/2, largest 25
+/// let r = largest_generalized_eigenvalue(
+///     50,
+///     |x, y| for i in 0..50 { y[i] = (i + 1) as f64 * x[i] },
+///     |x, y| for i in 0..50 { y[i] = 2.0 * x[i] },
+///     |b, x| for i in 0..50 { x[i] = b[i] / 2.0 },
+///     1e-12,
+///     100,
+/// );
+/// assert!((r.value - 25.0).abs() < 1e-9);
+/// ```
+pub fn largest_generalized_eigenvalue(
+    n: usize,
+    mut apply_q: impl FnMut(&[f64], &mut [f64]),
+    mut apply_v: impl FnMut(&[f64], &mut [f64]),
+    mut solve_v: impl FnMut(&[f64], &mut [f64]),
+    tol: f64,
+    max_iter: usize,
+) -> Ritz {
+    assert!(n > 0);
+    let m_max = max_iter.min(n).max(1);
+    let mut q: Vec<f64> = (0..n)
+        .map(|i| 1.0 + 0.5 * ((i as f64) * 0.7548776662).sin() + 0.25 * ((i * i) as f64 * 0.5698402910).cos())
+        .collect();
+    let mut vq = vec![0.0; n];
+    apply_v(&q, &mut vq);
+    let nrm = dot(&q, &vq).sqrt();
+    q.iter_mut().for_each(|x| *x /= nrm);
+    vq.iter_mut().for_each(|x| *x /= nrm);
+    let mut basis: Vec<Vec<f64>> = vec![];
+    let mut vbasis: Vec<Vec<f64>> = vec![];
+    let mut alpha: Vec<f64> = vec![];
+    let mut beta: Vec<f64> = vec![];
+    let (mut qx, mut p, mut vp) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut best: Option<(Vec<f64>, f64, f64, usize, f64)> = None; // (coefficients, theta, residual, steps, scale)
+    for j in 0..m_max {
+        apply_q(&q, &mut qx);
+        let a = dot(&q, &qx);
+        basis.push(q.clone());
+        vbasis.push(vq.clone());
+        alpha.push(a);
+        solve_v(&qx, &mut p);
+        // V-orthogonalise against the basis, twice
+        for _ in 0..2 {
+            for (b, vb) in basis.iter().zip(&vbasis) {
+                let c = dot(vb, &p);
+                axpy(-c, b, &mut p);
+            }
+        }
+        apply_v(&p, &mut vp);
+        let b = dot(&p, &vp).max(0.0).sqrt();
+        let steps = j + 1;
+        if steps == m_max || steps % 8 == 0 || b <= 1e-300 {
+            let t = DMatrix::from_fn(steps, steps, |r, c| {
+                if r == c {
+                    alpha[r]
+                } else if r + 1 == c || c + 1 == r {
+                    beta[r.min(c)]
+                } else {
+                    0.0
+                }
+            });
+            let eig = SymmetricEigen::new(t);
+            let (imax, &theta) =
+                eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).expect("non-empty");
+            let scale = eig.eigenvalues.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+            let residual = (b * eig.eigenvectors[(steps - 1, imax)]).abs();
+            let coefficients: Vec<f64> = eig.eigenvectors.column(imax).iter().copied().collect();
+            best = Some((coefficients, theta, residual, steps, scale));
+            if residual <= tol * scale.max(f64::MIN_POSITIVE) || b <= 1e-14 * scale.max(f64::MIN_POSITIVE) || steps == n
+            {
+                break;
+            }
+        }
+        if b == 0.0 || !b.is_finite() {
+            break;
+        }
+        beta.push(b);
+        q = p.iter().map(|x| x / b).collect();
+        vq = vp.iter().map(|x| x / b).collect();
+    }
+    let (coefficients, theta, residual, steps, scale) = best.expect("at least one check");
+    // The Ritz vector and its Rayleigh quotient, from Q and V directly.
+    let mut x = vec![0.0; n];
+    for (c, b) in coefficients.iter().zip(&basis) {
+        axpy(*c, b, &mut x);
+    }
+    apply_q(&x, &mut qx);
+    apply_v(&x, &mut vp);
+    let (num, den) = (dot(&x, &qx), dot(&x, &vp));
+    let value = if den > 0.0 { num / den } else { theta };
+    Ritz { value, residual, iterations: steps, scale }
+}
+
+/// Solve `A x = b` for symmetric positive definite `A` by conjugate
+/// gradients with a preconditioner `apply_pinv` (`z = P^-1 r`), to relative
+/// residual `tol`; returns the number of iterations, or `None` if a
+/// direction of non-positive curvature shows `A` is not positive definite.
+pub fn conjugate_gradients(
+    b: &[f64],
+    x: &mut [f64],
+    mut apply_a: impl FnMut(&[f64], &mut [f64]),
+    mut apply_pinv: impl FnMut(&[f64], &mut [f64]),
+    tol: f64,
+    max_iter: usize,
+) -> Option<usize> {
+    let n = b.len();
+    let bnorm = norm(b);
+    if bnorm == 0.0 {
+        x.iter_mut().for_each(|v| *v = 0.0);
+        return Some(0);
+    }
+    apply_pinv(b, x); // start from the preconditioner's answer
+    let mut ax = vec![0.0; n];
+    apply_a(x, &mut ax);
+    let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
+    let mut z = vec![0.0; n];
+    apply_pinv(&r, &mut z);
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    let mut ap = vec![0.0; n];
+    for it in 0..max_iter {
+        if norm(&r) <= tol * bnorm {
+            return Some(it);
+        }
+        apply_a(&p, &mut ap);
+        let pap = dot(&p, &ap);
+        if pap.is_nan() || pap <= 0.0 {
+            return None;
+        }
+        let step = rz / pap;
+        axpy(step, &p, x);
+        axpy(-step, &ap, &mut r);
+        apply_pinv(&r, &mut z);
+        let rz_new = dot(&r, &z);
+        let ratio = rz_new / rz;
+        rz = rz_new;
+        for (pi, zi) in p.iter_mut().zip(&z) {
+            *pi = zi + ratio * *pi;
+        }
+    }
+    Some(max_iter)
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

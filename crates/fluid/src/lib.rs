@@ -31,3 +31,4 @@ pub mod grid;
 pub mod lanczos;
 pub mod modes;
 pub mod profile;
+pub mod simulate;

@@ -31,7 +31,7 @@
 
 use crate::banded::{BandedCholesky, SymBanded};
 use crate::grid::{Boundary, YGrid};
-use crate::lanczos::{largest_eigenvalue, Ritz};
+use crate::lanczos::{conjugate_gradients, largest_eigenvalue, largest_generalized_eigenvalue, Ritz};
 use nalgebra::DMatrix;
 
 /// The profile and the noise at the grid nodes.
@@ -150,16 +150,12 @@ impl<'g> Mode<'g> {
         let ritz = match self.grid.boundary() {
             Boundary::Walls => {
                 let ops = WallOps::new(self.grid, self.k, form, coef).ok_or(ModeError::NotDefinite { k: self.k })?;
-                let mut y = vec![0.0; n];
-                let mut scratch = WallScratch::new(n);
-                largest_eigenvalue(
+                let cell = std::cell::RefCell::new(WallScratch::new(n));
+                largest_generalized_eigenvalue(
                     n,
-                    |x, out| {
-                        y.copy_from_slice(x);
-                        ops.v_factor.solve_upper(&mut y);
-                        ops.q_psi(&y, out, &mut scratch);
-                        ops.v_factor.solve_lower(out);
-                    },
+                    |x, out| ops.q_omega(x, out, &mut cell.borrow_mut()),
+                    |x, out| ops.v_omega(x, out),
+                    |b, x| ops.v_omega_solve(b, x, &mut cell.borrow_mut()),
                     tol,
                     max_iter,
                 )
@@ -208,27 +204,39 @@ fn symmetrise(a: DMatrix<f64>) -> DMatrix<f64> {
     (a + t) * 0.5
 }
 
-/// The walls operators in stream-function coordinates `omega = M^-1 L psi`:
-/// `V_psi = s (e L + L diag(w/m) L)` (banded) and
-/// `Q_psi = -(k^2/2) s e sum_j (L E_j^2 + E_j^2 L - 2 L E_j L^-1 E_j L)`.
+/// The walls operators, applied with banded solves and never formed:
+/// `K x = M L^-1 M x`, `V x = s (e K x + M w x)`, and
+/// `Q x = -(k^2/2) s e sum_j (E_j^2 K x - 2 E_j K E_j x + K E_j^2 x)` in
+/// vorticity coordinates, where the pencil is well conditioned (`V` is a
+/// weighted identity plus a smoothing operator). `V x = b` is solved by
+/// conjugate gradients preconditioned with the exact inverse in
+/// stream-function coordinates, `V^-1 = M^-1 L V_psi^-1 L M^-1` with
+/// `V_psi = s (e L + L diag(w/m) L)` (banded, bandwidth `2p`): that inverse is
+/// exact in exact arithmetic but loses accuracy through the conditioning of
+/// `L`, which the conjugate-gradient iteration then removes. The banded
+/// Cholesky of `V_psi` is also the definiteness screen.
 struct WallOps {
     l: SymBanded,
     l_factor: BandedCholesky,
     v_factor: BandedCholesky,
+    m: Vec<f64>,
+    wm: Vec<f64>,
     eta: Vec<Vec<f64>>,
     eta2: Vec<f64>,
+    sign: f64,
+    energy: f64,
     coef_q: f64,
 }
 
 struct WallScratch {
-    ly: Vec<f64>,
     t: Vec<f64>,
     t2: Vec<f64>,
+    t3: Vec<f64>,
 }
 
 impl WallScratch {
     fn new(n: usize) -> Self {
-        WallScratch { ly: vec![0.0; n], t: vec![0.0; n], t2: vec![0.0; n] }
+        WallScratch { t: vec![0.0; n], t2: vec![0.0; n], t3: vec![0.0; n] }
     }
 }
 
@@ -236,46 +244,103 @@ impl WallOps {
     fn new(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients) -> Option<Self> {
         let l = grid.helmholtz(k)?;
         let l_factor = l.cholesky().ok()?;
-        let m = grid.weights();
-        let wm: Vec<f64> = form.w.iter().zip(m).map(|(w, m)| w / m).collect();
-        let v = l.times(form.energy).plus(&l.sandwich(&wm)).times(form.sign);
-        let v_factor = v.cholesky().ok()?;
+        let m = grid.weights().to_vec();
+        let w_over_m: Vec<f64> = form.w.iter().zip(&m).map(|(w, m)| w / m).collect();
+        let v_psi = l.times(form.energy).plus(&l.sandwich(&w_over_m)).times(form.sign);
+        let v_factor = v_psi.cholesky().ok()?;
         let n = grid.n();
         // A constant noise field is a multiple of the identity and drops out
-        // of Q = -(k^2/2) sum [E, [E, V]] exactly; leaving it in would only add rounding.
-        let eta: Vec<Vec<f64>> = coef.eta.iter().filter(|e| e.iter().any(|x| *x != e[0])).cloned().collect();
+        // of Q = -(k^2/2) sum [E, [E, V]] exactly, and so does the mean of
+        // any field: subtracting it leaves Q unchanged and avoids cancellation.
+        let eta: Vec<Vec<f64>> = coef
+            .eta
+            .iter()
+            .filter(|e| e.iter().any(|x| *x != e[0]))
+            .map(|e| {
+                let mean = e.iter().sum::<f64>() / n as f64;
+                e.iter().map(|x| x - mean).collect()
+            })
+            .collect();
         let eta2 = (0..n).map(|a| eta.iter().map(|e| e[a] * e[a]).sum()).collect();
-        Some(WallOps { l, l_factor, v_factor, eta, eta2, coef_q: -0.5 * k * k * form.sign * form.energy })
+        let wm = form.w.iter().zip(&m).map(|(w, m)| w * m).collect();
+        Some(WallOps {
+            l,
+            l_factor,
+            v_factor,
+            m,
+            wm,
+            eta,
+            eta2,
+            sign: form.sign,
+            energy: form.energy,
+            coef_q: -0.5 * k * k * form.sign * form.energy,
+        })
     }
 
-    fn q_psi(&self, y: &[f64], out: &mut [f64], s: &mut WallScratch) {
-        let n = y.len();
-        self.l.mul_vec(y, &mut s.ly);
-        // L (sum E^2) y + (sum E^2) L y
-        for a in 0..n {
-            s.t[a] = self.eta2[a] * y[a];
+    /// `out = K x = M L^-1 M x`.
+    fn k_apply(&self, x: &[f64], out: &mut [f64]) {
+        for a in 0..x.len() {
+            out[a] = self.m[a] * x[a];
         }
-        self.l.mul_vec(&s.t, out);
-        for a in 0..n {
-            out[a] += self.eta2[a] * s.ly[a];
+        self.l_factor.solve(out);
+        for a in 0..x.len() {
+            out[a] *= self.m[a];
         }
-        // - 2 sum_j L E_j L^-1 E_j L y
+    }
+
+    fn v_omega(&self, x: &[f64], out: &mut [f64]) {
+        self.k_apply(x, out);
+        for a in 0..x.len() {
+            out[a] = self.sign * (self.energy * out[a] + self.wm[a] * x[a]);
+        }
+    }
+
+    fn q_omega(&self, x: &[f64], out: &mut [f64], s: &mut WallScratch) {
+        let n = x.len();
+        // (sum E^2) K x + K (sum E^2) x
+        self.k_apply(x, &mut s.t);
+        for a in 0..n {
+            s.t2[a] = self.eta2[a] * x[a];
+        }
+        self.k_apply(&s.t2, out);
+        for a in 0..n {
+            out[a] += self.eta2[a] * s.t[a];
+        }
+        // - 2 sum_j E_j K E_j x
         for e in &self.eta {
             for a in 0..n {
-                s.t[a] = e[a] * s.ly[a];
+                s.t2[a] = e[a] * x[a];
             }
-            self.l_factor.solve(&mut s.t);
+            self.k_apply(&s.t2, &mut s.t3);
             for a in 0..n {
-                s.t[a] *= e[a];
-            }
-            self.l.mul_vec(&s.t, &mut s.t2);
-            for a in 0..n {
-                out[a] -= 2.0 * s.t2[a];
+                out[a] -= 2.0 * e[a] * s.t3[a];
             }
         }
         for o in out.iter_mut() {
             *o *= self.coef_q;
         }
+    }
+
+    /// The preconditioner `M^-1 L V_psi^-1 L M^-1 b` (exact inverse of `V` in exact arithmetic).
+    fn v_inverse_approx(&self, b: &[f64], out: &mut [f64], t: &mut [f64]) {
+        for a in 0..b.len() {
+            t[a] = b[a] / self.m[a];
+        }
+        self.l.mul_vec(t, out);
+        self.v_factor.solve(out);
+        self.l.mul_vec(out, t);
+        for a in 0..b.len() {
+            out[a] = t[a] / self.m[a];
+        }
+    }
+
+    fn v_omega_solve(&self, b: &[f64], x: &mut [f64], s: &mut WallScratch) {
+        let t = &mut s.t;
+        // Non-positive curvature cannot occur once the banded Cholesky of
+        // V_psi succeeded, up to rounding; the iterate is used either way and
+        // the final Rayleigh quotient does not depend on the solve's accuracy.
+        let _ =
+            conjugate_gradients(b, x, |p, out| self.v_omega(p, out), |r, z| self.v_inverse_approx(r, z, t), 1e-15, 60);
     }
 }
 
