@@ -1,0 +1,211 @@
+//! Fluid specs through the `verify` binary: verdicts, bad input (exit 2,
+//! the JSON path named), and tampered fluid certificates (exit 1).
+
+mod common;
+
+use common::*;
+use serde_json::Value;
+use std::io::Write;
+use std::process::{Command, Output};
+
+fn verify(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
+}
+
+fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("verify-fluid-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::File::create(&path).unwrap().write_all(contents.as_bytes()).unwrap();
+    path
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A small valid incompressible spec, edited by `edit`.
+fn spec_with(edit: impl FnOnce(&mut Value)) -> String {
+    let mut v: Value = serde_json::from_str(
+        r#"{"name": "t", "fluid": {"model": "incompressible", "x_period": "2*pi", "y_interval": [0, "pi"],
+            "boundary": "walls", "shear_flow": "sin(y)", "noise": ["0.3*cos(y)"], "ny": 32, "x_modes": 2}}"#,
+    )
+    .unwrap();
+    edit(&mut v);
+    v.to_string()
+}
+
+#[test]
+fn fluid_verdicts_through_the_cli() {
+    let cases = [
+        ("fluids/rayleigh-cos-walls.json", "stable", Some(0.0)),
+        ("fluids/kolmogorov-periodic.json", "stable", None),
+        ("fluids/sin2y-unstable.json", "linearly_unstable", None),
+        ("fluids/tanh-mixing-layer.json", "inconclusive", None),
+    ];
+    for (name, verdict, sigma2) in cases {
+        let out = verify(&["certify", fixture_path(name).to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        let cert: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(cert["verdict"], verdict, "{name}");
+        assert_eq!(cert.get("sigma2").is_some(), verdict == "stable", "{name}");
+        if let Some(s) = sigma2 {
+            assert_eq!(cert["sigma2"].as_f64(), Some(s), "{name}");
+        }
+        assert!(stderr(&out).contains(verdict), "summary on stderr: {}", stderr(&out));
+    }
+    // the compressible verdicts on a small grid
+    let incompatible = spec_with(|v| {
+        v["fluid"]["model"] = "compressible".into();
+        v["fluid"]["sound_speed"] = 3.into();
+        v["fluid"]["shear_flow"] = "-cos(y)".into();
+        v["fluid"]["y_interval"] = serde_json::json!([-1, 1]);
+    });
+    let out = verify(&["certify", temp_file("incompatible.json", &incompatible).to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let cert: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(cert["verdict"], "noise_incompatible");
+    // U eta' = (-cos y)(-0.3 sin y) = 0.15 sin 2y, whose sup over [-1, 1] is
+    // 0.15 (at y = pi/4, inside the interval).
+    let r = cert["compressible"]["noise_residuals"][0].as_f64().unwrap();
+    assert!((r - 0.15).abs() < 1e-6, "{r}");
+}
+
+#[test]
+fn fluid_bad_input_is_exit_2_with_the_json_path() {
+    let cases: Vec<(&str, String, &str, &str)> = vec![
+        ("ny too small", spec_with(|v| v["fluid"]["ny"] = 8.into()), "$.fluid.ny", "too small"),
+        (
+            "ny not a multiple of the degree",
+            spec_with(|v| v["fluid"]["ny"] = 60.into()),
+            "$.fluid.ny",
+            "multiple of the element degree",
+        ),
+        ("ny not an integer", spec_with(|v| v["fluid"]["ny"] = 32.5.into()), "$.fluid.ny", "positive integer"),
+        (
+            "unknown function",
+            spec_with(|v| v["fluid"]["shear_flow"] = "tan(y)".into()),
+            "$.fluid.shear_flow",
+            "unknown function 'tan'",
+        ),
+        (
+            "unknown symbol",
+            spec_with(|v| v["fluid"]["noise"][0] = "z*y".into()),
+            "$.fluid.noise[0]",
+            "unknown symbol 'z'",
+        ),
+        (
+            "profile not finite",
+            spec_with(|v| v["fluid"]["shear_flow"] = "1/y".into()),
+            "$.fluid.shear_flow",
+            "not finite",
+        ),
+        (
+            "noise derivative not finite",
+            spec_with(|v| v["fluid"]["noise"][0] = "sqrt(y)".into()),
+            "$.fluid.noise[0]",
+            "derivative of order 1",
+        ),
+        (
+            "not periodic",
+            spec_with(|v| {
+                v["fluid"]["boundary"] = "periodic".into();
+                v["fluid"]["shear_flow"] = "y".into();
+            }),
+            "$.fluid.shear_flow",
+            "not periodic",
+        ),
+        (
+            "sound speed for incompressible",
+            spec_with(|v| v["fluid"]["sound_speed"] = 2.into()),
+            "$.fluid.sound_speed",
+            "only a compressible",
+        ),
+        (
+            "missing sound speed",
+            spec_with(|v| v["fluid"]["model"] = "compressible".into()),
+            "$.fluid.sound_speed",
+            "required",
+        ),
+        (
+            "negative sound speed",
+            spec_with(|v| {
+                v["fluid"]["model"] = "compressible".into();
+                v["fluid"]["sound_speed"] = (-1).into();
+            }),
+            "$.fluid.sound_speed",
+            "positive",
+        ),
+        (
+            "reversed interval",
+            spec_with(|v| v["fluid"]["y_interval"] = serde_json::json!([1, 0])),
+            "$.fluid.y_interval[1]",
+            "must exceed",
+        ),
+        ("unknown field", spec_with(|v| v["fluid"]["viscosity"] = 1.into()), "$.fluid.viscosity", "unknown field"),
+        ("unknown model", spec_with(|v| v["fluid"]["model"] = "viscous".into()), "$.fluid.model", "unknown model"),
+        (
+            "unknown boundary",
+            spec_with(|v| v["fluid"]["boundary"] = "slip".into()),
+            "$.fluid.boundary",
+            "unknown boundary",
+        ),
+        ("no x-modes", spec_with(|v| v["fluid"]["x_modes"] = 0.into()), "$.fluid.x_modes", "between 1"),
+        ("x-period depends on y", spec_with(|v| v["fluid"]["x_period"] = "y".into()), "$.fluid.x_period", "constant"),
+        (
+            "missing profile",
+            spec_with(|v| _ = v["fluid"].as_object_mut().unwrap().remove("shear_flow")),
+            "$.fluid.shear_flow",
+            "required",
+        ),
+        (
+            "bad setting",
+            spec_with(|v| v["settings"] = serde_json::json!({"lanczos_tolerance": 1.0})),
+            "$.settings.lanczos_tolerance",
+            "between",
+        ),
+        ("noise not a list", spec_with(|v| v["fluid"]["noise"] = "y".into()), "$.fluid.noise", "expected an array"),
+        (
+            "parameter named y",
+            spec_with(|v| v["parameters"] = serde_json::json!({"y": 1})),
+            "$.parameters.y",
+            "not a valid parameter name",
+        ),
+    ];
+    for (what, text, path, message) in cases {
+        let file = temp_file("bad.json", &text);
+        let out = verify(&["certify", file.to_str().unwrap()]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{what}: {err}");
+        assert!(err.contains(path) && err.contains(message), "{what}: expected {path} / {message}, got {err}");
+    }
+}
+
+#[test]
+fn tampered_fluid_certificates_fail_check() {
+    let out = verify(&["certify", fixture_path("fluids/kolmogorov-periodic.json").to_str().unwrap()]);
+    let cert: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let good = temp_file("good.cert.json", &cert.to_string());
+    assert_eq!(verify(&["check", good.to_str().unwrap()]).status.code(), Some(0));
+    let bump = |x: &Value, f: f64| Value::from(x.as_f64().unwrap() * f);
+    let edits: Vec<(&str, Box<dyn Fn(&mut Value)>)> = vec![
+        ("sigma2", Box::new(|c: &mut Value| c["sigma2"] = bump(&c["sigma2"], 1.0 - 1e-4))),
+        ("sigma2_upper", Box::new(|c: &mut Value| c["sigma2_upper"] = bump(&c["sigma2_upper"], 0.99))),
+        ("modes", Box::new(|c: &mut Value| c["modes"][1]["sigma2"] = bump(&c["modes"][1]["sigma2"], 0.9))),
+        (
+            "convergence",
+            Box::new(|c: &mut Value| c["convergence"][0]["sigma2"] = bump(&c["convergence"][0]["sigma2"], 1.001)),
+        ),
+        ("verdict", Box::new(|c: &mut Value| c["verdict"] = "inconclusive".into())),
+        ("paper", Box::new(|c: &mut Value| c["paper"]["bound"] = Value::from(0.01))),
+        ("spec", Box::new(|c: &mut Value| c["spec"]["fluid"]["noise"][0] = "0.31*cos(y)".into())),
+        ("stopping", Box::new(|c: &mut Value| c["stopping"]["T"] = Value::from(1000.0))),
+    ];
+    for (what, edit) in edits {
+        let mut c = cert.clone();
+        edit(&mut c);
+        let file = temp_file("tampered.cert.json", &c.to_string());
+        let out = verify(&["check", file.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(1), "{what}: {}", stderr(&out));
+    }
+}
