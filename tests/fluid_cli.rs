@@ -188,7 +188,7 @@ fn tampered_fluid_certificates_fail_check() {
     let good = temp_file("good.cert.json", &cert.to_string());
     assert_eq!(verify(&["check", good.to_str().unwrap()]).status.code(), Some(0));
     let bump = |x: &Value, f: f64| Value::from(x.as_f64().unwrap() * f);
-    type Edit = Box<dyn Fn(&mut Value)>;
+    type Edit<'a> = Box<dyn Fn(&mut Value) + 'a>;
     let edits: Vec<(&str, Edit)> = vec![
         ("sigma2", Box::new(|c: &mut Value| c["sigma2"] = bump(&c["sigma2"], 1.0 - 1e-4))),
         ("sigma2_upper", Box::new(|c: &mut Value| c["sigma2_upper"] = bump(&c["sigma2_upper"], 0.99))),
