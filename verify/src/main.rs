@@ -6,6 +6,7 @@
 //!   a short summary on stderr;
 //! * `verify check CERT...` — re-derive each certificate from its embedded
 //!   spec and compare;
+//! * `verify plot-fluid CERT... [--out DIR]` — charts from fluid certificates;
 //! * `verify simulate SPEC [--paths N --dt H --t-end T --observable NAME ...]` —
 //!   ensembles, exact moments and charts (SVG, PNG, JSON, CSV).
 //!
@@ -19,6 +20,7 @@ use spec::{check_certificate, parse_any_spec, CheckError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod fluid_plots;
 mod plots;
 mod simulate_cmd;
 mod table;
@@ -48,6 +50,8 @@ enum Command {
     },
     /// Simulate the nonlinear and the linearised system and draw the charts.
     Simulate(simulate_cmd::SimulateArgs),
+    /// Charts from fluid certificates (Sigma^2 per x-mode, convergence, Galilean shift).
+    PlotFluid(fluid_plots::PlotFluidArgs),
     /// Re-check certificates.
     Check {
         /// Certificates (JSON).
@@ -156,6 +160,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Some(Command::Certify { spec, output }) => certify_command(&spec, output.as_deref()),
         Some(Command::Check { certificates }) => check_command(&certificates),
         Some(Command::Simulate(args)) => simulate_cmd::run(&args),
+        Some(Command::PlotFluid(args)) => fluid_plots::run(&args),
         None => table::fixtures_table(&fixtures_dir(cli.fixtures), cli.write)
             .context("running the fixtures")
             .map_err(|e| Failure::Failed(format!("{e:#}")))

@@ -190,3 +190,106 @@ pub fn write_growth(stem: &Path, chart: &GrowthChart) -> DrawResult {
     draw_growth(BitMapBackend::new(&png, (1000, 600)).into_drawing_area(), chart)?;
     Ok(())
 }
+
+/// A named series of points: (label, points, colour index, dashed).
+pub type Series = (String, Vec<(f64, f64)>, usize, bool);
+
+/// Points on log-log or lin-log axes: named series with markers, and
+/// labelled horizontal reference lines.
+pub struct XyChart {
+    /// Chart title.
+    pub title: String,
+    /// x-axis label.
+    pub x_desc: String,
+    /// y-axis label.
+    pub y_desc: String,
+    /// Logarithmic x axis.
+    pub x_log: bool,
+    /// Series (label, points, colour index, dashed).
+    pub series: Vec<Series>,
+    /// Horizontal lines (label, y, colour index).
+    pub hlines: Vec<(String, f64, usize)>,
+}
+
+fn draw_xy<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, c: &XyChart) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    area.fill(&WHITE)?;
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    let xs: Vec<f64> =
+        c.series.iter().flat_map(|(_, p, _, _)| p.iter().map(|q| q.0)).filter(|x| !c.x_log || ok(*x)).collect();
+    let ys: Vec<f64> = c
+        .series
+        .iter()
+        .flat_map(|(_, p, _, _)| p.iter().map(|q| q.1))
+        .chain(c.hlines.iter().map(|h| h.1))
+        .filter(|y| ok(*y))
+        .collect();
+    if xs.is_empty() || ys.is_empty() {
+        return Err("nothing to plot".into());
+    }
+    let (x0, x1) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+    let (y0, y1) = ys.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), y| (l.min(*y), h.max(*y)));
+    let (y0, y1) = (y0 / 2.0, (y1 * 2.0).max(y0 * 10.0));
+    let mut builder = ChartBuilder::on(&area);
+    builder.caption(&c.title, ("sans-serif", 20)).margin(12).x_label_area_size(40).y_label_area_size(90);
+    macro_rules! finish {
+        ($chart:expr) => {{
+            let mut chart = $chart;
+            chart
+                .configure_mesh()
+                .x_desc(c.x_desc.as_str())
+                .y_desc(c.y_desc.as_str())
+                .label_style(("sans-serif", 14))
+                .draw()?;
+            for (label, y, colour) in &c.hlines {
+                let colour = palette(*colour);
+                chart
+                    .draw_series(DashedLineSeries::new(vec![(x0, *y), (x1, *y)], 8, 5, colour.stroke_width(2)))?
+                    .label(label.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            }
+            for (label, points, colour, dashed) in &c.series {
+                let colour = palette(*colour);
+                let pts: Vec<(f64, f64)> =
+                    points.iter().copied().filter(|(x, y)| ok(*y) && (!c.x_log || ok(*x))).collect();
+                let style = colour.stroke_width(2);
+                if *dashed {
+                    chart.draw_series(DashedLineSeries::new(pts.clone(), 6, 4, style))?;
+                } else {
+                    chart.draw_series(LineSeries::new(pts.clone(), style))?;
+                }
+                chart
+                    .draw_series(pts.iter().map(|p| Circle::new(*p, 4, colour.filled())))?
+                    .label(label.as_str())
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .draw()?;
+        }};
+    }
+    if c.x_log {
+        finish!(builder.build_cartesian_2d((x0 * 0.8..x1 * 1.25).log_scale(), (y0..y1).log_scale())?);
+    } else {
+        let pad = (x1 - x0).max(1e-12) * 0.05;
+        finish!(builder.build_cartesian_2d((x0 - pad)..(x1 + pad), (y0..y1).log_scale())?);
+    }
+    area.present()?;
+    Ok(())
+}
+
+/// Write `stem.svg` and `stem.png`.
+pub fn write_xy(stem: &Path, chart: &XyChart) -> DrawResult {
+    register_font();
+    let svg = stem.with_extension("svg");
+    draw_xy(SVGBackend::new(&svg, (1000, 600)).into_drawing_area(), chart)?;
+    let png = stem.with_extension("png");
+    draw_xy(BitMapBackend::new(&png, (1000, 600)).into_drawing_area(), chart)?;
+    Ok(())
+}

@@ -238,6 +238,27 @@ fn form_for(choice: &Choice, profile: &Profile, coef: &Coefficients, grid: &YGri
     }
 }
 
+/// The grid at the problem's `ny`, the coefficients, and the form the
+/// pipeline uses (`None` when the profile admits none): for benchmarks and
+/// for users who want the per-mode operators themselves.
+///
+/// ```
+/// use fluid::{analysis::{chosen_form, FluidModel, FluidProblem}, expr::parse, grid::Boundary, profile::Profile, modes::Mode};
+/// let p = |s: &str| parse(s, &Default::default()).unwrap();
+/// let profile = Profile::new(p("sin(y)"), vec![p("0.3*cos(y)")], (0.0, std::f64::consts::PI), Boundary::Walls);
+/// let problem = FluidProblem { model: FluidModel::Incompressible, profile, x_period: 6.283185307179586, ny: 32, x_modes: 1 };
+/// let (grid, coef, form) = chosen_form(&problem).unwrap();
+/// let s = Mode::new(&grid, 1.0).sigma2(&form, &coef, 1e-12).unwrap();
+/// assert!((s.lambda_max - 0.0142173139187).abs() < 1e-10); // the sine-Galerkin value (tests/fluid.rs)
+/// ```
+pub fn chosen_form(problem: &FluidProblem) -> Option<(YGrid, Coefficients, Form)> {
+    let profile = &problem.profile;
+    let grid = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
+    let coef = profile.coefficients(&grid);
+    let form = form_for(&choose(profile), profile, &coef, &grid)?;
+    Some((grid, coef, form))
+}
+
 /// The energy–Casimir–momentum form with Galilean shift `c`, if its weight
 /// `(U + c)/U''` has one sign at the nodes (`U''` must not vanish there).
 fn shifted_form(coef: &Coefficients, shift: f64) -> Option<Form> {

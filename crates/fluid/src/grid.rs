@@ -265,19 +265,24 @@ impl YGrid {
         // wavenumbers m = -(n/2)+1 .. n/2 ; the Nyquist term enters with its cosine (real, symmetric)
         let half = n / 2;
         let ms: Vec<i64> = (-(half as i64) + if n % 2 == 0 { 1 } else { 0 }..=half as i64).collect();
+        let symbol: Vec<f64> = ms
+            .iter()
+            .map(|&m| {
+                let l = two_pi * m as f64 / self.length;
+                let denom = k * k + l * l;
+                // the mean of psi is not determined at k = 0; the k = 0 mode is not used
+                if denom == 0.0 {
+                    0.0
+                } else {
+                    1.0 / denom
+                }
+            })
+            .collect();
+        // cos(2 pi m d / n) depends on (m d) mod n only: one table of n cosines
+        let table: Vec<f64> = (0..n).map(|j| (two_pi * j as f64 / n as f64).cos()).collect();
         (0..n)
             .map(|d| {
-                ms.iter()
-                    .map(|&m| {
-                        let l = two_pi * m as f64 / self.length;
-                        let denom = k * k + l * l;
-                        if denom == 0.0 {
-                            0.0 // the mean of psi is not determined at k = 0; the k = 0 mode is not used
-                        } else {
-                            (two_pi * m as f64 * d as f64 / n as f64).cos() / denom
-                        }
-                    })
-                    .sum::<f64>()
+                ms.iter().zip(&symbol).map(|(&m, s)| table[(m.rem_euclid(n as i64) as usize * d) % n] * s).sum::<f64>()
                     / n as f64
             })
             .collect()

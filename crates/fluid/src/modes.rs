@@ -105,8 +105,12 @@ impl<'g> Mode<'g> {
 
     /// `V` (dense, vorticity coordinates).
     pub fn form_matrix(&self, form: &Form) -> DMatrix<f64> {
+        self.form_from_energy(&self.grid.energy_matrix(self.k), form)
+    }
+
+    fn form_from_energy(&self, kmat: &DMatrix<f64>, form: &Form) -> DMatrix<f64> {
         let m = self.grid.weights();
-        let mut v = self.grid.energy_matrix(self.k) * (form.sign * form.energy);
+        let mut v = kmat * (form.sign * form.energy);
         for a in 0..self.grid.n() {
             v[(a, a)] += form.sign * m[a] * form.w[a];
         }
@@ -115,7 +119,10 @@ impl<'g> Mode<'g> {
 
     /// `Q` of `V` by the closed form of the module docs (dense).
     pub fn generator_matrix(&self, form: &Form, coef: &Coefficients) -> DMatrix<f64> {
-        let kmat = self.grid.energy_matrix(self.k);
+        self.generator_from_energy(&self.grid.energy_matrix(self.k), form, coef)
+    }
+
+    fn generator_from_energy(&self, kmat: &DMatrix<f64>, form: &Form, coef: &Coefficients) -> DMatrix<f64> {
         let c = -0.5 * self.k * self.k * form.sign * form.energy;
         DMatrix::from_fn(self.grid.n(), self.grid.n(), |a, b| {
             let d: f64 = coef.eta.iter().map(|e| (e[a] - e[b]).powi(2)).sum();
@@ -161,18 +168,31 @@ impl<'g> Mode<'g> {
                 )
             }
             Boundary::Periodic => {
-                let v = self.form_matrix(form);
-                let q = self.generator_matrix(form, coef);
-                let chol = nalgebra::Cholesky::new(v).ok_or(ModeError::NotDefinite { k: self.k })?;
-                let l = chol.l();
+                // Dense: faer's Cholesky of V, then Lanczos on L^-1 Q L^-T
+                // with triangular solves (the circulant K has no band).
+                use faer::linalg::triangular_solve::{
+                    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+                };
+                let kmat = self.grid.energy_matrix(self.k);
+                let v = self.form_from_energy(&kmat, form);
+                let q = self.generator_from_energy(&kmat, form, coef);
+                let vf = faer::Mat::<f64>::from_fn(n, n, |i, j| v[(i, j)]);
+                let qf = faer::Mat::<f64>::from_fn(n, n, |i, j| q[(i, j)]);
+                let llt = vf.llt(faer::Side::Lower).map_err(|_| ModeError::NotDefinite { k: self.k })?;
+                let l = llt.L();
+                let mut y = faer::Mat::<f64>::zeros(n, 1);
                 largest_eigenvalue(
                     n,
                     |x, out| {
-                        let mut y = nalgebra::DVector::from_column_slice(x);
-                        l.tr_solve_lower_triangular_mut(&mut y);
-                        let mut z = &q * y;
-                        l.solve_lower_triangular_mut(&mut z);
-                        out.copy_from_slice(z.as_slice());
+                        for i in 0..n {
+                            y[(i, 0)] = x[i];
+                        }
+                        solve_upper_triangular_in_place(l.transpose(), y.as_mut(), faer::Par::Seq);
+                        let mut z = &qf * &y;
+                        solve_lower_triangular_in_place(l, z.as_mut(), faer::Par::Seq);
+                        for i in 0..n {
+                            out[i] = z[(i, 0)];
+                        }
                     },
                     tol,
                     max_iter,
@@ -186,14 +206,15 @@ impl<'g> Mode<'g> {
     /// each by the rigorous floating-point Cholesky test of the generator
     /// crate. Returns `(form_definite, inequality)`.
     pub fn verify(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
-        let v = self.form_matrix(form);
+        let kmat = self.grid.energy_matrix(self.k);
+        let v = self.form_from_energy(&kmat, form);
         let v = symmetrise(v);
         let definite = generator::verified_positive_definite(&v);
         if form.energy == 0.0 {
             // V diagonal, Q = 0: the inequality 0 <= sigma2_bar V holds for sigma2_bar >= 0.
             return (definite, definite && sigma2_bar >= 0.0);
         }
-        let q = self.generator_matrix(form, coef);
+        let q = self.generator_from_energy(&kmat, form, coef);
         let g = symmetrise(v * sigma2_bar - q);
         (definite, definite && generator::verified_positive_definite(&g))
     }

@@ -1,0 +1,66 @@
+//! One x-mode of a fluid spec, for the side-by-side benchmark with scipy
+//! (`bench/fluid_side_by_side.sh`): times the engine's Lanczos estimate of
+//! Sigma^2 and the dense verified check, and writes the dense `V` and `Q`
+//! of that mode (row-major little-endian f64) for scipy to solve.
+//!
+//! `cargo run --release -p verify --example fluid_mode -- SPEC M OUTDIR [REPS]`
+
+use fluid::analysis::chosen_form;
+use fluid::modes::Mode;
+use std::io::Write;
+use std::time::Instant;
+
+fn write_matrix(path: &std::path::Path, m: &nalgebra::DMatrix<f64>) -> std::io::Result<()> {
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    for i in 0..m.nrows() {
+        for j in 0..m.ncols() {
+            f.write_all(&m[(i, j)].to_le_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.len() < 4 {
+        eprintln!("usage: fluid_mode SPEC M OUTDIR [REPS]");
+        std::process::exit(2);
+    }
+    let text = std::fs::read_to_string(&args[1]).expect("read spec");
+    let spec = spec::parse_fluid_spec(&text).unwrap_or_else(|e| panic!("{e}"));
+    let m: usize = args[2].parse().expect("mode index");
+    let out = std::path::PathBuf::from(&args[3]);
+    let reps: usize = args.get(4).map_or(20, |r| r.parse().expect("reps"));
+    std::fs::create_dir_all(&out).expect("out dir");
+    let problem = &spec.problem;
+    let (grid, coef, form) = chosen_form(problem).expect("the spec admits a form");
+    let k = 2.0 * std::f64::consts::PI * m as f64 / problem.x_period;
+    let mode = Mode::new(&grid, k);
+    // Lanczos (the engine's method), best of `reps`
+    let mut best = f64::INFINITY;
+    let mut value = 0.0;
+    let mut iterations = 0;
+    for _ in 0..reps {
+        let t = Instant::now();
+        let s = mode.sigma2(&form, &coef, spec.settings.lanczos_tolerance).expect("definite");
+        best = best.min(t.elapsed().as_secs_f64());
+        value = s.lambda_max;
+        iterations = s.ritz.iterations;
+    }
+    // the dense verified check at this grid
+    let t = Instant::now();
+    let bar = value * (1.0 + 1e-8) + 1e-300;
+    let (definite, inequality) = mode.verify(&form, &coef, bar);
+    let dense_check = t.elapsed().as_secs_f64();
+    let v = mode.form_matrix(&form);
+    let q = mode.generator_matrix(&form, &coef);
+    write_matrix(&out.join("V.f64"), &v).expect("write V");
+    write_matrix(&out.join("Q.f64"), &q).expect("write Q");
+    println!(
+        "{{\"n\": {}, \"k\": {k}, \"sigma2\": {value:.17e}, \"lanczos_ms\": {:.4}, \"lanczos_iterations\": {iterations}, \"dense_check_ms\": {:.2}, \"verified\": {}}}",
+        grid.n(),
+        best * 1e3,
+        dense_check * 1e3,
+        definite && inequality
+    );
+}
