@@ -83,4 +83,47 @@ proptest! {
             prop_assert!(spec::check_certificate_value(&cert.json).is_ok());
         }
     }
+
+    #[test]
+    fn random_fluid_expressions_never_panic(text in "[-+*/^()y0-9. e]{0,40}|(sin|cos|exp|sqrt|tan)\\([-+*/^y0-9. ]{0,20}\\)") {
+        if let Ok(e) = fluid::expr::parse(&text, &Default::default()) {
+            let d = e.derivative().derivative().derivative();
+            let _ = (e.eval(0.5), d.eval(-0.5));
+        }
+    }
+
+    #[test]
+    fn mutated_fluid_specs_never_panic(seed in any::<u64>(), replacement in fluid_leaf()) {
+        let mut v: Value = serde_json::from_str(SMALL_FLUID).unwrap();
+        let mut choice = seed;
+        mutate(&mut v, &mut choice, &replacement);
+        if let Ok(spec) = spec::fluid_spec_from_value(v) {
+            let cert = spec::certify_fluid(&spec);
+            prop_assert!(spec::check_certificate_value(&cert).is_ok(), "{}", cert);
+        }
+    }
+}
+
+/// A small fluid spec for the mutation test.
+const SMALL_FLUID: &str = r#"{"name": "t", "parameters": {"a": 0.3},
+  "fluid": {"model": "incompressible", "x_period": "2*pi", "y_interval": [0, "pi"], "boundary": "walls",
+            "shear_flow": "sin(y)", "noise": ["a*cos(y)", "0.1"], "ny": 16, "x_modes": 2},
+  "stopping": {"epsilon": 0.1, "delta": 0.001}}"#;
+
+fn fluid_leaf() -> impl Strategy<Value = Value> {
+    prop_oneof![
+        leaf(),
+        Just(Value::from("compressible")),
+        Just(Value::from("periodic")),
+        Just(Value::from("y^3 - y/4")),
+        Just(Value::from("exp(y)")),
+        Just(Value::from("1/(y - 1)")),
+        Just(Value::from("sqrt(y - 1)")),
+        Just(Value::from(1e-300)),
+        Just(Value::from(1e300)),
+        Just(Value::from(256)),
+        Just(Value::from(24)),
+        Just(serde_json::json!([0, 1e-12])),
+        Just(serde_json::json!(["-pi", "pi"])),
+    ]
 }

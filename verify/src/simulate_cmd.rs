@@ -76,6 +76,12 @@ fn cost_per_step(model: &Model) -> f64 {
 pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let text =
         std::fs::read_to_string(&args.spec).map_err(|e| bad(format!("{}: cannot read: {e}", args.spec.display())))?;
+    if serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| spec::is_fluid_spec(&v)) {
+        return Err(bad(format!(
+            "{}: $.fluid: `simulate` runs finite-dimensional specs; a fluid certificate's growth is checked against a Monte Carlo of the discretised SDE in tests/fluid.rs (fluid::simulate::ModeSde)",
+            args.spec.display()
+        )));
+    }
     let spec = spec::parse_spec(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let scheme = Scheme::from_name(&args.scheme)
         .ok_or_else(|| bad(format!("--scheme: '{}' is not 'lie' or 'heun'", args.scheme)))?;

@@ -42,6 +42,9 @@ pub const NY_RANGE: (usize, usize) = (16, 4096);
 /// Largest accepted number of x-modes.
 pub const MAX_X_MODES: usize = 2048;
 
+/// Largest accepted work of the dense verified checks (`2 x_modes ny^3 / 3`).
+pub const MAX_DENSE_FLOPS: f64 = 1e12;
+
 /// A parsed fluid spec.
 #[derive(Clone, Debug)]
 pub struct FluidSpec {
@@ -214,6 +217,19 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
     let x_modes = integer(required(f, "x_modes", &fpath)?, &kpath)?;
     if x_modes == 0 || x_modes > MAX_X_MODES {
         return Err(SpecError::new(kpath, format!("must be between 1 and {MAX_X_MODES}, got {x_modes}")));
+    }
+    // The dense verified check costs about n^3/3 multiply-adds per matrix,
+    // two matrices per mode: refuse work that would run for hours.
+    let n = ny as f64;
+    let flops = 2.0 * x_modes as f64 * n * n * n / 3.0;
+    if flops > MAX_DENSE_FLOPS {
+        return Err(SpecError::new(
+            kpath,
+            format!(
+                "x_modes = {x_modes} at ny = {ny} needs about {:.0e} floating-point operations for the dense verified checks (limit {MAX_DENSE_FLOPS:.0e}, roughly ten minutes on two cores): reduce x_modes or ny",
+                flops
+            ),
+        ));
     }
     let profile = Profile::new(u, noise, (a, b), boundary);
     // Profile checks up front so the error names the spec field.
