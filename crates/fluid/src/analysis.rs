@@ -197,6 +197,28 @@ pub struct FluidAnalysis {
     pub compressible: Option<CompressibleReport>,
 }
 
+impl FluidAnalysis {
+    /// A result with no Sigma^2 and no evidence beyond the verdict and reason.
+    fn without_certificate(verdict: FluidVerdict, reason: String, form: FormSummary, paper_bound: f64) -> Self {
+        FluidAnalysis {
+            verdict,
+            reason,
+            form,
+            sigma2: None,
+            sigma2_upper: None,
+            verification: "none",
+            modes: vec![],
+            convergence: vec![],
+            paper_bound,
+            paper_choice_sigma2: None,
+            shift_curve: vec![],
+            drift_residual: None,
+            instability: None,
+            compressible: None,
+        }
+    }
+}
+
 /// Bad input found while analysing (the spec layer maps these to JSON paths).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -538,19 +560,10 @@ fn inconclusive_or_unstable(
     };
     FluidAnalysis {
         verification: if verdict == FluidVerdict::LinearlyUnstable { "float" } else { "none" },
-        verdict,
-        reason,
-        form,
-        sigma2: None,
-        sigma2_upper: None,
-        modes: vec![],
-        convergence: vec![],
-        paper_bound,
         paper_choice_sigma2,
         shift_curve,
-        drift_residual: None,
         instability,
-        compressible: None,
+        ..FluidAnalysis::without_certificate(verdict, reason, form, paper_bound)
     }
 }
 
@@ -604,20 +617,8 @@ fn analyse_compressible(
         incompressible_sigma2,
     };
     let base = FluidAnalysis {
-        verdict: FluidVerdict::Inconclusive,
-        reason: String::new(),
-        form: summary.clone(),
-        sigma2: None,
-        sigma2_upper: None,
-        verification: "none",
-        modes: vec![],
-        convergence: vec![],
-        paper_bound,
-        paper_choice_sigma2: None,
-        shift_curve: vec![],
-        drift_residual: None,
-        instability: None,
         compressible: Some(compressible),
+        ..FluidAnalysis::without_certificate(FluidVerdict::Inconclusive, String::new(), summary.clone(), paper_bound)
     };
     let scale = u_abs.max(f64::MIN_POSITIVE);
     let offending: Vec<usize> =

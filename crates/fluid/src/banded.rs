@@ -85,19 +85,6 @@ impl SymBanded {
         }
     }
 
-    /// `D A D` for a diagonal `D` given by its entries: used for `L D L`
-    /// products (see [`SymBanded::sandwich`]).
-    pub fn scaled(&self, left: &[f64], right: &[f64]) -> Self {
-        let mut out = self.clone();
-        let b1 = self.b + 1;
-        for i in 0..self.n {
-            for d in 0..=self.b.min(i) {
-                out.band[i * b1 + d] *= left[i] * right[i - d];
-            }
-        }
-        out
-    }
-
     /// `A diag(w) A`, a symmetric matrix of bandwidth `2b`.
     pub fn sandwich(&self, w: &[f64]) -> Self {
         let b = self.b;
@@ -205,11 +192,6 @@ impl BandedCholesky {
     pub fn solve(&self, x: &mut [f64]) {
         self.solve_lower(x);
         self.solve_upper(x);
-    }
-
-    /// The smallest diagonal entry of `C` squared: a cheap indicator of conditioning.
-    pub fn min_pivot(&self) -> f64 {
-        (0..self.n).map(|i| self.c[i * (self.b + 1)].powi(2)).fold(f64::INFINITY, f64::min)
     }
 }
 

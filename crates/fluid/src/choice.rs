@@ -196,7 +196,8 @@ mod tests {
         // y^3 on [-1, 2]: U'' = 6y, zero at 0 with U = 0, w = y^2/6 >= 0 (Fjørtoft)
         assert!(matches!(choose(&profile("y^3", -1.0, 2.0)), Choice::Forced { sign, .. } if sign == 1.0));
         // y^3 + y/2 on [-1, 1]: c = 0, w = (y^3 + y/2)/(6y) = (y^2 + 1/2)/6 > 0
-        // and y^3 - y on [-1, 1]: w = (y^2 - 1)/6 <= 0 -> negative branch
+        assert!(matches!(choose(&profile("y^3 + y/2", -1.0, 1.0)), Choice::Forced { sign, .. } if sign == 1.0));
+        // y^3 - y on [-1, 1]: w = (y^2 - 1)/6 <= 0 -> negative branch
         assert!(matches!(choose(&profile("y^3 - y", -1.0, 1.0)), Choice::Forced { sign, .. } if sign == -1.0));
         // y^3 - y/4 on [-1,1]: w = (y^2 - 1/4)/6 changes sign
         assert!(matches!(choose(&profile("y^3 - y/4", -1.0, 1.0)), Choice::NoForm { .. }));

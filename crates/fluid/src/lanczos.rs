@@ -65,21 +65,7 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
         let steps = j + 1;
         let check = steps == m_max || steps % 8 == 0 || b <= 1e-300;
         if check {
-            let t = DMatrix::from_fn(steps, steps, |r, c| {
-                if r == c {
-                    alpha[r]
-                } else if r + 1 == c || c + 1 == r {
-                    beta[r.min(c)]
-                } else {
-                    0.0
-                }
-            });
-            let eig = SymmetricEigen::new(t);
-            let (imax, &theta) =
-                eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).expect("non-empty");
-            let scale = eig.eigenvalues.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-            let last_component = eig.eigenvectors[(steps - 1, imax)];
-            let residual = (b * last_component).abs();
+            let (_, theta, residual, scale) = top_ritz(&alpha, &beta, b);
             last = Ritz { value: theta, residual, iterations: steps, scale };
             if residual <= tol * scale.max(f64::MIN_POSITIVE) || b <= 1e-14 * scale.max(f64::MIN_POSITIVE) || steps == n
             {
@@ -157,21 +143,7 @@ pub fn largest_generalized_eigenvalue(
         let b = dot(&p, &vp).max(0.0).sqrt();
         let steps = j + 1;
         if steps == m_max || steps % 8 == 0 || b <= 1e-300 {
-            let t = DMatrix::from_fn(steps, steps, |r, c| {
-                if r == c {
-                    alpha[r]
-                } else if r + 1 == c || c + 1 == r {
-                    beta[r.min(c)]
-                } else {
-                    0.0
-                }
-            });
-            let eig = SymmetricEigen::new(t);
-            let (imax, &theta) =
-                eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).expect("non-empty");
-            let scale = eig.eigenvalues.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-            let residual = (b * eig.eigenvectors[(steps - 1, imax)]).abs();
-            let coefficients: Vec<f64> = eig.eigenvectors.column(imax).iter().copied().collect();
+            let (coefficients, theta, residual, scale) = top_ritz(&alpha, &beta, b);
             best = Some((coefficients, theta, residual, steps, scale));
             if residual <= tol * scale.max(f64::MIN_POSITIVE) || b <= 1e-14 * scale.max(f64::MIN_POSITIVE) || steps == n
             {
@@ -246,6 +218,28 @@ pub fn conjugate_gradients(
         }
     }
     Some(max_iter)
+}
+
+/// The top eigenpair of the Lanczos tridiagonal matrix (diagonal `alpha`,
+/// off-diagonal `beta`, one shorter) as `(eigenvector, theta, residual,
+/// scale)`: the residual `|b s_last|` of the Ritz pair, with `b` the next
+/// off-diagonal, and the largest Ritz value in magnitude.
+fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
+    let steps = alpha.len();
+    let t = DMatrix::from_fn(steps, steps, |r, c| {
+        if r == c {
+            alpha[r]
+        } else if r + 1 == c || c + 1 == r {
+            beta[r.min(c)]
+        } else {
+            0.0
+        }
+    });
+    let eig = SymmetricEigen::new(t);
+    let (imax, &theta) = eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).expect("non-empty");
+    let scale = eig.eigenvalues.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+    let residual = (b * eig.eigenvectors[(steps - 1, imax)]).abs();
+    (eig.eigenvectors.column(imax).iter().copied().collect(), theta, residual, scale)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

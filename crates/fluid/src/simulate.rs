@@ -26,6 +26,8 @@ type C = Complex<f64>;
 pub struct ModeSde {
     k: f64,
     v: DMatrix<f64>,
+    /// `v` as a complex matrix, for `V(w) = w^H V w` without a conversion per call.
+    vc: DMatrix<C>,
     r: DMatrix<f64>,
     eta: Vec<Vec<f64>>,
 }
@@ -47,13 +49,14 @@ impl ModeSde {
     /// The SDE of mode `k` with the form `V` (dense, vorticity coordinates).
     pub fn new(grid: &YGrid, coef: &Coefficients, form: &Form, k: f64) -> Self {
         let mode = Mode::new(grid, k);
-        ModeSde { k, v: mode.form_matrix(form), r: mode.drift_matrix(coef), eta: coef.eta.clone() }
+        let v = mode.form_matrix(form);
+        let vc = v.map(|x| C::new(x, 0.0));
+        ModeSde { k, v, vc, r: mode.drift_matrix(coef), eta: coef.eta.clone() }
     }
 
     /// `V(w) = w^H V w`.
     pub fn energy(&self, w: &DVector<C>) -> f64 {
-        let vw = self.v.map(|x| C::new(x, 0.0)) * w;
-        w.dotc(&vw).re
+        w.dotc(&(&self.vc * w)).re
     }
 
     /// `exp(-ik R h)` from the `V`-orthonormal eigenbasis of `R`.
@@ -93,21 +96,22 @@ impl ModeSde {
             .map(|p| {
                 let mut rng = simulate::path_rng(seed, p as u64);
                 let mut x = x0.clone();
+                let mut y = DVector::<C>::zeros(n);
+                let mut dws = vec![0.0; self.eta.len()];
                 let mut out = Vec::with_capacity(records);
                 let mut drift = 0.0f64;
                 let sq = dt.sqrt();
+                let (one, zero) = (C::new(1.0, 0.0), C::new(0.0, 0.0));
                 for s in 1..=steps {
-                    x = &half * x;
-                    let dws: Vec<f64> = self
-                        .eta
-                        .iter()
-                        .map(|_| sq * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng))
-                        .collect();
+                    y.gemv(one, &half, &x, zero);
+                    for dw in dws.iter_mut() {
+                        *dw = sq * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
+                    }
                     for a in 0..n {
                         let phase: f64 = self.eta.iter().zip(&dws).map(|(e, dw)| e[a] * dw).sum();
-                        x[a] *= C::from_polar(1.0, -self.k * phase);
+                        y[a] *= C::from_polar(1.0, -self.k * phase);
                     }
-                    x = &half * x;
+                    x.gemv(one, &half, &y, zero);
                     if s % record_every == 0 {
                         let e = self.energy(&x);
                         drift = drift.max((e - v0).abs() / v0);
@@ -159,7 +163,7 @@ impl ModeSde {
         };
         let x0 = DVector::from_iterator(n, w0.iter().map(|x| C::new(*x, 0.0)));
         let mut s = &x0 * x0.adjoint();
-        let vc = self.v.map(|x| C::new(x, 0.0));
+        let vc = &self.vc;
         let scale = a_tilde.norm().max(1.0);
         let sub = ((t_end * scale / samples as f64) / 0.01).ceil().max(1.0) as usize;
         let h = t_end / (samples * sub) as f64;
@@ -172,7 +176,7 @@ impl ModeSde {
                 let k4 = rhs(&(&s + &k3 * C::new(h, 0.0)));
                 s += (k1 + k2 * C::new(2.0, 0.0) + k3 * C::new(2.0, 0.0) + k4) * C::new(h / 6.0, 0.0);
             }
-            out.push((j as f64 * t_end / samples as f64, (&vc * &s).trace().re));
+            out.push((j as f64 * t_end / samples as f64, (vc * &s).trace().re));
         }
         out
     }

@@ -44,7 +44,8 @@ fn matrix(m: &Matrix) -> Value {
     )
 }
 
-fn float(x: f64) -> Value {
+/// A float as JSON (non-finite values as strings).
+pub(crate) fn float_json(x: f64) -> Value {
     if x.is_finite() {
         Value::from(x)
     } else {
@@ -59,7 +60,7 @@ fn float(x: f64) -> Value {
 }
 
 fn complex(z: &Complex<f64>) -> Value {
-    obj! { "re" => float(z.re), "im" => float(z.im) }
+    obj! { "re" => float_json(z.re), "im" => float_json(z.im) }
 }
 
 /// The verification level of a verdict.
@@ -115,7 +116,7 @@ fn choice_json(ch: &casimir::CasimirChoice) -> Value {
         "family_parameters" => rationals(&ch.family_parameters),
         "multipliers" => rationals(&ch.multipliers),
         "M" => matrix(&ch.m),
-        "relative_margin" => float(ch.relative_margin),
+        "relative_margin" => float_json(ch.relative_margin),
     }
 }
 
@@ -152,7 +153,7 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
     put("level", Value::from(level));
     put("checks", checks);
     if let Some(s2) = a.sigma2() {
-        put("sigma2", float(s2));
+        put("sigma2", float_json(s2));
     }
     if let (Some(stop), Some(s2)) = (spec.stopping, a.sigma2()) {
         let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
@@ -161,7 +162,7 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
             obj! {
                 "epsilon" => stop.epsilon,
                 "delta" => stop.delta,
-                "T" => st.time().map_or(Value::String("infinity".into()), float),
+                "T" => st.time().map_or(Value::String("infinity".into()), float_json),
                 "bound" => "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta",
             },
         );
@@ -233,7 +234,7 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
             obj! {
                 "eigenvalue" => complex(&inst.eigenvalue),
                 "eigenvector" => Value::Array(inst.eigenvector.iter().map(complex).collect()),
-                "tolerance" => float(inst.tolerance),
+                "tolerance" => float_json(inst.tolerance),
             },
         );
     }
@@ -243,8 +244,8 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
         put(
             "search",
             obj! {
-                "best_positive_margin" => float(*best_positive_margin),
-                "best_negative_margin" => float(*best_negative_margin),
+                "best_positive_margin" => float_json(*best_positive_margin),
+                "best_negative_margin" => float_json(*best_negative_margin),
                 "restricted_dimension" => *restricted_dimension as u64,
             },
         );
@@ -257,16 +258,16 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
         }
         let mut opt = Map::new();
         opt.insert("first_definite_choice".into(), choice_json(&s.first_choice));
-        opt.insert("first_definite_sigma2".into(), float(s.first_sigma2));
+        opt.insert("first_definite_sigma2".into(), float_json(s.first_sigma2));
         match &s.optimum {
             Some(o) => {
                 opt.insert("optimised".into(), Value::Bool(true));
-                opt.insert("infimum".into(), float(o.infimum));
+                opt.insert("infimum".into(), float_json(o.infimum));
                 opt.insert("attained".into(), Value::Bool(o.attained));
                 opt.insert("within_tolerance".into(), Value::Bool(o.within_tolerance));
                 opt.insert("q_depends_on_M".into(), Value::Bool(o.q_depends_on_m));
                 opt.insert("method".into(), Value::from(o.method));
-                opt.insert("tolerance".into(), float(spec.settings.pipeline.optimisation.tolerance));
+                opt.insert("tolerance".into(), float_json(spec.settings.pipeline.optimisation.tolerance));
             }
             None => {
                 opt.insert("optimised".into(), Value::Bool(false));
@@ -285,9 +286,9 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
         put(
             "growth",
             obj! {
-                "largest_generalized_eigenvalue" => float(s.growth.largest_eigenvalue),
-                "generalized_eigenvalues" => Value::Array(s.growth.eigenvalues.iter().map(|x| float(*x)).collect()),
-                "fastest_direction" => Value::Array(s.growth.direction.iter().map(|x| float(*x)).collect()),
+                "largest_generalized_eigenvalue" => float_json(s.growth.largest_eigenvalue),
+                "generalized_eigenvalues" => Value::Array(s.growth.eigenvalues.iter().map(|x| float_json(*x)).collect()),
+                "fastest_direction" => Value::Array(s.growth.direction.iter().map(|x| float_json(*x)).collect()),
             },
         );
     }

@@ -113,3 +113,16 @@ pub(crate) fn expression_text(v: &Value, path: &str) -> Result<String> {
         )),
     }
 }
+
+/// The spec's `name` (a non-empty string), after checking that an optional
+/// `description` is a string.
+pub(crate) fn read_name(map: &Map<String, Value>, root: &str) -> Result<String> {
+    let name = as_str(required(map, "name", root)?, &child(root, "name"))?.to_string();
+    if name.trim().is_empty() {
+        return Err(SpecError::new(child(root, "name"), "must not be empty"));
+    }
+    if let Some(d) = map.get("description") {
+        as_str(d, &child(root, "description"))?;
+    }
+    Ok(name)
+}

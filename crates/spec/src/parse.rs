@@ -2,8 +2,8 @@
 //! error named by its JSON path.
 
 use crate::json::{
-    as_array, as_object, as_str, check_keys, child, expression_text, float, index, index_value, rational, required,
-    type_name, Result, SpecError,
+    as_array, as_object, as_str, check_keys, child, expression_text, float, index, index_value, rational, read_name,
+    required, type_name, Result, SpecError,
 };
 use crate::settings::EngineSettings;
 use algebra::{builtin, builtin_names, AlgebraError, LieAlgebra};
@@ -108,13 +108,7 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
     let root = "$";
     let map = as_object(&value, root)?;
     check_keys(map, TOP_KEYS, root)?;
-    let name = as_str(required(map, "name", root)?, &child(root, "name"))?.to_string();
-    if name.trim().is_empty() {
-        return Err(SpecError::new(child(root, "name"), "must not be empty"));
-    }
-    if let Some(d) = map.get("description") {
-        as_str(d, &child(root, "description"))?;
-    }
+    let name = read_name(map, root)?;
     let settings = EngineSettings::from_json(map.get("settings"), &child(root, "settings"))?;
 
     // Algebra.
