@@ -9,7 +9,7 @@ use std::sync::Once;
 
 static FONT: Once = Once::new();
 
-fn register_font() {
+pub(crate) fn register_font() {
     FONT.call_once(|| {
         let bytes: &'static [u8] = include_bytes!("../assets/DejaVuSansMono.ttf");
         // A failure here leaves plotters without a font; the charts would
@@ -18,7 +18,7 @@ fn register_font() {
     });
 }
 
-type DrawResult = Result<(), Box<dyn std::error::Error>>;
+pub(crate) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 
 /// A time-by-value density (grey shades, normalised per time column), the
 /// mean path (black), and a dashed vertical line at the stopping time.
@@ -53,7 +53,7 @@ pub struct GrowthChart<'a> {
     pub stopping_time: Option<f64>,
 }
 
-fn palette(i: usize) -> RGBColor {
+pub(crate) fn palette(i: usize) -> RGBColor {
     [RGBColor(0, 0, 0), RGBColor(200, 30, 30), RGBColor(30, 90, 200), RGBColor(20, 140, 60), RGBColor(150, 60, 170)]
         [i % 5]
 }

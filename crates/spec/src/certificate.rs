@@ -63,50 +63,59 @@ fn complex(z: &Complex<f64>) -> Value {
     obj! { "re" => float_json(z.re), "im" => float_json(z.im) }
 }
 
-/// The verification level of a verdict.
-///
-/// At this stage `P`'s definiteness and all residuals are exact (rational),
-/// while `Sigma^2` and the unstable eigenvalue come from floating-point
-/// eigensolvers: the level is `numerical`, and `checks` says which part is
-/// exact.
+/// The verification level of a verdict and what each part rests on.
 fn level_and_checks(a: &Analysis) -> (&'static str, Value) {
+    (verification_level(a), checks(a))
+}
+
+/// The verification level of an analysis: `exact` when the verdict is
+/// proved in rational arithmetic (the stable `Sigma^2` bound, the Sturm
+/// proof of instability, the residuals of the two early verdicts), else
+/// `numerical`.
+pub fn verification_level(a: &Analysis) -> &'static str {
+    let exact = match a.verdict {
+        Verdict::Stable => a.stable.as_ref().is_some_and(|s| s.exact.is_some()),
+        Verdict::LinearlyUnstable => matches!(a.spectral_proof, Some(generator::SpectralProof::Unstable { .. })),
+        Verdict::NotAnEquilibrium | Verdict::NoiseIncompatible => true,
+        Verdict::Inconclusive => false,
+    };
+    if exact {
+        "exact"
+    } else {
+        "numerical"
+    }
+}
+
+/// What each part of the verdict rests on.
+fn checks(a: &Analysis) -> Value {
     match a.verdict {
         Verdict::Stable => match a.stable.as_ref().and_then(|s| s.exact.as_ref()) {
-            Some(e) => (
-                "exact",
-                obj! {
-                    "P_definite" => "exact (rational LDL^T)",
-                    "first_variation" => "exact (rational)",
-                    "drift_residual" => "exact (rational)",
-                    "sigma2" => if e.sharp {
-                        "exact: sigma2 * sP - sQ is positive semidefinite and singular (sigma2 = lambda_max)"
-                    } else {
-                        "exact: sigma2 * sP - sQ is positive semidefinite (sigma2 is an upper bound within 1e-10 of lambda_max)"
-                    },
+            Some(e) => obj! {
+                "P_definite" => "exact (rational LDL^T)",
+                "first_variation" => "exact (rational)",
+                "drift_residual" => "exact (rational)",
+                "sigma2" => if e.sharp {
+                    "exact: sigma2 * sP - sQ is positive semidefinite and singular (sigma2 = lambda_max)"
+                } else {
+                    "exact: sigma2 * sP - sQ is positive semidefinite (sigma2 is an upper bound within 1e-10 of lambda_max)"
                 },
-            ),
-            None => (
-                "numerical",
-                obj! {
-                    "P_definite" => "exact (rational LDL^T)",
-                    "drift_residual" => "exact (rational)",
-                    "sigma2" => "floating point only (exact certification switched off, or it failed at every candidate)",
-                },
-            ),
+            },
+            None => obj! {
+                "P_definite" => "exact (rational LDL^T)",
+                "drift_residual" => "exact (rational)",
+                "sigma2" => "floating point only (exact certification switched off, or it failed at every candidate)",
+            },
         },
         Verdict::LinearlyUnstable => match a.spectral_proof {
-            Some(generator::SpectralProof::Unstable { .. }) => (
-                "exact",
-                obj! {
-                    "instability" => "exact: Sturm sequence on the characteristic polynomial of A",
-                    "eigenpair" => "floating point (faer), for information",
-                },
-            ),
-            _ => ("numerical", json!({ "eigenvalue": "floating point (faer), real part above tolerance" })),
+            Some(generator::SpectralProof::Unstable { .. }) => obj! {
+                "instability" => "exact: Sturm sequence on the characteristic polynomial of A",
+                "eigenpair" => "floating point (faer), for information",
+            },
+            _ => json!({ "eigenvalue": "floating point (faer), real part above tolerance" }),
         },
-        Verdict::NotAnEquilibrium => ("exact", json!({ "equilibrium_residual": "exact (rational)" })),
-        Verdict::NoiseIncompatible => ("exact", json!({ "noise_residuals": "exact (rational)" })),
-        Verdict::Inconclusive => ("numerical", json!({ "search": "floating point search; no claim is made" })),
+        Verdict::NotAnEquilibrium => json!({ "equilibrium_residual": "exact (rational)" }),
+        Verdict::NoiseIncompatible => json!({ "noise_residuals": "exact (rational)" }),
+        Verdict::Inconclusive => json!({ "search": "floating point search; no claim is made" }),
     }
 }
 

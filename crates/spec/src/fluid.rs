@@ -59,9 +59,11 @@ pub struct FluidSpec {
     pub stopping: Option<Stopping>,
     /// Numerical settings.
     pub settings: FluidSettings,
+    /// The optional `sweep` section.
+    pub sweep: crate::sweep::SweepSection,
 }
 
-const TOP_KEYS: &[&str] = &["name", "description", "parameters", "fluid", "stopping", "settings"];
+const TOP_KEYS: &[&str] = &["name", "description", "parameters", "fluid", "stopping", "settings", "sweep"];
 const FLUID_KEYS: &[&str] =
     &["model", "x_period", "y_interval", "boundary", "shear_flow", "sound_speed", "noise", "ny", "x_modes"];
 
@@ -234,8 +236,10 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
         Some(v) => Some(crate::parse::read_stopping(v, &child(root, "stopping"))?),
     };
     let settings = read_settings(map.get("settings"), &child(root, "settings"))?;
+    let names: Vec<String> = params.keys().cloned().collect();
+    let sweep = crate::sweep::read_sweep_section(map.get("sweep"), &child(root, "sweep"), &names)?;
     let problem = FluidProblem { model, profile, x_period, ny, x_modes };
-    Ok(FluidSpec { name, raw: value, problem, stopping, settings })
+    Ok(FluidSpec { name, raw: value, problem, stopping, settings, sweep })
 }
 
 fn profile_error(e: ProfileError, fpath: &str) -> SpecError {

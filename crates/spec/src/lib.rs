@@ -33,8 +33,11 @@ mod json;
 mod parse;
 mod pretty;
 mod settings;
+mod sweep;
 
-pub use certificate::{certificate_json, certify, spec_digest, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION};
+pub use certificate::{
+    certificate_json, certify, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
+};
 pub use check::{check_certificate, check_certificate_value, CheckError, CheckReport, FLOAT_TOLERANCE};
 pub use claims::{verify_claims, ClaimFailure};
 pub use fluid::{
@@ -45,6 +48,7 @@ pub use json::SpecError;
 pub use parse::{parse_spec, spec_from_value, CasimirSource, Spec, Stopping, MAX_NOISE_FIELDS};
 pub use pretty::to_pretty_json;
 pub use settings::EngineSettings;
+pub use sweep::{to_f64, unknown_parameter, Annotation, ParamRange, SweepSection, MAX_RANGE_COUNT};
 
 /// A spec of either kind: a Lie–Poisson system (finite-dimensional) or a
 /// shear flow (`"fluid": {...}`).
@@ -62,6 +66,22 @@ impl AnySpec {
         match self {
             AnySpec::Lie(s) => &s.name,
             AnySpec::Fluid(s) => &s.name,
+        }
+    }
+
+    /// The optional `sweep` section.
+    pub fn sweep(&self) -> &SweepSection {
+        match self {
+            AnySpec::Lie(s) => &s.sweep,
+            AnySpec::Fluid(s) => &s.sweep,
+        }
+    }
+
+    /// The spec as given.
+    pub fn raw(&self) -> &serde_json::Value {
+        match self {
+            AnySpec::Lie(s) => &s.raw,
+            AnySpec::Fluid(s) => &s.raw,
         }
     }
 

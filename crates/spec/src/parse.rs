@@ -6,11 +6,13 @@ use crate::json::{
     required, type_name, Result, SpecError,
 };
 use crate::settings::EngineSettings;
+use crate::sweep::{read_sweep_section, SweepSection};
 use algebra::{builtin, builtin_names, AlgebraError, LieAlgebra};
 use casimir::{discover_casimirs, DiscoveryReport, System, SystemError};
 use exact::{parse_expression, Limits, Poly, Rational, Symbols};
 use serde_json::Value;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// Where a Casimir came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,6 +66,9 @@ pub struct Spec {
     pub stopping: Option<Stopping>,
     /// Settings in force.
     pub settings: EngineSettings,
+    /// The optional `sweep` section (ranges, boundaries, reference constants).
+    pub sweep: SweepSection,
+    shape: Arc<Shape>,
 }
 
 const TOP_KEYS: &[&str] = &[
@@ -78,6 +83,7 @@ const TOP_KEYS: &[&str] = &[
     "noise",
     "stopping",
     "settings",
+    "sweep",
 ];
 
 /// Largest number of noise fields accepted.
@@ -105,8 +111,130 @@ pub fn parse_spec(text: &str) -> Result<Spec> {
 
 /// Parse a spec from a JSON value.
 pub fn spec_from_value(value: Value) -> Result<Spec> {
+    let shape = read_shape(&value)?;
+    let system = build_system(&shape, &shape.parameters)?;
+    let parameters = shape.parameters.clone();
+    Ok(Spec {
+        name: shape.name.clone(),
+        raw: value,
+        system,
+        casimir_source: shape.casimir_source,
+        discovery: shape.discovery.clone(),
+        builtin: shape.builtin.clone(),
+        parameters,
+        stopping: shape.stopping,
+        settings: shape.settings.clone(),
+        sweep: shape.sweep.clone(),
+        shape: Arc::new(shape),
+    })
+}
+
+impl Spec {
+    /// The system at other parameter values (every parameter of the spec
+    /// must be present in `parameters`). The expressions are re-read with
+    /// the new values and the system re-validated; the algebra, the settings
+    /// and discovered Casimirs are reused. Errors name the JSON path, as
+    /// when parsing.
+    ///
+    /// ```
+    /// let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
+    /// let spec = spec::parse_spec(&text).unwrap();
+    /// let mut p = spec.parameters.clone();
+    /// p.insert("I1".into(), exact::parse_number("0").unwrap());
+    /// let err = spec.system_with(&p).unwrap_err();
+    /// assert_eq!(err.path, "$.hamiltonian"); // Pi1^2/(2*I1) divides by zero
+    /// ```
+    pub fn system_with(&self, parameters: &BTreeMap<String, Rational>) -> Result<System> {
+        build_system(&self.shape, parameters)
+    }
+
+    /// The spec with some parameters changed: the system, the parameters
+    /// and the embedded JSON (`raw`) are all updated, so the result
+    /// certifies and re-checks like a spec read from a file.
+    ///
+    /// ```
+    /// let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
+    /// let spec = spec::parse_spec(&text).unwrap();
+    /// let two = exact::parse_number("2").unwrap();
+    /// let changed = spec.with_parameters(&[("I3".to_string(), two)]).unwrap();
+    /// assert_eq!(changed.raw["parameters"]["I3"], "2");
+    /// assert!(spec.with_parameters(&[("J".to_string(), exact::parse_number("1").unwrap())]).is_err());
+    /// ```
+    pub fn with_parameters(&self, changes: &[(String, Rational)]) -> Result<Spec> {
+        let mut parameters = self.parameters.clone();
+        let mut raw = self.raw.clone();
+        for (name, value) in changes {
+            if !parameters.contains_key(name) {
+                let names: Vec<String> = parameters.keys().cloned().collect();
+                return Err(SpecError::new("$.parameters", crate::sweep::unknown_parameter(name, &names)));
+            }
+            parameters.insert(name.clone(), value.clone());
+            raw["parameters"][name.as_str()] = Value::String(value.to_string());
+        }
+        let system = self.system_with(&parameters)?;
+        Ok(Spec { raw, system, parameters, ..self.clone() })
+    }
+}
+
+/// Everything read from a spec that does not depend on the parameter
+/// values, so that a sweep reads the JSON once.
+#[derive(Debug)]
+struct Shape {
+    name: String,
+    settings: EngineSettings,
+    algebra: LieAlgebra,
+    parameters: BTreeMap<String, Rational>,
+    hamiltonian: Expr,
+    casimirs: Casimirs,
+    first_integrals: Vec<Expr>,
+    equilibrium: Vec<Expr>,
+    noise: Vec<Vec<Expr>>,
+    stopping: Option<Stopping>,
+    casimir_source: CasimirSource,
+    discovery: Option<DiscoveryReport>,
+    builtin: Option<String>,
+    sweep: SweepSection,
+}
+
+/// Casimirs as expressions (re-read per parameter set) or fixed polynomials.
+#[derive(Debug)]
+enum Casimirs {
+    Given(Vec<Expr>),
+    Fixed(Vec<Poly>),
+}
+
+/// An expression of the spec, with the names it mentions and its polynomial
+/// at the spec's own parameter values, kept once computed: a sweep that does
+/// not change any parameter an expression uses reuses it instead of parsing
+/// again.
+#[derive(Debug)]
+struct Expr {
+    text: String,
+    names: Vec<String>,
+    base: std::sync::OnceLock<Poly>,
+}
+
+impl Expr {
+    fn new(text: String) -> Expr {
+        // Every maximal run of letters, digits and '_' (and the run without
+        // its leading digits): a superset of the identifiers the parser can
+        // see, so a parameter an expression uses is never missed.
+        let mut names = Vec::new();
+        for run in text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')) {
+            let stripped = run.trim_start_matches(|c: char| c.is_ascii_digit());
+            for n in [run, stripped] {
+                if !n.is_empty() && !names.iter().any(|m: &String| m == n) {
+                    names.push(n.to_string());
+                }
+            }
+        }
+        Expr { text, names, base: std::sync::OnceLock::new() }
+    }
+}
+
+fn read_shape(value: &Value) -> Result<Shape> {
     let root = "$";
-    let map = as_object(&value, root)?;
+    let map = as_object(value, root)?;
     check_keys(map, TOP_KEYS, root)?;
     let name = read_name(map, root)?;
     let settings = EngineSettings::from_json(map.get("settings"), &child(root, "settings"))?;
@@ -116,12 +244,6 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
     let (algebra, builtin_casimirs, builtin_name) = read_algebra(required(map, "algebra", root)?, &algebra_path)?;
     let n = algebra.dim();
 
-    // Parameters.
-    // Bounded so that derivatives of every expression stay cheap (a Hessian
-    // costs dim^2 passes over the terms): degree 16 and 5000 terms are far
-    // beyond mechanical Hamiltonians and Casimirs.
-    let limits = Limits { max_degree: 16, max_terms: 5000, ..Limits::default() };
-    let mut symbols = Symbols::new(algebra.coordinates()).with_limits(limits);
     let mut parameters = BTreeMap::new();
     if let Some(p) = map.get("parameters") {
         let ppath = child(root, "parameters");
@@ -136,34 +258,17 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
             if algebra.coordinates().contains(key) {
                 return Err(SpecError::new(kpath, format!("parameter '{key}' has the name of a coordinate")));
             }
-            let r = rational(v, &kpath)?;
-            symbols.set_parameter(key, r.clone());
-            parameters.insert(key.clone(), r);
+            parameters.insert(key.clone(), rational(v, &kpath)?);
         }
     }
-    let poly = |v: &Value, path: &str| -> Result<Poly> {
-        let text = expression_text(v, path)?;
-        parse_expression(&text, &symbols).map_err(|e| SpecError::new(path, format!("in '{text}': {e}")))
-    };
-    let constant = |v: &Value, path: &str| -> Result<Rational> {
-        let p = poly(v, path)?;
-        p.constant_value()
-            .ok_or_else(|| SpecError::new(path, "must be a constant (it may use parameters but not coordinates)"))
-    };
-
-    let hpath = child(root, "hamiltonian");
-    let hamiltonian = poly(required(map, "hamiltonian", root)?, &hpath)?;
-
-    let list = |key: &str| -> Result<Option<Vec<(Poly, String)>>> {
+    let hamiltonian = Expr::new(expression_text(required(map, "hamiltonian", root)?, &child(root, "hamiltonian"))?);
+    let list = |key: &str| -> Result<Option<Vec<Expr>>> {
         let Some(v) = map.get(key) else { return Ok(None) };
         let path = child(root, key);
         as_array(v, &path)?
             .iter()
             .enumerate()
-            .map(|(i, e)| {
-                let p = index(&path, i);
-                poly(e, &p).map(|x| (x, p))
-            })
+            .map(|(i, e)| expression_text(e, &index(&path, i)).map(Expr::new))
             .collect::<Result<Vec<_>>>()
             .map(Some)
     };
@@ -178,7 +283,11 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
             format!("expected {n} components (the algebra's dimension), got {}", eq.len()),
         ));
     }
-    let equilibrium = eq.iter().enumerate().map(|(i, v)| constant(v, &index(&epath, i))).collect::<Result<Vec<_>>>()?;
+    let equilibrium = eq
+        .iter()
+        .enumerate()
+        .map(|(i, v)| expression_text(v, &index(&epath, i)).map(Expr::new))
+        .collect::<Result<Vec<_>>>()?;
 
     let npath = child(root, "noise");
     let noise_list = as_array(required(map, "noise", root)?, &npath)?;
@@ -195,20 +304,25 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
                 format!("expected {n} components (the algebra's dimension), got {}", comps.len()),
             ));
         }
-        noise.push(comps.iter().enumerate().map(|(j, v)| constant(v, &index(&fpath, j))).collect::<Result<Vec<_>>>()?);
+        noise.push(
+            comps
+                .iter()
+                .enumerate()
+                .map(|(j, v)| expression_text(v, &index(&fpath, j)).map(Expr::new))
+                .collect::<Result<Vec<_>>>()?,
+        );
     }
 
     let stopping = match map.get("stopping") {
         None => None,
         Some(v) => Some(read_stopping(v, &child(root, "stopping"))?),
     };
+    let names: Vec<String> = parameters.keys().cloned().collect();
+    let sweep = read_sweep_section(map.get("sweep"), &child(root, "sweep"), &names)?;
 
     // Casimirs: given, builtin, or discovered.
-    let (casimirs, casimir_paths, casimir_source, discovery) = match given_casimirs {
-        Some(list) => {
-            let (polys, paths): (Vec<_>, Vec<_>) = list.into_iter().unzip();
-            (polys, paths, CasimirSource::Spec, None)
-        }
+    let (casimirs, casimir_source, discovery) = match given_casimirs {
+        Some(list) => (Casimirs::Given(list), CasimirSource::Spec, None),
         None => match builtin_casimirs {
             Some(texts) => {
                 let s = Symbols::new(algebra.coordinates());
@@ -219,44 +333,120 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
                             .map_err(|e| SpecError::new(&algebra_path, format!("builtin Casimir '{t}': {e}")))
                     })
                     .collect::<Result<Vec<_>>>()?;
-                let paths = vec![algebra_path.clone(); polys.len()];
-                (polys, paths, CasimirSource::Builtin, None)
+                (Casimirs::Fixed(polys), CasimirSource::Builtin, None)
             }
             None => {
                 let report = discover_casimirs(&algebra, settings.discovery_degree, settings.discovery_max_unknowns);
-                let paths = vec![child(root, "casimirs"); report.casimirs.len()];
-                (report.casimirs.clone(), paths, CasimirSource::Discovered, Some(report))
+                (Casimirs::Fixed(report.casimirs.clone()), CasimirSource::Discovered, Some(report))
             }
         },
     };
-    let fi_paths: Vec<String> = (0..first_integrals.len()).map(|i| index(&child(root, "first_integrals"), i)).collect();
-    let first_integrals: Vec<Poly> = first_integrals.into_iter().map(|(p, _)| p).collect();
-
-    let system =
-        System::new(algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| match &e {
-            SystemError::NotACasimir { index, .. } => SpecError::new(&casimir_paths[*index], e.to_string()),
-            SystemError::ConstantQuantity { what: "casimir", index } => {
-                SpecError::new(&casimir_paths[*index], e.to_string())
-            }
-            SystemError::NotConserved { index, .. } | SystemError::ConstantQuantity { index, .. } => {
-                SpecError::new(&fi_paths[*index], e.to_string())
-            }
-            _ => SpecError::new(root, e.to_string()),
-        })?;
-    Ok(Spec {
+    Ok(Shape {
         name,
-        raw: value.clone(),
-        system,
+        settings,
+        algebra,
+        parameters,
+        hamiltonian,
+        casimirs,
+        first_integrals,
+        equilibrium,
+        noise,
+        stopping,
         casimir_source,
         discovery,
         builtin: builtin_name,
-        parameters,
-        stopping,
-        settings,
+        sweep,
     })
 }
 
-fn is_identifier(s: &str) -> bool {
+/// Read the expressions at the given parameter values and validate the system.
+fn build_system(shape: &Shape, parameters: &BTreeMap<String, Rational>) -> Result<System> {
+    let root = "$";
+    // Bounded so that derivatives of every expression stay cheap (a Hessian
+    // costs dim^2 passes over the terms): degree 16 and 5000 terms are far
+    // beyond mechanical Hamiltonians and Casimirs.
+    let limits = Limits { max_degree: 16, max_terms: 5000, ..Limits::default() };
+    let mut symbols = Symbols::new(shape.algebra.coordinates()).with_limits(limits);
+    for (name, value) in parameters {
+        if !shape.parameters.contains_key(name) {
+            let names: Vec<String> = shape.parameters.keys().cloned().collect();
+            return Err(SpecError::new(child(root, "parameters"), crate::sweep::unknown_parameter(name, &names)));
+        }
+        symbols.set_parameter(name, value.clone());
+    }
+    if let Some(missing) = shape.parameters.keys().find(|k| !parameters.contains_key(*k)) {
+        return Err(SpecError::new(child(root, "parameters"), format!("parameter '{missing}' has no value")));
+    }
+    let poly = |e: &Expr, path: &str| -> Result<Poly> {
+        let unchanged = e.names.iter().all(|n| parameters.get(n) == shape.parameters.get(n));
+        if unchanged {
+            if let Some(p) = e.base.get() {
+                return Ok(p.clone());
+            }
+        }
+        let text = &e.text;
+        let p = parse_expression(text, &symbols).map_err(|err| SpecError::new(path, format!("in '{text}': {err}")))?;
+        if unchanged {
+            // Another thread may have set it first: the values are equal.
+            let _ = e.base.set(p.clone());
+        }
+        Ok(p)
+    };
+    let constant = |text: &Expr, path: &str| -> Result<Rational> {
+        let p = poly(text, path)?;
+        p.constant_value()
+            .ok_or_else(|| SpecError::new(path, "must be a constant (it may use parameters but not coordinates)"))
+    };
+    let hamiltonian = poly(&shape.hamiltonian, &child(root, "hamiltonian"))?;
+    let cpath = child(root, "casimirs");
+    let casimirs = match &shape.casimirs {
+        Casimirs::Given(texts) => {
+            texts.iter().enumerate().map(|(i, t)| poly(t, &index(&cpath, i))).collect::<Result<Vec<_>>>()?
+        }
+        Casimirs::Fixed(polys) => polys.clone(),
+    };
+    let fpath = child(root, "first_integrals");
+    let first_integrals = shape
+        .first_integrals
+        .iter()
+        .enumerate()
+        .map(|(i, t)| poly(t, &index(&fpath, i)))
+        .collect::<Result<Vec<_>>>()?;
+    let epath = child(root, "equilibrium");
+    let equilibrium = shape
+        .equilibrium
+        .iter()
+        .enumerate()
+        .map(|(i, t)| constant(t, &index(&epath, i)))
+        .collect::<Result<Vec<_>>>()?;
+    let npath = child(root, "noise");
+    let noise = shape
+        .noise
+        .iter()
+        .enumerate()
+        .map(|(i, field)| {
+            let p = index(&npath, i);
+            field.iter().enumerate().map(|(j, t)| constant(t, &index(&p, j))).collect::<Result<Vec<_>>>()
+        })
+        .collect::<Result<Vec<_>>>()?;
+
+    let casimir_path = |i: usize| match shape.casimirs {
+        Casimirs::Given(_) => index(&cpath, i),
+        Casimirs::Fixed(_) if shape.casimir_source == CasimirSource::Builtin => child(root, "algebra"),
+        Casimirs::Fixed(_) => cpath.clone(),
+    };
+    System::new(shape.algebra.clone(), hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| match &e
+    {
+        SystemError::NotACasimir { index, .. } => SpecError::new(casimir_path(*index), e.to_string()),
+        SystemError::ConstantQuantity { what: "casimir", index } => SpecError::new(casimir_path(*index), e.to_string()),
+        SystemError::NotConserved { index: i, .. } | SystemError::ConstantQuantity { index: i, .. } => {
+            SpecError::new(index(&fpath, *i), e.to_string())
+        }
+        _ => SpecError::new(root, e.to_string()),
+    })
+}
+
+pub(crate) fn is_identifier(s: &str) -> bool {
     let mut c = s.chars();
     matches!(c.next(), Some(x) if x.is_ascii_alphabetic() || x == '_')
         && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
