@@ -82,6 +82,19 @@ pub(crate) enum Failure {
     Failed(String),
 }
 
+/// A progress bar on stderr when it is a terminal: `{pos}/{len} <unit>`.
+pub(crate) fn progress_bar(total: u64, template: &str) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(total);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
+        bar.set_style(style);
+    }
+    Some(bar)
+}
+
 fn read(path: &Path) -> Result<String, Failure> {
     std::fs::read_to_string(path).map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))
 }

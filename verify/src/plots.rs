@@ -53,6 +53,23 @@ pub struct GrowthChart<'a> {
     pub stopping_time: Option<f64>,
 }
 
+/// The legend box every chart uses, at `position`.
+pub(crate) fn draw_legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>, position: SeriesLabelPosition) -> DrawResult
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    CT: plotters::coord::CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()?;
+    Ok(())
+}
+
 pub(crate) fn palette(i: usize) -> RGBColor {
     [RGBColor(0, 0, 0), RGBColor(200, 30, 30), RGBColor(30, 90, 200), RGBColor(20, 140, 60), RGBColor(150, 60, 170)]
         [i % 5]
@@ -160,13 +177,7 @@ where
     if let Some(t) = c.stopping_time.filter(|t| *t <= t_max) {
         chart.draw_series(DashedLineSeries::new(vec![(t, lo * 0.8), (t, hi * 1.25)], 6, 4, RED.stroke_width(1)))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()?;
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     area.present()?;
     Ok(())
 }
@@ -265,13 +276,7 @@ where
                     .label(label.as_str())
                     .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()?;
+            draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }};
     }
     if c.x_log {

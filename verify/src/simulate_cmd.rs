@@ -7,7 +7,6 @@ use crate::Failure;
 use nalgebra::DMatrix;
 use serde_json::{json, Value};
 use simulate::{run_ensemble, EnsembleSettings, EnsembleStats, LinearModel, Model, Observable, Scheme, Target};
-use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// Options of `verify simulate`.
@@ -163,7 +162,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         observable: Observable { lo: centre - 1.2 * half, hi: centre + 1.2 * half, ..settings.observable },
         ..settings
     };
-    let bar = progress_bar(args.paths as u64 * runs as u64);
+    let bar = crate::progress_bar(args.paths as u64 * runs as u64, "{bar:40} {pos}/{len} paths ({eta} left)");
     let tick = |k: u64| {
         if let Some(b) = &bar {
             b.inc(k)
@@ -329,17 +328,6 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         );
     }
     Ok(())
-}
-
-fn progress_bar(total: u64) -> Option<indicatif::ProgressBar> {
-    if !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(total);
-    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} paths ({eta} left)") {
-        bar.set_style(style);
-    }
-    Some(bar)
 }
 
 fn write_csv(

@@ -5,7 +5,7 @@ use crate::{read, Failure};
 use clap::Args;
 use spec::{parse_any_spec, ParamRange};
 use std::fs::OpenOptions;
-use std::io::{IsTerminal, Seek, SeekFrom, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::PathBuf;
 use std::time::Instant;
 use sweep::{Done, Evaluator, Level, Plan, Sampling, Shard};
@@ -110,7 +110,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         }
     };
 
-    let bar = progress_bar(plan.len());
+    let bar = crate::progress_bar(plan.len(), "{bar:40} {pos}/{len} points ({per_sec}, {eta} left)");
     let started = Instant::now();
     let progress = |n: u64| {
         if let Some(b) = &bar {
@@ -146,15 +146,4 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         )));
     }
     Ok(())
-}
-
-fn progress_bar(total: u64) -> Option<indicatif::ProgressBar> {
-    if !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(total);
-    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} points ({per_sec}, {eta} left)") {
-        bar.set_style(style);
-    }
-    Some(bar)
 }

@@ -10,7 +10,7 @@
 //! * One swept parameter: `Sigma^2` and `T(eps, delta)` against it, with
 //!   the reference constants dashed beside the engine's.
 
-use crate::plots::{palette, register_font, DrawResult};
+use crate::plots::{draw_legend, palette, register_font, DrawResult};
 use crate::{read, Failure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -154,16 +154,7 @@ fn order(mut names: Vec<String>, spec: &AnySpec) -> Vec<String> {
 }
 
 fn fixed_values(spec: &AnySpec) -> BTreeMap<String, f64> {
-    let mut out = BTreeMap::new();
-    if let Some(m) = spec.raw().get("parameters").and_then(Value::as_object) {
-        for (k, v) in m {
-            let text = v.as_str().map(str::to_string).unwrap_or_else(|| v.to_string());
-            if let Ok(r) = exact::parse_number(&text) {
-                out.insert(k.clone(), spec::to_f64(&r));
-            }
-        }
-    }
-    out
+    spec.parameters().iter().map(|(k, v)| (k.clone(), spec::to_f64(v))).collect()
 }
 
 fn eval(a: &Annotation, fixed: &BTreeMap<String, f64>, swept: &[(&str, f64)]) -> f64 {
@@ -360,13 +351,7 @@ impl Map<'_> {
                 .label(format!("boundary: {}", b.label))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], style));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
 
         // Colour bar of the stable shading.
         let (label, lo, hi) = match self.shade {
@@ -560,13 +545,7 @@ impl LineCharts<'_> {
                 "engine: T from the sharp Sigma^2"
             })
             .legend(move |(x, y)| Circle::new((x + 8, y), 4, blue.filled()));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         area.present()?;
         Ok(())
     }

@@ -77,6 +77,35 @@ impl AnySpec {
         }
     }
 
+    /// The spec's parameter values, exactly (a fluid spec's constant
+    /// expressions that are not plain numbers are left out).
+    pub fn parameters(&self) -> std::collections::BTreeMap<String, exact::Rational> {
+        match self {
+            AnySpec::Lie(s) => s.parameters.clone(),
+            AnySpec::Fluid(s) => s
+                .raw
+                .get("parameters")
+                .and_then(serde_json::Value::as_object)
+                .map(|m| {
+                    m.iter()
+                        .filter_map(|(k, v)| {
+                            let text = v.as_str().map(str::to_string).unwrap_or_else(|| v.to_string());
+                            exact::parse_number(&text).ok().map(|r| (k.clone(), r))
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+        }
+    }
+
+    /// The names of the spec's parameters.
+    pub fn parameter_names(&self) -> Vec<String> {
+        match self.raw().get("parameters").and_then(serde_json::Value::as_object) {
+            Some(m) => m.keys().cloned().collect(),
+            None => vec![],
+        }
+    }
+
     /// The spec as given.
     pub fn raw(&self) -> &serde_json::Value {
         match self {

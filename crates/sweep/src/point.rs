@@ -55,6 +55,8 @@ pub struct Evaluator {
     spec: AnySpec,
     names: Vec<String>,
     level: Level,
+    /// The spec's own parameter values (the ones not swept stay at these).
+    fixed: BTreeMap<String, Rational>,
 }
 
 impl Evaluator {
@@ -73,16 +75,14 @@ impl Evaluator {
     /// assert!(sweep::Evaluator::new(spec::parse_any_spec(&text).unwrap(), vec!["J".into()], sweep::Level::Spec).is_err());
     /// ```
     pub fn new(spec: AnySpec, names: Vec<String>, level: Level) -> Result<Evaluator, String> {
-        let known: Vec<String> = match spec.raw().get("parameters").and_then(Value::as_object) {
-            Some(m) => m.keys().cloned().collect(),
-            None => vec![],
-        };
+        let known = spec.parameter_names();
         for n in &names {
             if !known.contains(n) {
                 return Err(spec::unknown_parameter(n, &known));
             }
         }
-        Ok(Evaluator { spec, names, level })
+        let fixed = spec.parameters();
+        Ok(Evaluator { spec, names, level, fixed })
     }
 
     /// The swept parameter names.
@@ -106,30 +106,10 @@ impl Evaluator {
         if section.domain.is_empty() {
             return true;
         }
-        let fixed = self.fixed_parameters();
         section.in_domain(|n| match self.names.iter().position(|m| m == n) {
             Some(i) => Some(values[i].clone()),
-            None => fixed.get(n).cloned(),
+            None => self.fixed.get(n).cloned(),
         })
-    }
-
-    fn fixed_parameters(&self) -> BTreeMap<String, Rational> {
-        match &self.spec {
-            AnySpec::Lie(s) => s.parameters.clone(),
-            AnySpec::Fluid(s) => s
-                .raw
-                .get("parameters")
-                .and_then(Value::as_object)
-                .map(|m| {
-                    m.iter()
-                        .filter_map(|(k, v)| {
-                            let text = v.as_str().map(str::to_string).unwrap_or_else(|| v.to_string());
-                            exact::parse_number(&text).ok().map(|r| (k.clone(), r))
-                        })
-                        .collect()
-                })
-                .unwrap_or_default(),
-        }
     }
 
     /// Certify the spec with the swept parameters set to `values`.
@@ -141,7 +121,7 @@ impl Evaluator {
     pub fn evaluate(&self, values: &[Rational]) -> Outcome {
         match &self.spec {
             AnySpec::Lie(s) => {
-                let mut parameters = s.parameters.clone();
+                let mut parameters = self.fixed.clone();
                 for (n, v) in self.names.iter().zip(values) {
                     parameters.insert(n.clone(), v.clone());
                 }
