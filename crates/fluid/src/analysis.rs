@@ -4,7 +4,9 @@
 //! linear-instability test, and the compressible noise-compatibility test.
 
 use crate::choice::{casimir_weight, choose, Choice};
+use crate::expr::SignProof;
 use crate::grid::{Boundary, YGrid};
+use crate::interval::Interval;
 use crate::modes::{Coefficients, Form, Mode};
 use crate::profile::{Profile, ProfileError};
 use rayon::prelude::*;
@@ -182,8 +184,9 @@ pub struct FluidAnalysis {
     pub modes: Vec<ModeResult>,
     /// Sigma^2 under refinement.
     pub convergence: Vec<ConvergenceRow>,
-    /// The paper's `sup_y sum_k eta_k'(y)^2`.
-    pub paper_bound: f64,
+    /// The paper's `sup_y sum_k eta_k'(y)^2` (`None` where it exceeds the
+    /// range of doubles).
+    pub paper_bound: Option<f64>,
     /// Sigma^2 with the paper's functional (`c = 0`), if it is definite.
     pub paper_choice_sigma2: Option<f64>,
     /// Sigma^2 of `H + C + cM` for shifts `c` moving away from the
@@ -209,7 +212,7 @@ impl FluidAnalysis {
             verification: "none",
             modes: vec![],
             convergence: vec![],
-            paper_bound,
+            paper_bound: Some(paper_bound),
             paper_choice_sigma2: None,
             shift_curve: vec![],
             drift_residual: None,
@@ -308,13 +311,163 @@ fn sigma2_all_modes(grid: &YGrid, coef: &Coefficients, form: &Form, ks: &[(usize
 }
 
 /// Run the pipeline.
+///
+/// The noise enters `Q` quadratically and nowhere else, so the pipeline runs
+/// on the noise divided by a power of two `2^e` close to its largest value
+/// (exactly, in binary floating point) and multiplies every `Sigma^2` by
+/// `4^e` at the end. An amplitude of `1e160` then gives `Sigma^2` near
+/// `1e318`, which no double holds: the verdict is `inconclusive` with that
+/// reason, never a `Sigma^2` rounded to 0 or to infinity (the squares
+/// overflowed to NaN before, which was floored to 0).
 pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<FluidAnalysis, FluidError> {
     let profile = &problem.profile;
     let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
     profile.check(fine.nodes())?;
+    let e = noise_exponent(profile, fine.nodes());
+    if e == 0 {
+        return Ok(analyse_normalised(problem, settings, &fine));
+    }
+    let scaled = FluidProblem { profile: profile.with_noise_factor(pow2(-e)), ..problem.clone() };
+    Ok(rescale(analyse_normalised(&scaled, settings, &fine), e))
+}
+
+/// `2^e` for `-1022 <= e <= 1023`.
+fn pow2(e: i32) -> f64 {
+    f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
+}
+
+/// The exponent `e` with `max |eta_k| / 2^e` in `[1/2, 1)` over the samples
+/// and the nodes (0 for no noise).
+fn noise_exponent(profile: &Profile, nodes: &[f64]) -> i32 {
+    let ys = profile.samples(4096);
+    let max = profile
+        .eta
+        .iter()
+        .flat_map(|[e, _]| ys.iter().chain(nodes).map(move |y| e.eval(*y).abs()))
+        .fold(0.0f64, f64::max);
+    if !(max.is_finite() && max > 0.0) {
+        return 0;
+    }
+    // floor(log2 max) + 1, exactly from the bits for normal numbers
+    let exponent = if max >= f64::MIN_POSITIVE { ((max.to_bits() >> 52) & 0x7ff) as i32 - 1022 } else { -1022 };
+    exponent.clamp(-1000, 1000)
+}
+
+/// Multiply every `Sigma^2` of an analysis of the normalised noise by
+/// `4^e` (and the noise residuals by `2^e`), and refuse what no double holds.
+fn rescale(a: FluidAnalysis, e: i32) -> FluidAnalysis {
+    let f = pow2(e);
+    let sq = |x: f64| x * f * f;
+    // An upper bound must stay one: round a subnormal result up.
+    let sq_up = |x: f64| {
+        let y = x * f * f;
+        if x > 0.0 && y < f64::MIN_POSITIVE {
+            f64::MIN_POSITIVE
+        } else {
+            y
+        }
+    };
+    let sq_opt = |x: Option<f64>| x.map(sq);
+    let paper_bound = a.paper_bound.map(sq).filter(|b| b.is_finite());
+    let headline = a.sigma2_upper.or(a.sigma2);
+    if let Some(h) = headline {
+        let y = h * f * f;
+        let not_representable = if !y.is_finite() {
+            Some(format!(
+                "Sigma^2 is about 10^{:.1} with this noise, beyond the largest double (1.8e308): rescale time or the noise amplitudes",
+                h.log10() + 2.0 * e as f64 * std::f64::consts::LOG10_2
+            ))
+        } else if h > 0.0 && y < f64::MIN_POSITIVE {
+            Some(format!(
+                "Sigma^2 is about 10^{:.1} with this noise, below the smallest normal double (2.2e-308): rescale time or the noise amplitudes",
+                h.log10() + 2.0 * e as f64 * std::f64::consts::LOG10_2
+            ))
+        } else {
+            None
+        };
+        if let Some(reason) = not_representable {
+            return FluidAnalysis {
+                paper_bound,
+                ..FluidAnalysis::without_certificate(FluidVerdict::Inconclusive, reason, a.form, 0.0)
+            };
+        }
+    }
+    FluidAnalysis {
+        sigma2: sq_opt(a.sigma2),
+        sigma2_upper: a.sigma2_upper.map(sq_up),
+        modes: a
+            .modes
+            .into_iter()
+            .map(|m| ModeResult { sigma2: sq(m.sigma2), sigma2_upper: m.sigma2_upper.map(sq_up), ..m })
+            .collect(),
+        convergence: a
+            .convergence
+            .into_iter()
+            .map(|r| ConvergenceRow {
+                sigma2: sq_opt(r.sigma2),
+                sigma2_paper_choice: sq_opt(r.sigma2_paper_choice),
+                ..r
+            })
+            .collect(),
+        paper_bound,
+        paper_choice_sigma2: sq_opt(a.paper_choice_sigma2),
+        shift_curve: a.shift_curve.into_iter().map(|(c, s)| (c, sq(s))).collect(),
+        compressible: a.compressible.map(|c| CompressibleReport {
+            noise_residuals: c.noise_residuals.iter().map(|r| r * f).collect(),
+            incompressible_sigma2: sq_opt(c.incompressible_sigma2),
+            ..c
+        }),
+        ..a
+    }
+}
+
+/// The noise scale used by [`analyse`] for this problem: the pipeline's
+/// `Q` is that of the noise divided by `2^e`, and its `Sigma^2` values are
+/// multiplied by `4^e`.
+pub fn noise_scale_exponent(problem: &FluidProblem) -> i32 {
+    let profile = &problem.profile;
+    let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
+    noise_exponent(profile, fine.nodes())
+}
+
+/// Whether `bound V - Q ⪰ 0` (with `V ≻ 0`) is proved by the verified
+/// Cholesky test for each `(m, bound)`: x-mode `m` of the finest grid, with
+/// the matrices built exactly as [`analyse`] builds them (the same noise
+/// normalisation, choice of functional and form). `false` for a mode that
+/// does not exist, for a profile that admits no form, and for the
+/// compressible model (which has no matrices: its `Sigma^2 = 0` is
+/// structural). This is what `verify check` runs on a stated bound below the
+/// one it re-derives: a stated number is accepted only when it is proved.
+pub fn prove_mode_bounds(problem: &FluidProblem, bounds: &[(usize, f64)]) -> Vec<bool> {
+    if matches!(problem.model, FluidModel::Compressible { .. }) || bounds.is_empty() {
+        return vec![false; bounds.len()];
+    }
+    let e = noise_scale_exponent(problem);
+    let profile = problem.profile.with_noise_factor(pow2(-e));
+    let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
+    let coef = profile.coefficients(&fine);
+    let Some(form) = form_for(&choose(&profile), &profile, &coef, &fine) else { return vec![false; bounds.len()] };
+    let ks = wavenumbers(problem);
+    let f = pow2(-e);
+    bounds
+        .par_iter()
+        .map(|&(m, bound)| {
+            let Some(&(_, k)) = ks.iter().find(|(mm, _)| *mm == m) else { return false };
+            // bound / 4^e, rounded down if it underflows: proving a smaller
+            // bound proves the larger one (V ≻ 0).
+            let normalised = bound * f * f;
+            let normalised = if normalised < f64::MIN_POSITIVE { normalised.next_down().max(0.0) } else { normalised };
+            Mode::new(&fine, k).verify(&form, &coef, normalised) == (true, true)
+        })
+        .collect()
+}
+
+fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &YGrid) -> FluidAnalysis {
+    let profile = &problem.profile;
+    let fine = fine.clone();
     let paper_bound = profile.paper_bound();
     if let FluidModel::Compressible { sound_speed } = problem.model {
-        return Ok(analyse_compressible(problem, settings, sound_speed, paper_bound));
+        return analyse_compressible(problem, settings, sound_speed, paper_bound);
     }
     let ks = wavenumbers(problem);
     let choice = choose(profile);
@@ -355,7 +508,7 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
             Choice::NoForm { reason } => reason.clone(),
             _ => unreachable!(),
         };
-        return Ok(inconclusive_or_unstable(
+        return inconclusive_or_unstable(
             problem,
             settings,
             reason,
@@ -363,7 +516,7 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
             paper_bound,
             paper_choice_sigma2,
             shift_curve,
-        ));
+        );
     };
 
     // Per mode at the finest grid: Lanczos, then the dense verified check.
@@ -372,6 +525,8 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
         .map(|&(m, k)| {
             let mode = Mode::new(&fine, k);
             let s = mode.sigma2(&form, &coef, tol).ok()?;
+            // Mode::sigma2 never returns a non-finite value; flooring NaN at 0
+            // would round towards "stable".
             let sigma2 = s.lambda_max.max(0.0);
             let mut upper = None;
             let mut form_verified = false;
@@ -399,7 +554,7 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
             summary.casimir_weight,
             if summary.sign < 0.0 { ": Arnold's second criterion (K + M w negative definite) fails there" } else { "" }
         );
-        return Ok(inconclusive_or_unstable(
+        return inconclusive_or_unstable(
             problem,
             settings,
             reason,
@@ -407,7 +562,7 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
             paper_bound,
             paper_choice_sigma2,
             shift_curve,
-        ));
+        );
     }
     let modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
     let sigma2 = modes.iter().map(|r| r.sigma2).fold(0.0, f64::max);
@@ -431,16 +586,19 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
             let c = profile.coefficients(&g);
             (g, c)
         };
-        let f = form_for(&choice, profile, &coef, &grid).expect("form exists at the finest grid");
+        let Some(f) = form_for(&choice, profile, &coef, &grid) else { continue };
         if drift_residual.is_none() {
+            // |sym(V A)| / (|V| |A|), A = -ik R: dimensionless, so it does not
+            // grow with the size of U (it did when divided by |V| alone).
             let r = ks
                 .par_iter()
                 .map(|(_, k)| {
                     let mode = Mode::new(&grid, *k);
-                    mode.drift_residual(&f, &coef).norm() / mode.form_matrix(&f).norm()
+                    let scale = mode.form_matrix(&f).norm() * k * mode.drift_matrix(&coef).norm();
+                    mode.drift_residual(&f, &coef).norm() / scale
                 })
-                .reduce(|| 0.0, f64::max);
-            drift_residual = Some(r);
+                .reduce(|| 0.0, |a, b| if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) });
+            drift_residual = r.is_finite().then_some(r);
         }
         let s = if ny == problem.ny { Some(sigma2) } else { sigma2_all_modes(&grid, &coef, &f, &ks, tol) };
         let p = if ny == problem.ny {
@@ -457,7 +615,7 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
         Choice::Forced { .. } => format!("{}; the form is definite for every x-mode and Sigma^2 is the largest generalised eigenvalue of (Q, V) over the modes", summary.casimir_weight),
         Choice::NoForm { .. } => unreachable!(),
     };
-    Ok(FluidAnalysis {
+    FluidAnalysis {
         verdict: FluidVerdict::Stable,
         reason,
         form: summary,
@@ -466,13 +624,13 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
         verification,
         modes,
         convergence,
-        paper_bound,
+        paper_bound: Some(paper_bound),
         paper_choice_sigma2,
         shift_curve,
         drift_residual,
         instability: None,
         compressible: None,
-    })
+    }
 }
 
 fn form_summary(choice: &Choice) -> FormSummary {
@@ -510,11 +668,15 @@ fn growth_rate(profile: &Profile, ny: usize, k: f64) -> Option<f64> {
     let grid = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, ny);
     let coef = profile.coefficients(&grid);
     let r = Mode::new(&grid, k).drift_matrix(&coef);
+    if r.iter().any(|x| !x.is_finite()) {
+        return None; // U or k beyond the range of doubles: no evidence
+    }
     let n = r.nrows();
     let m = faer::Mat::<f64>::from_fn(n, n, |i, j| r[(i, j)]);
     let values = m.eigenvalues().ok()?;
     // A = -ik R: Re(-ik lambda) = k Im(lambda)
-    Some(values.iter().map(|z| k * z.im).fold(f64::NEG_INFINITY, f64::max))
+    let rate = values.iter().map(|z| k * z.im).fold(f64::NEG_INFINITY, f64::max);
+    rate.is_finite().then_some(rate)
 }
 
 fn inconclusive_or_unstable(
@@ -576,6 +738,16 @@ fn inconclusive_or_unstable(
 /// commutes with the drift and with the form, so `Sigma^2 = 0`; the form
 /// `|du|^2 + 2(U + c) drho du_x + c_s^2 drho^2 + w (curl du + U' drho)^2`
 /// is positive definite iff `w >= 0` and `|U + c| < c_s` on the interval.
+///
+/// What `stable` rests on is proved, not sampled: every `eta_k'` vanishes
+/// identically (interval arithmetic, [`crate::expr::Derivative::sign_on`]),
+/// and the range of `U` over the closed interval is enclosed rigorously, so
+/// that `|U + c| < c_s` holds everywhere for the chosen `c`. The weight's
+/// sign is proved for the pseudomomentum and the uniform flow (level
+/// `exact_structure`) and only sampled for a forced shift (level `float`).
+/// Noise whose residual `sup |U eta'|` is far above rounding on the samples
+/// is `noise_incompatible` (level `float`); noise in between, neither proved
+/// compatible nor clearly not, is `inconclusive`.
 fn analyse_compressible(
     problem: &FluidProblem,
     settings: &FluidSettings,
@@ -583,6 +755,7 @@ fn analyse_compressible(
     paper_bound: f64,
 ) -> FluidAnalysis {
     let profile = &problem.profile;
+    let (a, b) = profile.interval;
     let ys = profile.samples(8192);
     let us: Vec<f64> = ys.iter().map(|y| profile.u[0].eval(*y)).collect();
     let u_abs = us.iter().fold(0.0f64, |m, u| m.max(u.abs()));
@@ -591,22 +764,50 @@ fn analyse_compressible(
         .iter()
         .map(|[_, d]| ys.iter().zip(&us).map(|(y, u)| (u * d.eval(*y)).abs()).fold(0.0, f64::max))
         .collect();
+    let constant_noise: Vec<bool> = profile
+        .eta
+        .iter()
+        .map(|[_, d]| {
+            d.expr().constant().is_some() || d.sign_on(a, b, crate::choice::SIGN_PROOF_BUDGET) == SignProof::Zero
+        })
+        .collect();
     let incompressible = analyse(&FluidProblem { model: FluidModel::Incompressible, ..problem.clone() }, settings).ok();
     let (incompressible_verdict, incompressible_sigma2) =
         incompressible.as_ref().map(|a| (a.verdict, a.sigma2)).unwrap_or((FluidVerdict::Inconclusive, None));
     let choice = choose(profile);
-    let (umin, umax) = us.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
-    let shift_interval = match &choice {
-        Choice::Pseudomomentum { sign } => {
-            let (lo, hi) = if *sign > 0.0 { (-umin, sound_speed - umax) } else { (-sound_speed - umin, -umax) };
-            (lo < hi).then_some((lo, hi))
+    // A rigorous enclosure of the range of U over the closed interval.
+    let range = profile.u[0].range_on(a, b, 1024);
+    let uniform = profile.u[1].sign_on(a, b, crate::choice::SIGN_PROOF_BUDGET) == SignProof::Zero;
+    let c_s = Interval::point(sound_speed);
+    // The largest c with c + U_hi < c_s (exactly, through the interval's lower bound).
+    let below_cs = |u_hi: f64| (c_s - Interval::point(u_hi)).lo;
+    let above = |x: f64| -x; // negation is exact
+    let (shift_interval, proved_weight) = if !(range.lo.is_finite() && range.hi.is_finite()) {
+        (None, false)
+    } else {
+        match &choice {
+            Choice::Pseudomomentum { sign } if *sign > 0.0 => {
+                // U + c > 0 (w = (U + c)/U'' >= 0) and U + c < c_s
+                let (lo, hi) = (above(range.lo), below_cs(range.hi));
+                ((lo < hi).then_some((lo, hi)), true)
+            }
+            Choice::Pseudomomentum { .. } => {
+                // U'' < 0: U + c < 0 and U + c > -c_s
+                let (lo, hi) = ((Interval::point(-sound_speed) - Interval::point(range.lo)).hi, above(range.hi));
+                ((lo < hi).then_some((lo, hi)), true)
+            }
+            _ if uniform => {
+                // U constant (U' = 0 proved): c = -U brings the flow to rest
+                let c = -(0.5 * range.lo + 0.5 * range.hi);
+                let w = Interval::point(c) + range;
+                ((w.hi < sound_speed && w.lo > -sound_speed).then_some((c, c)), true)
+            }
+            Choice::Forced { shift, sign, .. } if *sign > 0.0 => {
+                let worst = Interval::point(*shift) + range;
+                ((worst.hi < sound_speed && worst.lo > -sound_speed).then_some((*shift, *shift)), false)
+            }
+            _ => (None, false),
         }
-        Choice::Enstrophy if umax - umin <= 1e-12 * u_abs.max(1.0) => Some((-umin, -umin)),
-        Choice::Forced { shift, sign, .. } if *sign > 0.0 => {
-            let worst = us.iter().fold(0.0f64, |m, u| m.max((u + shift).abs()));
-            (worst < sound_speed).then_some((*shift, *shift))
-        }
-        _ => None,
     };
     let mut summary = form_summary(&choice);
     let compressible = CompressibleReport {
@@ -621,16 +822,20 @@ fn analyse_compressible(
         ..FluidAnalysis::without_certificate(FluidVerdict::Inconclusive, String::new(), summary.clone(), paper_bound)
     };
     let scale = u_abs.max(f64::MIN_POSITIVE);
-    let offending: Vec<usize> =
-        noise_residuals.iter().enumerate().filter(|(_, r)| **r > 1e-12 * scale).map(|(i, _)| i).collect();
-    if !offending.is_empty() {
-        let i = offending[0];
+    if let Some(i) = (0..noise_residuals.len()).find(|&i| !constant_noise[i] && noise_residuals[i] > 1e-12 * scale) {
         return FluidAnalysis {
             verdict: FluidVerdict::NoiseIncompatible,
             verification: "float",
             reason: format!(
-                "the coadjoint action of noise[{i}] on the momentum rho u contains (grad sigma)^T m = (0, U eta'), of size up to {:.6e} at the equilibrium: in compressible flow no pressure absorbs it (in incompressible flow it is a gradient), so the noise moves the shear flow; compatible noise has U eta' = 0 (constant eta where U != 0)",
-                noise_residuals[i]
+                "the coadjoint action of noise[{i}] on the momentum rho u contains (grad sigma)^T m = (0, U eta'), which is not zero at the equilibrium (compressible.noise_residuals gives sup |U eta'|): in compressible flow no pressure absorbs it (in incompressible flow it is a gradient), so the noise moves the shear flow; compatible noise has U eta' = 0 (constant eta where U != 0)"
+            ),
+            ..base
+        };
+    }
+    if let Some(i) = constant_noise.iter().position(|c| !c) {
+        return FluidAnalysis {
+            reason: format!(
+                "noise[{i}]: U eta' is below 1e-12 of max|U| on every sample, but eta' could not be proved identically zero, so neither compatibility (B_k a multiple of the identity) nor incompatibility is established"
             ),
             ..base
         };
@@ -640,17 +845,19 @@ fn analyse_compressible(
             Choice::NoForm { reason } => reason.clone(),
             Choice::Forced { sign, .. } if *sign < 0.0 => "the forced Casimir weight is negative, and a compressible form cannot be negative definite (the acoustic energy is positive)".into(),
             _ => format!(
-                "no Galilean shift c makes the form definite: it needs |U + c| < c_s = {sound_speed} and (U + c)/U'' >= 0 on the whole interval, but U ranges over [{umin:.6}, {umax:.6}]"
+                "no Galilean shift c makes the form definite: it needs |U + c| < c_s = {sound_speed} and (U + c)/U'' >= 0 on the whole interval, but U ranges over [{:.6}, {:.6}] (a rigorous enclosure)",
+                range.lo, range.hi
             ),
         };
         return FluidAnalysis { reason, ..base };
     };
-    let c = 0.5 * (lo + hi);
+    let c = if lo == hi { lo } else { 0.5 * lo + 0.5 * hi };
     summary.energy = 1.0;
     summary.galilean_shift = Some(c);
     summary.sign = 1.0;
     summary.kind = "energy_casimir_momentum";
-    let worst = us.iter().fold(0.0f64, |m, u| m.max((u + c).abs()));
+    let worst = Interval::point(c) + range;
+    let worst = worst.hi.abs().max(worst.lo.abs());
     let ks = wavenumbers(problem);
     let modes = ks
         .iter()
@@ -659,12 +866,13 @@ fn analyse_compressible(
     FluidAnalysis {
         verdict: FluidVerdict::Stable,
         reason: format!(
-            "every noise field is constant, so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} (admissible c in [{lo:.6}, {hi:.6}]) is positive definite because max |U + c| = {worst:.6} < c_s = {sound_speed}"
+            "every noise field is constant (eta' = 0 proved), so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} (admissible c in [{lo:.6}, {hi:.6}]) is positive definite because |U + c| <= {worst:.6} < c_s = {sound_speed} on the whole interval (a rigorous enclosure of U){}",
+            if proved_weight { "" } else { ", with the Casimir weight (U + c)/U'' non-negative on a fine sample (not proved: level float)" }
         ),
         form: summary,
         sigma2: Some(0.0),
         sigma2_upper: Some(0.0),
-        verification: "exact_structure",
+        verification: if proved_weight { "exact_structure" } else { "float" },
         modes,
         ..base
     }

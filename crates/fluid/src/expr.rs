@@ -1,33 +1,42 @@
 //! Expressions in one variable `y` with `sin cos exp sqrt` and the constant
-//! `pi`: parsed to a tree, evaluated in floating point, and differentiated
-//! symbolically (profiles `U(y)` and noise amplitudes `eta(y)` need their
-//! first and second derivatives to machine precision, not by differences).
+//! `pi`, compiled to a tape (a straight-line program in which every
+//! operation refers to earlier slots) and evaluated in three arithmetics:
+//!
+//! * `f64`, for values;
+//! * truncated Taylor series of order 3 ("jets"), for `U`, `U'`, `U''`, `U'''`
+//!   and `eta'` to machine precision in one pass (forward-mode automatic
+//!   differentiation). A symbolic derivative tree grows with every
+//!   differentiation (a product of 30 factors, or `sin` nested 190 deep, blew
+//!   up to gigabytes); a jet pass costs a fixed multiple of the tape length;
+//! * jets of [`Interval`]s, for rigorous enclosures of those derivatives over
+//!   a piece of the y-interval: what [`Derivative::sign_on`] uses to *prove*
+//!   that `U''` has one sign, or vanishes identically.
+//!
+//! Jet recurrences (coefficients `t_k` of `f(y + h) = sum_k t_k h^k`, so the
+//! k-th derivative is `k! t_k`), for `c = a b`, `a / b`, `exp a`, `sin a`,
+//! `cos a`, `sqrt a` (Griewank & Walther, *Evaluating Derivatives*, §13.2):
+//!
+//! ```text
+//! (ab)_k  = sum_{j<=k} a_j b_{k-j}
+//! (a/b)_k = (a_k - sum_{1<=j<=k} b_j c_{k-j}) / b_0
+//! e_k     = (1/k) sum_{1<=j<=k} j a_j e_{k-j}                     e = exp a
+//! s_k     = (1/k) sum j a_j c_{k-j},  c_k = -(1/k) sum j a_j s_{k-j}   s, c = sin a, cos a
+//! r_k     = (a_k - sum_{1<=j<k} r_j r_{k-j}) / (2 r_0)             r = sqrt a
+//! ```
+//!
+//! Parameters are substituted by value and sub-expressions that do not
+//! depend on `y` are folded to numbers when parsed, so [`Expr::constant`] is
+//! a lookup.
 
+use crate::interval::Interval;
 use std::collections::BTreeMap;
-use std::fmt;
+use std::sync::Arc;
 
-/// An expression tree.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Expr {
-    /// A number.
-    Num(f64),
-    /// The variable `y`.
-    Y,
-    /// Sum.
-    Add(Box<Expr>, Box<Expr>),
-    /// Difference.
-    Sub(Box<Expr>, Box<Expr>),
-    /// Product.
-    Mul(Box<Expr>, Box<Expr>),
-    /// Quotient.
-    Div(Box<Expr>, Box<Expr>),
-    /// Integer power.
-    Pow(Box<Expr>, i32),
-    /// Negation.
-    Neg(Box<Expr>),
-    /// A function of one argument.
-    Call(Func, Box<Expr>),
-}
+/// Longest expression text accepted, in bytes.
+pub const MAX_LENGTH: usize = 10_000;
+
+/// Deepest nesting of parentheses, calls, unary signs and powers.
+pub const MAX_DEPTH: usize = 200;
 
 /// The functions allowed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,6 +49,26 @@ pub enum Func {
     Exp,
     /// `sqrt`.
     Sqrt,
+}
+
+/// One slot of the tape; operands are indices of earlier slots.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Node {
+    Num(f64),
+    Y,
+    Add(u32, u32),
+    Sub(u32, u32),
+    Mul(u32, u32),
+    Div(u32, u32),
+    Pow(u32, i32),
+    Neg(u32),
+    Call(Func, u32),
+}
+
+/// A compiled expression in `y`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expr {
+    nodes: Vec<Node>,
 }
 
 /// Why an expression is not accepted.
@@ -56,11 +85,222 @@ fn err<T>(message: impl Into<String>, position: usize) -> Result<T, ExprError> {
     Err(ExprError { message: message.into(), position })
 }
 
+/// The arithmetic a tape is evaluated in.
+pub trait Scalar: Copy {
+    /// A constant.
+    fn constant(x: f64) -> Self;
+    /// `a + b`.
+    fn add(self, o: Self) -> Self;
+    /// `a - b`.
+    fn sub(self, o: Self) -> Self;
+    /// `a b`.
+    fn mul(self, o: Self) -> Self;
+    /// `a / b`.
+    fn div(self, o: Self) -> Self;
+    /// `-a`.
+    fn neg(self) -> Self;
+    /// `(sin a, cos a)`.
+    fn sin_cos(self) -> (Self, Self);
+    /// `exp a`.
+    fn exp(self) -> Self;
+    /// `sqrt a`.
+    fn sqrt(self) -> Self;
+    /// `a^n`, `|n| <= 64`.
+    fn powi(self, n: i32) -> Self;
+}
+
+impl Scalar for f64 {
+    fn constant(x: f64) -> Self {
+        x
+    }
+    fn add(self, o: Self) -> Self {
+        self + o
+    }
+    fn sub(self, o: Self) -> Self {
+        self - o
+    }
+    fn mul(self, o: Self) -> Self {
+        self * o
+    }
+    fn div(self, o: Self) -> Self {
+        self / o
+    }
+    fn neg(self) -> Self {
+        -self
+    }
+    fn sin_cos(self) -> (Self, Self) {
+        (self.sin(), self.cos())
+    }
+    fn exp(self) -> Self {
+        f64::exp(self)
+    }
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    fn powi(self, n: i32) -> Self {
+        f64::powi(self, n)
+    }
+}
+
+impl Scalar for Interval {
+    fn constant(x: f64) -> Self {
+        Interval::point(x)
+    }
+    fn add(self, o: Self) -> Self {
+        self + o
+    }
+    fn sub(self, o: Self) -> Self {
+        self - o
+    }
+    fn mul(self, o: Self) -> Self {
+        self * o
+    }
+    fn div(self, o: Self) -> Self {
+        self / o
+    }
+    fn neg(self) -> Self {
+        -self
+    }
+    fn sin_cos(self) -> (Self, Self) {
+        (self.sin(), self.cos())
+    }
+    fn exp(self) -> Self {
+        Interval::exp(self)
+    }
+    fn sqrt(self) -> Self {
+        Interval::sqrt(self)
+    }
+    fn powi(self, n: i32) -> Self {
+        Interval::powi(self, n)
+    }
+}
+
+/// A Taylor jet of order 3: `f(y + h) = t[0] + t[1] h + t[2] h^2 + t[3] h^3 + O(h^4)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Jet<T>(pub [T; 4]);
+
+impl<T: Scalar> Jet<T> {
+    fn c(x: f64) -> T {
+        T::constant(x)
+    }
+
+    /// The k-th derivative, `k! t_k`.
+    pub fn derivative(&self, k: usize) -> T {
+        let factorial = [1.0, 1.0, 2.0, 6.0][k];
+        if factorial == 1.0 {
+            self.0[k]
+        } else {
+            self.0[k].mul(Self::c(factorial))
+        }
+    }
+}
+
+impl<T: Scalar> Scalar for Jet<T> {
+    fn constant(x: f64) -> Self {
+        let z = T::constant(0.0);
+        Jet([T::constant(x), z, z, z])
+    }
+    fn add(self, o: Self) -> Self {
+        Jet(std::array::from_fn(|k| self.0[k].add(o.0[k])))
+    }
+    fn sub(self, o: Self) -> Self {
+        Jet(std::array::from_fn(|k| self.0[k].sub(o.0[k])))
+    }
+    fn mul(self, o: Self) -> Self {
+        let (a, b) = (self.0, o.0);
+        Jet(std::array::from_fn(|k| {
+            let mut s = a[0].mul(b[k]);
+            for j in 1..=k {
+                s = s.add(a[j].mul(b[k - j]));
+            }
+            s
+        }))
+    }
+    fn div(self, o: Self) -> Self {
+        let (a, b) = (self.0, o.0);
+        let mut c = [T::constant(0.0); 4];
+        for k in 0..4 {
+            let mut s = a[k];
+            for j in 1..=k {
+                s = s.sub(b[j].mul(c[k - j]));
+            }
+            c[k] = s.div(b[0]);
+        }
+        Jet(c)
+    }
+    fn neg(self) -> Self {
+        Jet(self.0.map(T::neg))
+    }
+    fn sin_cos(self) -> (Self, Self) {
+        let a = self.0;
+        let (s0, c0) = a[0].sin_cos();
+        let mut s = [s0; 4];
+        let mut c = [c0; 4];
+        for k in 1..4 {
+            let (mut ss, mut cc) = (T::constant(0.0), T::constant(0.0));
+            for j in 1..=k {
+                let ja = a[j].mul(Self::c(j as f64));
+                ss = ss.add(ja.mul(c[k - j]));
+                cc = cc.add(ja.mul(s[k - j]));
+            }
+            s[k] = ss.div(Self::c(k as f64));
+            c[k] = cc.div(Self::c(k as f64)).neg();
+        }
+        (Jet(s), Jet(c))
+    }
+    fn exp(self) -> Self {
+        let a = self.0;
+        let mut e = [a[0].exp(); 4];
+        for k in 1..4 {
+            let mut s = T::constant(0.0);
+            for j in 1..=k {
+                s = s.add(a[j].mul(Self::c(j as f64)).mul(e[k - j]));
+            }
+            e[k] = s.div(Self::c(k as f64));
+        }
+        Jet(e)
+    }
+    fn sqrt(self) -> Self {
+        let a = self.0;
+        let mut r = [a[0].sqrt(); 4];
+        let two_r0 = r[0].mul(Self::c(2.0));
+        for k in 1..4 {
+            let mut s = a[k];
+            for j in 1..k {
+                s = s.sub(r[j].mul(r[k - j]));
+            }
+            r[k] = s.div(two_r0);
+        }
+        Jet(r)
+    }
+    fn powi(self, n: i32) -> Self {
+        // Repeated squaring (at most 12 products for |n| <= 64): exact zeros
+        // stay zeros, so y^2 has third derivative 0, not 0 * y^-1.
+        if n < 0 {
+            return Self::constant(1.0).div(self.powi(-n));
+        }
+        let mut acc = Self::constant(1.0);
+        let mut base = self;
+        let mut e = n as u32;
+        while e > 0 {
+            if e & 1 == 1 {
+                acc = acc.mul(base);
+            }
+            e >>= 1;
+            if e > 0 {
+                base = base.mul(base);
+            }
+        }
+        acc
+    }
+}
+
 struct Parser<'a> {
     s: &'a [u8],
     i: usize,
     params: &'a BTreeMap<String, f64>,
     depth: usize,
+    nodes: Vec<Node>,
 }
 
 /// Parse an expression in `y` (parameters are substituted by value).
@@ -71,29 +311,78 @@ struct Parser<'a> {
 /// let y = 0.3f64;
 /// assert!((e.eval(y) - (1.0 - (2.0 * y).cos().powi(2) + (-y).exp() / 2.0)).abs() < 1e-15);
 /// // d/dy: 4 cos(2y) sin(2y) - exp(-y)/2
-/// let d = e.derivative();
-/// assert!((d.eval(y) - (4.0 * (2.0 * y).cos() * (2.0 * y).sin() - (-y).exp() / 2.0)).abs() < 1e-14);
+/// let d = e.derivatives(y)[1];
+/// assert!((d - (4.0 * (2.0 * y).cos() * (2.0 * y).sin() - (-y).exp() / 2.0)).abs() < 1e-14);
 /// assert!(parse("log(y)", &Default::default()).unwrap_err().message.contains("unknown function 'log'"));
 /// ```
 pub fn parse(text: &str, params: &BTreeMap<String, f64>) -> Result<Expr, ExprError> {
-    if text.len() > 10_000 {
-        return err("expression too long", 0);
+    if text.len() > MAX_LENGTH {
+        return err(format!("expression longer than {MAX_LENGTH} bytes"), 0);
     }
     if !text.is_ascii() {
         let pos = text.chars().position(|c| !c.is_ascii()).unwrap_or(0);
         return err("unexpected non-ASCII character", pos);
     }
-    let mut p = Parser { s: text.as_bytes(), i: 0, params, depth: 0 };
+    let mut p = Parser { s: text.as_bytes(), i: 0, params, depth: 0, nodes: Vec::new() };
     p.skip();
     if p.i == p.s.len() {
         return err("empty expression", 0);
     }
-    let e = p.expr()?;
+    let root = p.expr()?;
     p.skip();
     if p.i != p.s.len() {
         return err(format!("unexpected '{}'", p.s[p.i] as char), p.i);
     }
-    Ok(e)
+    Ok(Expr { nodes: compact(p.nodes, root) })
+}
+
+/// Keep only the slots the root depends on, renumbered in order.
+fn compact(nodes: Vec<Node>, root: u32) -> Vec<Node> {
+    let mut live = vec![false; nodes.len()];
+    live[root as usize] = true;
+    for i in (0..nodes.len()).rev() {
+        if !live[i] {
+            continue;
+        }
+        match nodes[i] {
+            Node::Add(a, b) | Node::Sub(a, b) | Node::Mul(a, b) | Node::Div(a, b) => {
+                live[a as usize] = true;
+                live[b as usize] = true;
+            }
+            Node::Pow(a, _) | Node::Neg(a) | Node::Call(_, a) => live[a as usize] = true,
+            Node::Num(_) | Node::Y => {}
+        }
+    }
+    let mut map = vec![0u32; nodes.len()];
+    let mut out = Vec::new();
+    for (i, n) in nodes.into_iter().enumerate() {
+        if !live[i] {
+            continue;
+        }
+        let r = |x: u32| map[x as usize];
+        let m = match n {
+            Node::Add(a, b) => Node::Add(r(a), r(b)),
+            Node::Sub(a, b) => Node::Sub(r(a), r(b)),
+            Node::Mul(a, b) => Node::Mul(r(a), r(b)),
+            Node::Div(a, b) => Node::Div(r(a), r(b)),
+            Node::Pow(a, k) => Node::Pow(r(a), k),
+            Node::Neg(a) => Node::Neg(r(a)),
+            Node::Call(f, a) => Node::Call(f, r(a)),
+            other => other,
+        };
+        map[i] = out.len() as u32;
+        out.push(m);
+    }
+    out
+}
+
+fn apply(f: Func, x: f64) -> f64 {
+    match f {
+        Func::Sin => x.sin(),
+        Func::Cos => x.cos(),
+        Func::Exp => x.exp(),
+        Func::Sqrt => x.sqrt(),
+    }
 }
 
 impl Parser<'_> {
@@ -108,77 +397,106 @@ impl Parser<'_> {
         self.s.get(self.i).copied()
     }
 
-    fn expr(&mut self) -> Result<Expr, ExprError> {
+    fn enter(&mut self) -> Result<(), ExprError> {
         self.depth += 1;
-        if self.depth > 200 {
-            return err("expression nested too deeply", self.i);
+        if self.depth > MAX_DEPTH {
+            return err(format!("expression nested too deeply (limit {MAX_DEPTH})"), self.i);
         }
+        Ok(())
+    }
+
+    fn num(&self, i: u32) -> Option<f64> {
+        match self.nodes[i as usize] {
+            Node::Num(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// Push a node, folding it to a number when its operands are numbers.
+    fn push(&mut self, n: Node) -> u32 {
+        let folded = match n {
+            Node::Add(a, b) => self.num(a).zip(self.num(b)).map(|(x, y)| x + y),
+            Node::Sub(a, b) => self.num(a).zip(self.num(b)).map(|(x, y)| x - y),
+            Node::Mul(a, b) => self.num(a).zip(self.num(b)).map(|(x, y)| x * y),
+            Node::Div(a, b) => self.num(a).zip(self.num(b)).map(|(x, y)| x / y),
+            Node::Pow(a, k) => self.num(a).map(|x| x.powi(k)),
+            Node::Neg(a) => self.num(a).map(|x| -x),
+            Node::Call(f, a) => self.num(a).map(|x| apply(f, x)),
+            other => return self.push_raw(other),
+        };
+        match folded {
+            Some(v) => self.push_raw(Node::Num(v)),
+            None => self.push_raw(n),
+        }
+    }
+
+    fn push_raw(&mut self, n: Node) -> u32 {
+        self.nodes.push(n);
+        (self.nodes.len() - 1) as u32
+    }
+
+    fn expr(&mut self) -> Result<u32, ExprError> {
+        self.enter()?;
         let mut acc = self.term()?;
         while let Some(c @ (b'+' | b'-')) = self.peek() {
             self.i += 1;
             let rhs = self.term()?;
-            acc = if c == b'+' {
-                Expr::Add(Box::new(acc), Box::new(rhs))
-            } else {
-                Expr::Sub(Box::new(acc), Box::new(rhs))
-            };
+            acc = self.push(if c == b'+' { Node::Add(acc, rhs) } else { Node::Sub(acc, rhs) });
         }
         self.depth -= 1;
         Ok(acc)
     }
 
-    fn term(&mut self) -> Result<Expr, ExprError> {
+    fn term(&mut self) -> Result<u32, ExprError> {
         let mut acc = self.unary()?;
         while let Some(c @ (b'*' | b'/')) = self.peek() {
             self.i += 1;
             let rhs = self.unary()?;
-            acc = if c == b'*' {
-                Expr::Mul(Box::new(acc), Box::new(rhs))
-            } else {
-                Expr::Div(Box::new(acc), Box::new(rhs))
-            };
+            acc = self.push(if c == b'*' { Node::Mul(acc, rhs) } else { Node::Div(acc, rhs) });
         }
         Ok(acc)
     }
 
-    fn unary(&mut self) -> Result<Expr, ExprError> {
+    fn unary(&mut self) -> Result<u32, ExprError> {
         match self.peek() {
             Some(b'-') => {
                 self.i += 1;
-                self.depth += 1;
-                if self.depth > 200 {
-                    return err("expression nested too deeply", self.i);
-                }
+                self.enter()?;
                 let e = self.unary()?;
                 self.depth -= 1;
-                Ok(Expr::Neg(Box::new(e)))
+                Ok(self.push(Node::Neg(e)))
             }
             Some(b'+') => {
                 self.i += 1;
-                self.unary()
+                self.enter()?;
+                let e = self.unary()?;
+                self.depth -= 1;
+                Ok(e)
             }
             _ => self.power(),
         }
     }
 
-    fn power(&mut self) -> Result<Expr, ExprError> {
+    fn power(&mut self) -> Result<u32, ExprError> {
         let base = self.atom()?;
         if self.peek() == Some(b'^') {
             self.i += 1;
             let at = self.i;
+            self.enter()?;
             let e = self.unary()?;
-            let v = e
-                .constant()
+            self.depth -= 1;
+            let v = self
+                .num(e)
                 .ok_or_else(|| ExprError { message: "the exponent must be a constant integer".into(), position: at })?;
             if v.fract() != 0.0 || v.abs() > 64.0 {
                 return err("the exponent must be an integer between -64 and 64", at);
             }
-            return Ok(Expr::Pow(Box::new(base), v as i32));
+            return Ok(self.push(Node::Pow(base, v as i32)));
         }
         Ok(base)
     }
 
-    fn atom(&mut self) -> Result<Expr, ExprError> {
+    fn atom(&mut self) -> Result<u32, ExprError> {
         let at = self.i;
         match self.peek() {
             None => err("unexpected end of expression", self.s.len()),
@@ -210,7 +528,7 @@ impl Parser<'_> {
                 }
                 let text = std::str::from_utf8(&self.s[start..self.i]).unwrap_or("");
                 let v = exact::parse_number(text).map_err(|e| ExprError { message: e.to_string(), position: start })?;
-                Ok(Expr::Num(exact::rational_to_f64(&v)))
+                Ok(self.push_raw(Node::Num(exact::rational_to_f64(&v))))
             }
             Some(c) if c.is_ascii_alphabetic() || c == b'_' => {
                 let start = self.i;
@@ -224,7 +542,12 @@ impl Parser<'_> {
                         "cos" => Func::Cos,
                         "exp" => Func::Exp,
                         "sqrt" => Func::Sqrt,
-                        _ => return err(format!("unknown function '{name}' (allowed: sin, cos, exp, sqrt)"), start),
+                        _ => {
+                            return err(
+                                format!("unknown function '{}' (allowed: sin, cos, exp, sqrt)", excerpt(name)),
+                                start,
+                            )
+                        }
                     };
                     self.i += 1;
                     let arg = self.expr()?;
@@ -232,17 +555,17 @@ impl Parser<'_> {
                         return err("missing ')'", self.i);
                     }
                     self.i += 1;
-                    return Ok(Expr::Call(f, Box::new(arg)));
+                    return Ok(self.push(Node::Call(f, arg)));
                 }
                 match name {
-                    "y" => Ok(Expr::Y),
-                    "pi" => Ok(Expr::Num(std::f64::consts::PI)),
+                    "y" => Ok(self.push_raw(Node::Y)),
+                    "pi" => Ok(self.push_raw(Node::Num(std::f64::consts::PI))),
                     _ => match self.params.get(name) {
-                        Some(v) => Ok(Expr::Num(*v)),
+                        Some(v) => Ok(self.push_raw(Node::Num(*v))),
                         None => {
                             let known: Vec<&str> =
                                 ["y", "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
-                            err(format!("unknown symbol '{name}' (known: {})", known.join(", ")), start)
+                            err(format!("unknown symbol '{}' (known: {})", excerpt(name), known.join(", ")), start)
                         }
                     },
                 }
@@ -252,145 +575,241 @@ impl Parser<'_> {
     }
 }
 
+/// A name quoted in a message: at most 40 characters of it.
+fn excerpt(s: &str) -> String {
+    if s.len() <= 40 {
+        s.to_string()
+    } else {
+        format!("{}… ({} characters)", &s[..40], s.len())
+    }
+}
+
 impl Expr {
     /// The value if the expression does not depend on `y`.
     pub fn constant(&self) -> Option<f64> {
-        if self.depends_on_y() {
-            None
-        } else {
-            Some(self.eval(0.0))
+        match self.nodes.last() {
+            Some(Node::Num(v)) => Some(*v),
+            _ => None,
         }
     }
 
-    fn depends_on_y(&self) -> bool {
-        match self {
-            Expr::Num(_) => false,
-            Expr::Y => true,
-            Expr::Add(a, b) | Expr::Sub(a, b) | Expr::Mul(a, b) | Expr::Div(a, b) => {
-                a.depends_on_y() || b.depends_on_y()
-            }
-            Expr::Pow(a, _) | Expr::Neg(a) | Expr::Call(_, a) => a.depends_on_y(),
+    /// Number of operations on the tape (the cost of one evaluation).
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether the tape is empty (never, for a parsed expression).
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Evaluate with `y` given in the arithmetic `T`.
+    pub fn evaluate<T: Scalar>(&self, y: T) -> T {
+        let mut v: Vec<T> = Vec::with_capacity(self.nodes.len());
+        for n in &self.nodes {
+            let x = match *n {
+                Node::Num(c) => T::constant(c),
+                Node::Y => y,
+                Node::Add(a, b) => v[a as usize].add(v[b as usize]),
+                Node::Sub(a, b) => v[a as usize].sub(v[b as usize]),
+                Node::Mul(a, b) => v[a as usize].mul(v[b as usize]),
+                Node::Div(a, b) => v[a as usize].div(v[b as usize]),
+                Node::Pow(a, k) => v[a as usize].powi(k),
+                Node::Neg(a) => v[a as usize].neg(),
+                Node::Call(f, a) => {
+                    let x = v[a as usize];
+                    match f {
+                        Func::Sin => x.sin_cos().0,
+                        Func::Cos => x.sin_cos().1,
+                        Func::Exp => x.exp(),
+                        Func::Sqrt => x.sqrt(),
+                    }
+                }
+            };
+            v.push(x);
         }
+        *v.last().expect("a parsed expression has at least one slot")
     }
 
     /// Value at `y`.
     pub fn eval(&self, y: f64) -> f64 {
-        match self {
-            Expr::Num(v) => *v,
-            Expr::Y => y,
-            Expr::Add(a, b) => a.eval(y) + b.eval(y),
-            Expr::Sub(a, b) => a.eval(y) - b.eval(y),
-            Expr::Mul(a, b) => a.eval(y) * b.eval(y),
-            Expr::Div(a, b) => a.eval(y) / b.eval(y),
-            Expr::Pow(a, n) => a.eval(y).powi(*n),
-            Expr::Neg(a) => -a.eval(y),
-            Expr::Call(f, a) => {
-                let v = a.eval(y);
-                match f {
-                    Func::Sin => v.sin(),
-                    Func::Cos => v.cos(),
-                    Func::Exp => v.exp(),
-                    Func::Sqrt => v.sqrt(),
+        self.evaluate(y)
+    }
+
+    /// `[f, f', f'', f''']` at `y`, by one jet pass.
+    pub fn derivatives(&self, y: f64) -> [f64; 4] {
+        let j = self.evaluate(Jet([y, 1.0, 0.0, 0.0]));
+        std::array::from_fn(|k| j.derivative(k))
+    }
+
+    /// Enclosures of `[f, f', f'', f''']` over all `y` in `ys` (rigorous: the
+    /// jet recurrences run in interval arithmetic).
+    pub fn enclose(&self, ys: Interval) -> [Interval; 4] {
+        let one = Interval::point(1.0);
+        let zero = Interval::point(0.0);
+        let j = self.evaluate(Jet([ys, one, zero, zero]));
+        std::array::from_fn(|k| j.derivative(k))
+    }
+}
+
+/// One derivative (`order` 0 to 3) of a shared expression, times a
+/// constant factor (a power of two when the pipeline normalises the noise,
+/// so that the scaling is exact).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Derivative {
+    expr: Arc<Expr>,
+    order: usize,
+    factor: f64,
+}
+
+/// What interval arithmetic proved about the sign of a function on a closed interval.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SignProof {
+    /// Strictly positive everywhere.
+    Positive,
+    /// Strictly negative everywhere.
+    Negative,
+    /// Identically zero.
+    Zero,
+    /// Positive somewhere and negative somewhere (so it vanishes in between).
+    Changes,
+    /// Nothing proved within the budget (a zero, a touching zero, or an
+    /// enclosure too loose).
+    Unproved,
+}
+
+impl Derivative {
+    /// The `order`-th derivative of `expr` (`order <= 3`).
+    pub fn new(expr: Arc<Expr>, order: usize) -> Self {
+        assert!(order <= 3, "jets carry derivatives up to order 3");
+        Derivative { expr, order, factor: 1.0 }
+    }
+
+    /// The same derivative times `factor`.
+    pub fn times(&self, factor: f64) -> Self {
+        Derivative { factor: self.factor * factor, ..self.clone() }
+    }
+
+    /// The expression differentiated.
+    pub fn expr(&self) -> &Expr {
+        &self.expr
+    }
+
+    /// The order of the derivative.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Value at `y`.
+    pub fn eval(&self, y: f64) -> f64 {
+        let v = if self.order == 0 { self.expr.eval(y) } else { self.expr.derivatives(y)[self.order] };
+        if self.factor == 1.0 {
+            v
+        } else {
+            v * self.factor
+        }
+    }
+
+    /// A rigorous enclosure over `[lo, hi]`: the natural interval extension
+    /// intersected with the mean-value form `f(m) + f'([lo, hi]) ([lo, hi] - m)`
+    /// (at order 3 only the natural one: jets stop at the third derivative).
+    pub fn enclose(&self, lo: f64, hi: f64) -> Interval {
+        let e = self.enclose_unscaled(lo, hi);
+        if self.factor == 1.0 {
+            e
+        } else {
+            e * Interval::point(self.factor)
+        }
+    }
+
+    fn enclose_unscaled(&self, lo: f64, hi: f64) -> Interval {
+        let ys = Interval::new(lo, hi);
+        let e = self.expr.enclose(ys);
+        let natural = e[self.order];
+        if self.order == 3 || lo == hi {
+            return natural;
+        }
+        let m = 0.5 * (lo + hi);
+        let at_m = self.expr.enclose(Interval::point(m))[self.order];
+        let slope = e[self.order + 1];
+        let mean_value = at_m + slope * (ys - Interval::point(m));
+        natural.intersect(&mean_value)
+    }
+
+    /// Prove the sign of this derivative on the closed interval `[a, b]` by
+    /// bisection, with at most `budget` tape operations (each enclosure
+    /// costs about `40 len` of them) and pieces no shorter than `2^-40 (b - a)`.
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use fluid::expr::{parse, Derivative, SignProof};
+    /// let p = |s: &str| Arc::new(parse(s, &Default::default()).unwrap());
+    /// let second = |s: &str| Derivative::new(p(s), 2);
+    /// assert_eq!(second("y^2 + sin(y)/10").sign_on(0.0, 3.0, 1e6), SignProof::Positive); // 2 - sin(y)/10 > 0
+    /// assert_eq!(second("3*y - 1e13*y").sign_on(0.0, 3.0, 1e6), SignProof::Zero);         // affine: U'' = 0 exactly
+    /// assert_eq!(second("sin(y) + 1e13*y").sign_on(0.0, 3.14159, 1e6), SignProof::Unproved); // -sin y vanishes at 0
+    /// assert_eq!(second("sin(y)").sign_on(1.0, 6.0, 1e6), SignProof::Changes);
+    /// ```
+    pub fn sign_on(&self, a: f64, b: f64, budget: f64) -> SignProof {
+        if !(a.is_finite() && b.is_finite() && a <= b) {
+            return SignProof::Unproved;
+        }
+        let cost = 40.0 * self.expr.len() as f64;
+        let min_width = (b - a) * 2f64.powi(-40);
+        let mut spent = 0.0;
+        let (mut positive, mut negative, mut zero, mut undecided) = (false, false, false, false);
+        let mut stack = vec![(a, b)];
+        while let Some((lo, hi)) = stack.pop() {
+            spent += cost;
+            let e = self.enclose(lo, hi);
+            if e.lo > 0.0 {
+                positive = true;
+            } else if e.hi < 0.0 {
+                negative = true;
+            } else if e.is_zero() {
+                zero = true;
+            } else {
+                if spent > budget {
+                    return if positive && negative { SignProof::Changes } else { SignProof::Unproved };
                 }
+                let mid = 0.5 * (lo + hi);
+                if hi - lo <= min_width || !(mid > lo && mid < hi) {
+                    // A zero (or a loose enclosure) here: undecided, but keep
+                    // going, a sign change elsewhere may still be proved.
+                    undecided = true;
+                    continue;
+                }
+                stack.push((mid, hi));
+                stack.push((lo, mid));
             }
+            if positive && negative {
+                return SignProof::Changes;
+            }
+        }
+        match (positive, negative, zero, undecided) {
+            (true, false, false, false) => SignProof::Positive,
+            (false, true, false, false) => SignProof::Negative,
+            (false, false, true, false) => SignProof::Zero,
+            _ => SignProof::Unproved,
         }
     }
 
-    /// `d/dy`, symbolically.
-    pub fn derivative(&self) -> Expr {
-        use Expr::*;
-        match self {
-            Num(_) => Num(0.0),
-            Y => Num(1.0),
-            Add(x, z) => add(x.derivative(), z.derivative()),
-            Sub(x, z) => sub(x.derivative(), z.derivative()),
-            Mul(x, z) => add(mul(x.derivative(), (**z).clone()), mul((**x).clone(), z.derivative())),
-            Div(x, z) => {
-                div(sub(mul(x.derivative(), (**z).clone()), mul((**x).clone(), z.derivative())), pow((**z).clone(), 2))
-            }
-            // d/dy x^0 = 0 exactly (not 0 * x^-1, which is NaN at x = 0)
-            Pow(x, n) => mul(mul(Num(*n as f64), pow((**x).clone(), n - 1)), x.derivative()),
-            Neg(x) => neg(x.derivative()),
-            Call(f, x) => {
-                let outer = match f {
-                    Func::Sin => Call(Func::Cos, x.clone()),
-                    Func::Cos => neg(Call(Func::Sin, x.clone())),
-                    Func::Exp => Call(Func::Exp, x.clone()),
-                    Func::Sqrt => div(Num(0.5), Call(Func::Sqrt, x.clone())),
-                };
-                mul(outer, x.derivative())
-            }
+    /// A rigorous enclosure of the range over `[a, b]` from `pieces` equal
+    /// pieces (the hull of their enclosures).
+    pub fn range_on(&self, a: f64, b: f64, pieces: usize) -> Interval {
+        if !(a.is_finite() && b.is_finite() && a <= b) {
+            return Interval::ENTIRE;
         }
-    }
-}
-
-// Constructors that fold the zeros and ones derivatives produce, so that
-// repeated derivatives stay small and never form `0 * x^-1`.
-fn add(a: Expr, b: Expr) -> Expr {
-    match (&a, &b) {
-        (Expr::Num(x), _) if *x == 0.0 => b,
-        (_, Expr::Num(y)) if *y == 0.0 => a,
-        (Expr::Num(x), Expr::Num(y)) => Expr::Num(x + y),
-        _ => Expr::Add(Box::new(a), Box::new(b)),
-    }
-}
-
-fn sub(a: Expr, b: Expr) -> Expr {
-    match (&a, &b) {
-        (_, Expr::Num(y)) if *y == 0.0 => a,
-        (Expr::Num(x), _) if *x == 0.0 => neg(b),
-        (Expr::Num(x), Expr::Num(y)) => Expr::Num(x - y),
-        _ => Expr::Sub(Box::new(a), Box::new(b)),
-    }
-}
-
-fn mul(a: Expr, b: Expr) -> Expr {
-    match (&a, &b) {
-        (Expr::Num(x), _) | (_, Expr::Num(x)) if *x == 0.0 => Expr::Num(0.0),
-        (Expr::Num(x), _) if *x == 1.0 => b,
-        (_, Expr::Num(y)) if *y == 1.0 => a,
-        (Expr::Num(x), Expr::Num(y)) => Expr::Num(x * y),
-        _ => Expr::Mul(Box::new(a), Box::new(b)),
-    }
-}
-
-fn div(a: Expr, b: Expr) -> Expr {
-    match (&a, &b) {
-        (Expr::Num(x), _) if *x == 0.0 => Expr::Num(0.0),
-        (_, Expr::Num(y)) if *y == 1.0 => a,
-        _ => Expr::Div(Box::new(a), Box::new(b)),
-    }
-}
-
-fn pow(a: Expr, n: i32) -> Expr {
-    match n {
-        0 => Expr::Num(1.0),
-        1 => a,
-        _ => Expr::Pow(Box::new(a), n),
-    }
-}
-
-fn neg(a: Expr) -> Expr {
-    match a {
-        Expr::Num(x) => Expr::Num(-x),
-        Expr::Neg(inner) => *inner,
-        other => Expr::Neg(Box::new(other)),
-    }
-}
-
-impl fmt::Display for Expr {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Expr::Num(v) => write!(f, "{v}"),
-            Expr::Y => write!(f, "y"),
-            Expr::Add(a, b) => write!(f, "({a} + {b})"),
-            Expr::Sub(a, b) => write!(f, "({a} - {b})"),
-            Expr::Mul(a, b) => write!(f, "({a} * {b})"),
-            Expr::Div(a, b) => write!(f, "({a} / {b})"),
-            Expr::Pow(a, n) => write!(f, "({a})^{n}"),
-            Expr::Neg(a) => write!(f, "-({a})"),
-            Expr::Call(g, a) => write!(f, "{}({a})", format!("{g:?}").to_lowercase()),
+        let n = pieces.max(1);
+        let mut out: Option<Interval> = None;
+        for i in 0..n {
+            let lo = if i == 0 { a } else { a + (b - a) * (i as f64 / n as f64) };
+            let hi = if i + 1 == n { b } else { a + (b - a) * ((i + 1) as f64 / n as f64) };
+            // Overlap the rounded cut points by one ulp so no y is missed.
+            let e = self.enclose(if i == 0 { lo } else { lo.next_down() }, hi);
+            out = Some(out.map_or(e, |o| o.hull(&e)));
         }
+        out.unwrap_or(Interval::ENTIRE)
     }
 }
 
@@ -403,15 +822,35 @@ mod tests {
         let p = BTreeMap::new();
         for text in ["sin(y)^3 * exp(y/2)", "sqrt(1 + y^2) / cos(y)", "y^-2 + 3*y^4", "exp(-(y - 1)^2)"] {
             let e = parse(text, &p).unwrap();
-            let d = e.derivative();
-            let dd = d.derivative();
             for y in [0.3, 0.9, 1.4] {
+                let [_, d, dd, _] = e.derivatives(y);
                 let h = 1e-5;
                 let fd = (e.eval(y + h) - e.eval(y - h)) / (2.0 * h);
-                assert!((fd - d.eval(y)).abs() < 1e-8 * (1.0 + fd.abs()), "{text}: {fd} vs {}", d.eval(y));
+                assert!((fd - d).abs() < 1e-8 * (1.0 + fd.abs()), "{text}: {fd} vs {d}");
                 let fd2 = (e.eval(y + h) - 2.0 * e.eval(y) + e.eval(y - h)) / (h * h);
-                assert!((fd2 - dd.eval(y)).abs() < 1e-4 * (1.0 + fd2.abs()), "{text}: {fd2} vs {}", dd.eval(y));
+                assert!((fd2 - dd).abs() < 1e-4 * (1.0 + fd2.abs()), "{text}: {fd2} vs {dd}");
+                // the third derivative against a difference of second derivatives
+                let fd3 = (e.derivatives(y + h)[2] - e.derivatives(y - h)[2]) / (2.0 * h);
+                assert!((fd3 - e.derivatives(y)[3]).abs() < 1e-6 * (1.0 + fd3.abs()), "{text}");
             }
+        }
+    }
+
+    #[test]
+    fn third_derivatives_in_closed_form() {
+        // d^3/dy^3 sin(2y) = -8 cos(2y); d^3/dy^3 exp(y^2) = (8y^3 + 12y) exp(y^2);
+        // d^3/dy^3 sqrt(y) = (3/8) y^(-5/2); d^3/dy^3 1/y = -6/y^4.
+        let p = BTreeMap::new();
+        let y = 0.7f64;
+        let cases: [(&str, f64); 4] = [
+            ("sin(2*y)", -8.0 * (2.0 * y).cos()),
+            ("exp(y^2)", (8.0 * y.powi(3) + 12.0 * y) * (y * y).exp()),
+            ("sqrt(y)", 0.375 * y.powf(-2.5)),
+            ("1/y", -6.0 / y.powi(4)),
+        ];
+        for (text, want) in cases {
+            let got = parse(text, &p).unwrap().derivatives(y)[3];
+            assert!((got - want).abs() < 1e-13 * want.abs().max(1.0), "{text}: {got} vs {want}");
         }
     }
 
@@ -419,9 +858,35 @@ mod tests {
     fn repeated_derivatives_of_powers_are_finite_at_zero() {
         // y^2: third derivative 0, not 0 * y^-1 = NaN at y = 0 (regression)
         let e = parse("y^2 + y", &BTreeMap::new()).unwrap();
-        let d3 = e.derivative().derivative().derivative();
-        assert_eq!(d3.eval(0.0), 0.0);
-        assert_eq!(e.derivative().derivative().eval(0.0), 2.0);
+        assert_eq!(e.derivatives(0.0), [0.0, 1.0, 2.0, 0.0]);
+    }
+
+    #[test]
+    fn cost_grows_with_size_not_nesting() {
+        // Regression: a product of 30 factors took 20 s and sin nested 190
+        // deep or 300 sin factors took over 4 GB with symbolic derivatives.
+        let p = BTreeMap::new();
+        let product = vec!["y"; 30].join("*");
+        let nested = "sin(".repeat(190) + "y" + &")".repeat(190);
+        let factors = vec!["sin(y)"; 300].join("*");
+        for text in [product, nested, factors] {
+            let e = parse(&text, &p).unwrap();
+            assert!(e.len() <= text.len(), "tape of {} slots for {} bytes", e.len(), text.len());
+            assert!(e.derivatives(0.4).iter().all(|x| x.is_finite()));
+        }
+        let e = parse(&vec!["y"; 30].join("*"), &p).unwrap();
+        // d^3/dy^3 y^30 = 30 * 29 * 28 y^27
+        let y = 1.01f64;
+        assert!((e.derivatives(y)[3] - 24360.0 * y.powi(27)).abs() < 1e-10 * 24360.0 * y.powi(27));
+    }
+
+    #[test]
+    fn constants_are_folded() {
+        let mut p = BTreeMap::new();
+        p.insert("a".to_string(), 0.5);
+        assert_eq!(parse("2*a + sin(0)", &p).unwrap().constant(), Some(1.0));
+        assert_eq!(parse("2*a*y", &p).unwrap().constant(), None);
+        assert_eq!(parse("(y - y) + 1", &p).unwrap().constant(), None); // depends on y syntactically
     }
 
     #[test]
@@ -432,5 +897,34 @@ mod tests {
         assert!(parse("y^y", &p).unwrap_err().message.contains("exponent"));
         assert!(parse("(y", &p).unwrap_err().message.contains("missing ')'"));
         assert!(parse("", &p).unwrap_err().message.contains("empty"));
+        // power towers and unary chains count towards the depth (no stack overflow)
+        let tower = vec!["2"; 5000].join("^");
+        assert!(parse(&tower, &p).unwrap_err().message.contains("nested too deeply"));
+        let minus = "-".repeat(5000) + "y";
+        assert!(parse(&minus, &p).unwrap_err().message.contains("nested too deeply"));
+        let long_name = "x".repeat(5000);
+        assert!(parse(&long_name, &p).unwrap_err().message.len() < 200);
+    }
+
+    #[test]
+    fn enclosures_hold_values_and_derivatives() {
+        let p = BTreeMap::new();
+        let e = Arc::new(parse("sin(3*y) * exp(-y^2) + sqrt(2 + y)", &p).unwrap());
+        for order in 0..4 {
+            let d = Derivative::new(e.clone(), order);
+            let (lo, hi) = (0.2, 0.45);
+            let enc = d.enclose(lo, hi);
+            for i in 0..=50 {
+                let y = lo + (hi - lo) * i as f64 / 50.0;
+                let v = d.eval(y);
+                // the float value is within rounding of the exact one, which the enclosure holds
+                let slack = 1e-12 * v.abs().max(1.0);
+                assert!(enc.lo - slack <= v && v <= enc.hi + slack, "order {order} at {y}: {v} not in {enc:?}");
+            }
+            if order < 3 {
+                // the mean-value form keeps these tight (order 3 has only the natural extension)
+                assert!(enc.hi - enc.lo < 10.0, "order {order}: enclosure {enc:?} too loose to be useful");
+            }
+        }
     }
 }

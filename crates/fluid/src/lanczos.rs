@@ -28,6 +28,10 @@ pub struct Ritz {
 /// Largest eigenvalue of the symmetric `n x n` operator `apply` (`y = T x`),
 /// to relative accuracy `tol` (with respect to the spectrum's scale).
 ///
+/// A numerical breakdown (a non-finite number in the recurrence, which
+/// overflowing data produce) gives a Ritz value of NaN: callers must not
+/// floor it (`NaN.max(0.0)` is `0`).
+///
 /// ```
 /// use fluid::lanczos::largest_eigenvalue;
 /// // T = diag(1..=100): largest eigenvalue 100
@@ -48,10 +52,14 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
     let mut alpha: Vec<f64> = Vec::with_capacity(m_max);
     let mut beta: Vec<f64> = Vec::with_capacity(m_max);
     let mut w = vec![0.0; n];
-    let mut last = Ritz { value: 0.0, residual: f64::INFINITY, iterations: 0, scale: 0.0 };
+    let breakdown = |steps| Ritz { value: f64::NAN, residual: f64::INFINITY, iterations: steps, scale: f64::NAN };
+    let mut last = breakdown(0);
     for j in 0..m_max {
         apply(&v, &mut w);
         let a = dot(&v, &w);
+        if !a.is_finite() {
+            return breakdown(j);
+        }
         basis.push(v.clone());
         alpha.push(a);
         // full reorthogonalisation, twice ("twice is enough", Parlett)
@@ -63,6 +71,9 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
         }
         let b = norm(&w);
         let steps = j + 1;
+        if !b.is_finite() {
+            return breakdown(steps);
+        }
         let check = steps == m_max || steps % 8 == 0 || b <= 1e-300;
         if check {
             let (_, theta, residual, scale) = top_ritz(&alpha, &beta, b);
@@ -87,6 +98,7 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
 /// value is the Rayleigh quotient `x^T Q x / x^T V x` of the final Ritz
 /// vector, computed with `apply_q` and `apply_v` directly, so it is a lower
 /// estimate of the largest eigenvalue up to rounding in those products).
+/// A numerical breakdown gives a value of NaN, as in [`largest_eigenvalue`].
 ///
 /// ```
 /// use fluid::lanczos::largest_generalized_eigenvalue;
@@ -117,6 +129,10 @@ pub fn largest_generalized_eigenvalue(
     let mut vq = vec![0.0; n];
     apply_v(&q, &mut vq);
     let nrm = dot(&q, &vq).sqrt();
+    let breakdown = |steps| Ritz { value: f64::NAN, residual: f64::INFINITY, iterations: steps, scale: f64::NAN };
+    if !(nrm.is_finite() && nrm > 0.0) {
+        return breakdown(0);
+    }
     q.iter_mut().for_each(|x| *x /= nrm);
     vq.iter_mut().for_each(|x| *x /= nrm);
     let mut basis: Vec<Vec<f64>> = vec![];
@@ -128,6 +144,9 @@ pub fn largest_generalized_eigenvalue(
     for j in 0..m_max {
         apply_q(&q, &mut qx);
         let a = dot(&q, &qx);
+        if !a.is_finite() {
+            return breakdown(j);
+        }
         basis.push(q.clone());
         vbasis.push(vq.clone());
         alpha.push(a);
@@ -142,6 +161,9 @@ pub fn largest_generalized_eigenvalue(
         apply_v(&p, &mut vp);
         let b = dot(&p, &vp).max(0.0).sqrt();
         let steps = j + 1;
+        if !b.is_finite() {
+            return breakdown(steps);
+        }
         if steps == m_max || steps % 8 == 0 || b <= 1e-300 {
             let (coefficients, theta, residual, scale) = top_ritz(&alpha, &beta, b);
             best = Some((coefficients, theta, residual, steps, scale));
@@ -157,7 +179,9 @@ pub fn largest_generalized_eigenvalue(
         q = p.iter().map(|x| x / b).collect();
         vq = vp.iter().map(|x| x / b).collect();
     }
-    let (coefficients, theta, residual, steps, scale) = best.expect("at least one check");
+    // The last step always checks (steps == m_max), and every early exit
+    // above returned: `best` is set unless the recurrence broke down.
+    let Some((coefficients, theta, residual, steps, scale)) = best else { return breakdown(0) };
     // The Ritz vector and its Rayleigh quotient, from Q and V directly.
     let mut x = vec![0.0; n];
     for (c, b) in coefficients.iter().zip(&basis) {
@@ -235,8 +259,16 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
             0.0
         }
     });
-    let eig = SymmetricEigen::new(t);
-    let (imax, &theta) = eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).expect("non-empty");
+    // Bounded iterations: nalgebra's `new` iterates without limit, and a NaN
+    // entry would never converge.
+    let nan = (vec![f64::NAN; steps], f64::NAN, f64::INFINITY, f64::NAN);
+    if t.iter().any(|x| !x.is_finite()) || !b.is_finite() {
+        return nan;
+    }
+    let Some(eig) = SymmetricEigen::try_new(t, f64::EPSILON, 1000 * (steps + 1)) else { return nan };
+    let Some((imax, &theta)) = eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) else {
+        return nan;
+    };
     let scale = eig.eigenvalues.iter().fold(0.0f64, |s, x| s.max(x.abs()));
     let residual = (b * eig.eigenvectors[(steps - 1, imax)]).abs();
     (eig.eigenvectors.column(imax).iter().copied().collect(), theta, residual, scale)

@@ -28,6 +28,7 @@ pub mod banded;
 pub mod choice;
 pub mod expr;
 pub mod grid;
+pub mod interval;
 pub mod lanczos;
 pub mod modes;
 pub mod profile;

@@ -66,6 +66,12 @@ pub enum ModeError {
         /// The wavenumber.
         k: f64,
     },
+    /// A non-finite number appeared (data beyond the range of doubles).
+    #[error("the computation for x-wavenumber {k} broke down on a non-finite number")]
+    NonFinite {
+        /// The wavenumber.
+        k: f64,
+    },
 }
 
 /// Sigma^2 of one mode, from the Lanczos process.
@@ -199,24 +205,58 @@ impl<'g> Mode<'g> {
                 )
             }
         };
+        if !(ritz.value.is_finite() && ritz.residual.is_finite() && ritz.scale.is_finite()) {
+            return Err(ModeError::NonFinite { k: self.k });
+        }
         Ok(ModeSigma2 { lambda_max: ritz.value, ritz })
     }
 
     /// The dense check at this grid: `V ≻ 0` and `sigma2_bar V - Q ≻ 0`,
     /// each by the rigorous floating-point Cholesky test of the generator
-    /// crate. Returns `(form_definite, inequality)`.
+    /// crate, for `V` and `Q` as computed. Forming `sigma2_bar V - Q` in
+    /// floating point rounds each entry by at most
+    /// `2.01 u (|sigma2_bar V_ab| + |Q_ab|)` (`u = 2^-53`: one rounding for the
+    /// product, one for the difference), and symmetrising it (`Q` of a
+    /// periodic grid is symmetric only to rounding) by at most as much again
+    /// plus `u` of the result, so the second test is run with `3.02 u` times
+    /// the Frobenius norm of `|sigma2_bar V| + |Q|` as a radius
+    /// ([`generator::verified_positive_definite_within`]): the claim holds
+    /// for the exact `sigma2_bar V - Q`, not only for its rounding.
+    /// Returns `(form_definite, inequality)`.
     pub fn verify(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
+        if !(sigma2_bar.is_finite() && sigma2_bar >= 0.0) {
+            return (false, false);
+        }
         let kmat = self.grid.energy_matrix(self.k);
         let v = self.form_from_energy(&kmat, form);
         let v = symmetrise(v);
         let definite = generator::verified_positive_definite(&v);
         if form.energy == 0.0 {
             // V diagonal, Q = 0: the inequality 0 <= sigma2_bar V holds for sigma2_bar >= 0.
-            return (definite, definite && sigma2_bar >= 0.0);
+            return (definite, definite);
+        }
+        if !definite {
+            return (false, false);
         }
         let q = self.generator_from_energy(&kmat, form, coef);
-        let g = symmetrise(v * sigma2_bar - q);
-        (definite, definite && generator::verified_positive_definite(&g))
+        let n = v.nrows();
+        let mut g = DMatrix::zeros(n, n);
+        let mut bound2 = 0.0f64;
+        for j in 0..n {
+            for i in 0..n {
+                let bv = sigma2_bar * v[(i, j)];
+                g[(i, j)] = bv - q[(i, j)];
+                let e = bv.abs() + q[(i, j)].abs();
+                bound2 += e * e;
+            }
+        }
+        // 3.02 u (see above), then a relative (1 + 4n u) for the rounding of
+        // the sum of squares and the square root, then the smallest
+        // subnormal per entry for underflow in the products.
+        let u = f64::EPSILON / 2.0;
+        let radius = 3.02 * u * bound2.sqrt() * (1.0 + 4.0 * (n as f64 + 2.0) * u) + 2.0 * n as f64 * 5e-324;
+        let g = symmetrise(g);
+        (true, generator::verified_positive_definite_within(&g, radius))
     }
 }
 

@@ -2,17 +2,18 @@
 //! expressions with their derivatives, and the checks made before any
 //! discretisation: finite on the interval, periodic when the boundary is.
 
-use crate::expr::Expr;
+use crate::expr::{Derivative, Expr};
 use crate::grid::{Boundary, YGrid};
 use crate::modes::Coefficients;
+use std::sync::Arc;
 
 /// The profile, the noise and the domain.
 #[derive(Clone, Debug)]
 pub struct Profile {
     /// `U` and its first three derivatives.
-    pub u: [Expr; 4],
+    pub u: [Derivative; 4],
     /// `eta_k` and `eta_k'`.
-    pub eta: Vec<[Expr; 2]>,
+    pub eta: Vec<[Derivative; 2]>,
     /// The y-interval `[a, b]`.
     pub interval: (f64, f64),
     /// The boundary condition in y.
@@ -44,19 +45,23 @@ pub enum ProfileError {
 }
 
 impl Profile {
-    /// Compile `U` and the noise, with derivatives.
+    /// `U` and the noise, with their derivatives (by Taylor jets: see [`crate::expr`]).
     pub fn new(u: Expr, eta: Vec<Expr>, interval: (f64, f64), boundary: Boundary) -> Self {
-        let u1 = u.derivative();
-        let u2 = u1.derivative();
-        let u3 = u2.derivative();
+        let u = Arc::new(u);
         let eta = eta
             .into_iter()
             .map(|e| {
-                let d = e.derivative();
-                [e, d]
+                let e = Arc::new(e);
+                [Derivative::new(e.clone(), 0), Derivative::new(e, 1)]
             })
             .collect();
-        Profile { u: [u, u1, u2, u3], eta, interval, boundary }
+        Profile { u: std::array::from_fn(|k| Derivative::new(u.clone(), k)), eta, interval, boundary }
+    }
+
+    /// The same profile with every noise field multiplied by `factor` (a
+    /// power of two: then exactly).
+    pub fn with_noise_factor(&self, factor: f64) -> Profile {
+        Profile { eta: self.eta.iter().map(|[e, d]| [e.times(factor), d.times(factor)]).collect(), ..self.clone() }
     }
 
     /// Sample points on the closed interval (`count + 1` of them, uniform).
@@ -89,7 +94,7 @@ impl Profile {
         }
         if self.boundary == Boundary::Periodic {
             let (a, b) = self.interval;
-            let mut quantities: Vec<(String, &Expr)> =
+            let mut quantities: Vec<(String, &Derivative)> =
                 names.iter().zip(&self.u).take(3).map(|(n, e)| (n.to_string(), e)).collect();
             for (i, [e, d]) in self.eta.iter().enumerate() {
                 quantities.push((format!("noise[{i}]"), e));

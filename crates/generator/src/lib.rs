@@ -63,4 +63,4 @@ pub use optimise::{optimise_choice, OptimiseSettings, Optimum};
 pub use pipeline::{analyse, Analysis, OptimumSummary, Settings, StableEvidence, Verdict};
 pub use spectral::{exact_spectrum_test, SpectralProof};
 pub use stopping::StoppingTime;
-pub use verified::verified_positive_definite;
+pub use verified::{verified_positive_definite, verified_positive_definite_within};

@@ -37,6 +37,26 @@ use nalgebra::DMatrix;
 /// assert!(!verified_positive_definite(&b)); // singular to working precision
 /// ```
 pub fn verified_positive_definite(a: &DMatrix<f64>) -> bool {
+    verified_positive_definite_within(a, 0.0)
+}
+
+/// Whether every symmetric `a + E` with `||E||_2 <= radius` is proved
+/// positive definite: the test of [`verified_positive_definite`] with the
+/// shift raised by `radius` (`lambda_min(a + E) >= lambda_min(a) - radius`,
+/// Weyl). Use it when `a` was formed in floating point from the matrix the
+/// claim is about, with `radius` bounding the rounding of that formation.
+///
+/// ```
+/// use nalgebra::DMatrix;
+/// use generator::verified_positive_definite_within;
+/// let a = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]); // eigenvalues 1 and 3
+/// assert!(verified_positive_definite_within(&a, 0.5));
+/// assert!(!verified_positive_definite_within(&a, 1.5));
+/// ```
+pub fn verified_positive_definite_within(a: &DMatrix<f64>, radius: f64) -> bool {
+    if !(radius.is_finite() && radius >= 0.0) {
+        return false;
+    }
     let n = a.nrows();
     if n == 0 || a.ncols() != n || a.iter().any(|x| !x.is_finite()) {
         return false;
@@ -63,7 +83,7 @@ pub fn verified_positive_definite(a: &DMatrix<f64>) -> bool {
     // c >= c0 + u c; inflate by (1 + 16 u) per rounded operation above.
     let c0 = (g / (1.0 - g)) * (1.0 + u) * trace + u * max_diag;
     let underflow = 4.0 * nn.powi(3) * f64::MIN_POSITIVE;
-    let c = (c0 / (1.0 - u) + underflow) * (1.0 + 16.0 * u);
+    let c = (c0 / (1.0 - u) + underflow + radius) * (1.0 + 16.0 * u);
     if !c.is_finite() {
         return false;
     }
