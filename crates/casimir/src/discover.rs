@@ -132,11 +132,13 @@ pub fn discover_casimirs(algebra: &LieAlgebra, max_degree: u32, max_unknowns: us
     let mut skipped = Vec::new();
     let mut degree_searched = 0;
     for d in 1..=max_degree {
-        let monomials = monomials_of_degree(n, d as u16);
-        if monomials.len() > max_unknowns {
+        // Count before enumerating: a 60-dimensional algebra has C(67, 8),
+        // about 6.6e9, monomials of degree 8, which took more than 4 GB to list.
+        if monomial_count(n, d) > max_unknowns as u128 {
             skipped.push(d);
             continue;
         }
+        let monomials = monomials_of_degree(n, d as u16);
         // Column j: the brackets {x^m_j, mu_i} for all i; equation rows are
         // indexed by (i, monomial of the result).
         let mut rows: BTreeMap<(usize, Monomial), BTreeMap<usize, Rational>> = BTreeMap::new();
@@ -180,6 +182,23 @@ pub fn discover_casimirs(algebra: &LieAlgebra, max_degree: u32, max_unknowns: us
     DiscoveryReport { casimirs: found, degree_searched, skipped_degrees: skipped }
 }
 
+/// `C(n + d - 1, d)`, the number of monomials of degree `d` in `n`
+/// variables, saturating at `u128::MAX`.
+fn monomial_count(n: usize, d: u32) -> u128 {
+    if n == 0 {
+        return u128::from(d == 0);
+    }
+    let mut c: u128 = 1;
+    for i in 1..=d as u128 {
+        // c * (n - 1 + i) / i stays an integer at every step
+        match c.checked_mul(n as u128 - 1 + i) {
+            Some(v) => c = v / i,
+            None => return u128::MAX,
+        }
+    }
+    c
+}
+
 /// Scale so that coefficients are coprime integers with a positive leading one.
 fn normalise(p: Poly) -> Poly {
     let coefficients: Vec<Rational> = p.terms().map(|(_, c)| c.clone()).collect();
@@ -214,4 +233,33 @@ fn products_of_degree(generators: &[Poly], d: u32) -> Vec<Poly> {
     // recursion produces a single factor only when a generator has degree d,
     // which cannot happen because generators of degree d are being searched.
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn monomials_are_counted_not_listed() {
+        // C(n + d - 1, d): 3 variables of degree 2 give 6 (x^2, y^2, z^2, xy, xz, yz);
+        // 60 variables of degree 8 give C(67, 8) = 6,522,361,560 (checked with
+        // Python's math.comb), which is not enumerated.
+        assert_eq!(monomial_count(3, 2), 6);
+        assert_eq!(monomial_count(3, 2) as usize, monomials_of_degree(3, 2).len());
+        assert_eq!(monomial_count(60, 8), 6_522_361_560);
+        assert_eq!(monomial_count(64, 200), u128::MAX);
+    }
+
+    #[test]
+    fn a_large_algebra_skips_large_degrees_quickly() {
+        // Regression: a 60-dimensional abelian algebra with discovery_degree 8
+        // listed billions of monomials (over 4 GB). Degree 1 has 60 unknowns
+        // (every coordinate is a Casimir of an abelian algebra), degree 2 has
+        // C(61, 2) = 1830, and from degree 3 on (C(62, 3) = 37820) all are skipped.
+        let names: Vec<String> = (0..60).map(|i| format!("x{i}")).collect();
+        let algebra = LieAlgebra::from_structure_constants("abelian", &names, &[]).unwrap();
+        let report = discover_casimirs(&algebra, 8, 2000);
+        assert_eq!(report.skipped_degrees, vec![3, 4, 5, 6, 7, 8]);
+        assert_eq!(report.casimirs.len(), 60);
+    }
 }

@@ -36,8 +36,9 @@ mod upoly;
 pub use matrix::{AffineSolution, Matrix};
 pub use num_bigint::BigInt;
 pub use number::{
-    best_rational_approximation, decimal_at_least, parse_number, rational_from_f64, rational_to_f64, NumberError,
-    Rational,
+    best_rational_approximation, binary_exponent, decimal_at_least, parse_certificate_rational, parse_number,
+    power_of_two, rational_from_f64, rational_to_f64, rational_to_f64_up, NumberError, Rational,
+    MAX_CERTIFICATE_DIGITS, MAX_LITERAL_DIGITS,
 };
 pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};
 pub use poly::{monomials_of_degree, Monomial, Poly};

@@ -12,6 +12,12 @@ pub use crate::rational::Rational;
 /// range of `f64`, so nothing physical is lost.
 pub const MAX_DECIMAL_EXPONENT: i64 = 400;
 
+/// Most digits accepted in one literal of a spec (`parse_number`). Reading a
+/// decimal costs time quadratic in its digits; a thousand digits is far
+/// beyond any physical constant, and a 100,000-digit parameter took seconds
+/// per use before this limit.
+pub const MAX_LITERAL_DIGITS: usize = 1000;
+
 /// Why a piece of text is not an exact number.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
@@ -39,6 +45,15 @@ pub enum NumberError {
         /// The offending text.
         text: String,
     },
+    /// More digits than allowed (the cost of reading a number grows with
+    /// the square of its digits).
+    #[error("a number of {digits} digits is longer than the limit of {limit}")]
+    TooLong {
+        /// Digits found.
+        digits: usize,
+        /// The limit.
+        limit: usize,
+    },
 }
 
 /// Parse an integer, a decimal literal (with optional exponent) or a rational
@@ -62,30 +77,34 @@ pub fn parse_number(text: &str) -> Result<Rational, NumberError> {
     if t.is_empty() {
         return Err(NumberError::Empty);
     }
+    let digits = t.bytes().filter(u8::is_ascii_digit).count();
+    if digits > MAX_LITERAL_DIGITS {
+        return Err(NumberError::TooLong { digits, limit: MAX_LITERAL_DIGITS });
+    }
     let lower = t.to_ascii_lowercase();
     let stripped = lower.trim_start_matches(['+', '-']);
     if stripped.starts_with("nan") || stripped.starts_with("inf") {
-        return Err(NumberError::NotFinite { text: t.to_string() });
+        return Err(NumberError::NotFinite { text: short(t) });
     }
     let value = if let Some((num, den)) = t.split_once('/') {
         let n = parse_decimal(num.trim(), t)?;
         let d = parse_decimal(den.trim(), t)?;
         if d.is_zero() {
-            return Err(NumberError::ZeroDenominator { text: t.to_string() });
+            return Err(NumberError::ZeroDenominator { text: short(t) });
         }
         n / d
     } else {
         parse_decimal(t, t)?
     };
     if !rational_to_f64(&value).is_finite() {
-        return Err(NumberError::NotFinite { text: t.to_string() });
+        return Err(NumberError::NotFinite { text: short(t) });
     }
     Ok(value)
 }
 
 /// Parse `[+-]digits[.digits][(e|E)[+-]digits]` exactly.
 fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
-    let malformed = || NumberError::Malformed { text: whole.to_string() };
+    let malformed = || NumberError::Malformed { text: short(whole) };
     let bytes = s.as_bytes();
     let mut i = 0;
     let mut negative = false;
@@ -128,7 +147,7 @@ fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
         }
         // Long digit strings are rejected before conversion, so no overflow.
         if exp_digits.trim_start_matches('0').len() > 6 {
-            return Err(NumberError::NotFinite { text: whole.to_string() });
+            return Err(NumberError::NotFinite { text: short(whole) });
         }
         exponent = exp_digits.parse::<i64>().map_err(|_| malformed())?;
         if exp_negative {
@@ -157,7 +176,7 @@ fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
     // The decimal point position plus the digit count bounds the magnitude.
     let magnitude = total_exponent + digits.trim_start_matches('0').len() as i64;
     if !(-MAX_DECIMAL_EXPONENT..=MAX_DECIMAL_EXPONENT).contains(&magnitude) {
-        return Err(NumberError::NotFinite { text: whole.to_string() });
+        return Err(NumberError::NotFinite { text: short(whole) });
     }
     let ten = BigInt::from(10);
     let value = if total_exponent >= 0 {
@@ -292,6 +311,110 @@ pub fn decimal_at_least(x: f64, digits: u32) -> Option<Rational> {
     Some(Rational::from_integer(n) * unit)
 }
 
+/// `floor(log2 |r|)` for `r != 0` (exact, from the bit lengths and one
+/// comparison), `None` for zero.
+///
+/// ```
+/// use exact::{binary_exponent, Rational};
+/// assert_eq!(binary_exponent(&Rational::new_small(3, 1)), Some(1));
+/// assert_eq!(binary_exponent(&Rational::new_small(1, 4)), Some(-2));
+/// assert_eq!(binary_exponent(&Rational::new_small(-5, 16)), Some(-2)); // 5/16 = 0.3125 in [1/4, 1/2)
+/// assert_eq!(binary_exponent(&Rational::new_small(0, 1)), None);
+/// ```
+pub fn binary_exponent(r: &Rational) -> Option<i64> {
+    r.log2_floor()
+}
+
+/// `2^e` as an exact rational.
+///
+/// ```
+/// use exact::{power_of_two, Rational};
+/// assert_eq!(power_of_two(-3), Rational::new_small(1, 8));
+/// assert_eq!(power_of_two(10), Rational::from(1024));
+/// ```
+pub fn power_of_two(e: i64) -> Rational {
+    let big = BigInt::from(1) << e.unsigned_abs() as usize;
+    if e >= 0 {
+        Rational::from_integer(big)
+    } else {
+        Rational::new(BigInt::from(1), big)
+    }
+}
+
+/// The smallest double `>= r` (`f64::INFINITY` beyond the largest double).
+///
+/// ```
+/// use exact::{rational_to_f64_up, Rational};
+/// let third = Rational::new_small(1, 3);
+/// let x = rational_to_f64_up(&third);
+/// assert!(Rational::from_float(x).unwrap() >= third && x == 1.0 / 3.0 || x == (1.0f64 / 3.0).next_up());
+/// assert_eq!(rational_to_f64_up(&Rational::new_small(1, 4)), 0.25);
+/// ```
+pub fn rational_to_f64_up(r: &Rational) -> f64 {
+    let x = rational_to_f64(r);
+    if !x.is_finite() {
+        return if r.is_negative() { f64::MIN } else { f64::INFINITY };
+    }
+    match Rational::from_float(x) {
+        Some(exact_x) if &exact_x < r => x.next_up(),
+        _ => x,
+    }
+}
+
+/// Largest number of digits in a rational read by [`parse_certificate_rational`].
+pub const MAX_CERTIFICATE_DIGITS: usize = 20_000;
+
+/// Read a rational written by the engine into a certificate: an integer or
+/// `p/q` with integers `p`, `q` (no decimal point, no exponent), exactly,
+/// whatever its size up to [`MAX_CERTIFICATE_DIGITS`] digits in all. Unlike
+/// [`parse_number`], which reads a *spec*'s numbers and insists that they are
+/// finite doubles, this reads what exact arithmetic produced: `Q` entries of
+/// `1/10^600` are legitimate there and must re-check.
+///
+/// ```
+/// use exact::{parse_certificate_rational, Rational};
+/// let tiny = format!("1/1{}", "0".repeat(600));
+/// assert!(parse_certificate_rational(&tiny).unwrap() > Rational::new_small(0, 1));
+/// assert_eq!(parse_certificate_rational("-3/6").unwrap(), Rational::new_small(-1, 2));
+/// assert!(parse_certificate_rational("0.5").is_err());
+/// assert!(parse_certificate_rational(&"9".repeat(30_000)).is_err());
+/// ```
+pub fn parse_certificate_rational(text: &str) -> Result<Rational, NumberError> {
+    let t = text.trim();
+    let malformed = || NumberError::Malformed { text: short(t) };
+    let digits = t.bytes().filter(u8::is_ascii_digit).count();
+    if digits > MAX_CERTIFICATE_DIGITS {
+        return Err(NumberError::TooLong { digits, limit: MAX_CERTIFICATE_DIGITS });
+    }
+    let integer = |s: &str| -> Result<BigInt, NumberError> {
+        let body = s.strip_prefix('-').or_else(|| s.strip_prefix('+')).unwrap_or(s);
+        if body.is_empty() || !body.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(malformed());
+        }
+        s.parse::<BigInt>().map_err(|_| malformed())
+    };
+    match t.split_once('/') {
+        Some((n, d)) => {
+            let (n, d) = (integer(n)?, integer(d)?);
+            if d.is_zero() {
+                return Err(NumberError::ZeroDenominator { text: short(t) });
+            }
+            Ok(Rational::new(n, d))
+        }
+        None => Ok(Rational::from_integer(integer(t)?)),
+    }
+}
+
+/// At most 60 characters of `t`, for messages.
+fn short(t: &str) -> String {
+    if t.len() <= 60 {
+        t.to_string()
+    } else {
+        let cut = (0..=60).rev().find(|&i| t.is_char_boundary(i)).unwrap_or(0);
+        format!("{}… ({} characters)", &t[..cut], t.len())
+    }
+}
+
 /// `1` as a rational (convenience).
 pub(crate) fn one() -> Rational {
     Rational::one()
@@ -327,6 +450,18 @@ mod tests {
         assert!(matches!(parse_number("1e99999999999999"), Err(NumberError::NotFinite { .. })));
         assert!(matches!(parse_number("1.2.3"), Err(NumberError::Malformed { .. })));
         assert!(matches!(parse_number("e5"), Err(NumberError::Malformed { .. })));
+    }
+
+    #[test]
+    fn long_literals_are_refused_with_their_length_not_echoed() {
+        // Regression: a 100,000-digit parameter took time quadratic in its
+        // digits, and error messages echoed the whole literal.
+        let long = "1".repeat(100_000);
+        assert!(matches!(parse_number(&long), Err(NumberError::TooLong { digits: 100_000, .. })));
+        let junk = format!("{}x", "1".repeat(500));
+        let message = parse_number(&junk).unwrap_err().to_string();
+        assert!(message.len() < 200, "{message}");
+        assert!(parse_number(&format!("0.{}", "1".repeat(MAX_LITERAL_DIGITS - 1))).is_ok());
     }
 
     #[test]

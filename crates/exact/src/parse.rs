@@ -45,11 +45,23 @@ pub struct Limits {
     pub max_depth: usize,
     /// Longest expression text in bytes (default 100,000).
     pub max_length: usize,
+    /// Largest size in bits of the numerator or denominator of any
+    /// coefficient, intermediate ones included (default 4096, about 1233
+    /// decimal digits: far beyond physical constants, and it keeps
+    /// `((10^64)^64)^64` from building a 870,000-bit integer).
+    pub max_coefficient_bits: u64,
 }
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits { max_exponent: 64, max_degree: 64, max_terms: 20_000, max_depth: 200, max_length: 100_000 }
+        Limits {
+            max_exponent: 64,
+            max_degree: 64,
+            max_terms: 20_000,
+            max_depth: 200,
+            max_length: 100_000,
+            max_coefficient_bits: 4096,
+        }
     }
 }
 
@@ -147,6 +159,14 @@ pub enum ParseErrorKind {
         terms: usize,
         /// Term limit.
         max_terms: usize,
+    },
+    /// A coefficient beyond the size limit.
+    #[error("a coefficient of about {bits} bits is beyond the limit of {limit} bits (about {} decimal digits)", limit * 3 / 10)]
+    CoefficientTooLarge {
+        /// Bits reached (or an upper bound, when refused before computing).
+        bits: u64,
+        /// The limit.
+        limit: u64,
     },
     /// Nesting beyond the depth limit.
     #[error("expression nested too deeply (limit {0})")]
@@ -258,6 +278,27 @@ pub fn parse_expression(text: &str, symbols: &Symbols) -> Result<Poly, ParseErro
     Ok(value)
 }
 
+/// The largest coefficient size in bits.
+fn max_bits(p: &Poly) -> u64 {
+    p.terms().map(|(_, c)| c.size_bits()).max().unwrap_or(1)
+}
+
+/// Monomials of total degree at most `d` in `v` variables, `C(v + d, v)`, saturating.
+fn monomial_count(v: usize, d: u32) -> usize {
+    let mut c: u128 = 1;
+    for i in 1..=v as u128 {
+        c = c * (d as u128 + i) / i;
+        if c > usize::MAX as u128 {
+            return usize::MAX;
+        }
+    }
+    c as usize
+}
+
+fn saturating_pow(b: usize, e: u32) -> usize {
+    (0..e).fold(1usize, |acc, _| acc.saturating_mul(b))
+}
+
 fn token_text(t: &Token) -> String {
     match t {
         Token::Number(s) | Token::Ident(s) => s.to_string(),
@@ -284,6 +325,10 @@ impl<'a> Parser<'a> {
 
     fn check_size(&self, p: Poly, position: usize) -> Result<Poly, ParseError> {
         let l = &self.symbols.limits;
+        let bits = max_bits(&p);
+        if bits > l.max_coefficient_bits {
+            return self.err(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, position);
+        }
         let degree = p.total_degree();
         if degree > l.max_degree || p.num_terms() > l.max_terms {
             return self.err(
@@ -297,6 +342,19 @@ impl<'a> Parser<'a> {
             );
         }
         Ok(p)
+    }
+
+    /// Refuse `base^m` before computing it when its coefficients would
+    /// exceed the size limit: each is a sum of products of `m` coefficients
+    /// (with multinomial weights below `terms^m`).
+    fn bound_power_bits(&self, base: &Poly, m: u32, at: usize) -> Result<(), ParseError> {
+        let l = &self.symbols.limits;
+        let per_factor = max_bits(base) + (usize::BITS - base.num_terms().leading_zeros()) as u64;
+        let bits = per_factor.saturating_mul(m as u64);
+        if bits > 2 * l.max_coefficient_bits {
+            return self.err(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
+        }
+        Ok(())
     }
 
     fn enter(&mut self) -> Result<(), ParseError> {
@@ -339,6 +397,12 @@ impl<'a> Parser<'a> {
                         at,
                     );
                 }
+                // Each coefficient of the product is a sum of at most
+                // `terms` products: its size is bounded before it is formed.
+                let bits = 2 * (max_bits(&acc) + max_bits(&rhs)) + 64;
+                if bits > 4 * l.max_coefficient_bits {
+                    return self.err(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
+                }
                 acc = self.check_size(acc.mul(&rhs), at)?;
             } else {
                 let Some(d) = rhs.constant_value() else {
@@ -347,7 +411,7 @@ impl<'a> Parser<'a> {
                 if d.is_zero() {
                     return self.err(ParseErrorKind::DivisionByZero, rhs_at);
                 }
-                acc = acc.scale(&d.recip());
+                acc = self.check_size(acc.scale(&d.recip()), at)?;
             }
         }
         Ok(acc)
@@ -400,7 +464,8 @@ impl<'a> Parser<'a> {
                 if b.is_zero() {
                     return self.err(ParseErrorKind::ZeroToNegativePower, at);
                 }
-                return Ok(Poly::constant(self.nvars(), b.recip().pow(m)));
+                self.bound_power_bits(&base, m, at)?;
+                return self.check_size(Poly::constant(self.nvars(), b.recip().pow(m)), at);
             }
             let l = &self.symbols.limits;
             let degree = base.total_degree().saturating_mul(m);
@@ -415,8 +480,19 @@ impl<'a> Parser<'a> {
                     at,
                 );
             }
+            self.bound_power_bits(&base, m, at)?;
             if let Some(b) = base.constant_value() {
-                return Ok(Poly::constant(self.nvars(), b.pow(m)));
+                return self.check_size(Poly::constant(self.nvars(), b.pow(m)), at);
+            }
+            // Terms of base^m: at most the monomials of degree <= m deg(base)
+            // in the variables base uses, refused before they are formed.
+            let vars = (0..self.nvars()).filter(|&i| base.terms().any(|(mono, _)| mono[i] > 0)).count();
+            let terms = monomial_count(vars, degree).min(saturating_pow(base.num_terms(), m));
+            if terms > l.max_terms.saturating_mul(4) {
+                return self.err(
+                    ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms, max_terms: l.max_terms },
+                    at,
+                );
             }
             return self.check_size(base.pow(m), at);
         }
@@ -521,6 +597,21 @@ mod tests {
         assert!(matches!(kind(&deep), ParseErrorKind::TooDeep(_)));
         let minus = "-".repeat(500) + "x";
         assert!(matches!(kind(&minus), ParseErrorKind::TooDeep(_)));
+    }
+
+    #[test]
+    fn huge_coefficients_are_refused_before_they_are_built() {
+        // Regression: ((10^64)^64)^64 * x^2 built a 870,000-bit integer and
+        // the pipeline then ran for minutes on it.
+        let s = syms();
+        let kind = |t: &str| parse_expression(t, &s).unwrap_err().kind;
+        assert!(matches!(kind("((10^64)^64)^64*x^2"), ParseErrorKind::CoefficientTooLarge { .. }));
+        assert!(matches!(kind("(x + 10^60)^60"), ParseErrorKind::CoefficientTooLarge { .. }));
+        // 10^1200 is 3987 bits: below the default 4096, accepted; its square is not.
+        assert!(parse_expression("(10^60)^20*x", &s).is_ok());
+        assert!(matches!(kind("(10^60)^20*(10^60)^20*x"), ParseErrorKind::CoefficientTooLarge { .. }));
+        // an ordinary quartic with rational coefficients is far below the limit
+        assert!(parse_expression("(x/3 + 2*y/7)^16", &s).is_ok());
     }
 
     #[test]

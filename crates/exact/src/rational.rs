@@ -190,6 +190,44 @@ impl Rational {
         }
     }
 
+    /// The larger bit length of numerator and denominator (without
+    /// allocating): the size that the cost of arithmetic grows with.
+    ///
+    /// ```
+    /// use exact::Rational;
+    /// assert_eq!(Rational::new_small(3, 8).size_bits(), 4);
+    /// assert_eq!(Rational::new_small(0, 1).size_bits(), 1);
+    /// ```
+    pub fn size_bits(&self) -> u64 {
+        match &self.0 {
+            Repr::Small(n, d) => {
+                let bits = |x: u64| (64 - x.leading_zeros() as u64).max(1);
+                bits(n.unsigned_abs()).max(bits(*d as u64))
+            }
+            Repr::Big(b) => b.numer().bits().max(b.denom().bits()).max(1),
+        }
+    }
+
+    /// `floor(log2 |self|)`, `None` for zero (no allocation for small values).
+    pub(crate) fn log2_floor(&self) -> Option<i64> {
+        match &self.0 {
+            Repr::Small(0, _) => None,
+            Repr::Small(n, d) => {
+                let (n, d) = (n.unsigned_abs() as u128, *d as u128);
+                let e = (127 - n.leading_zeros() as i64) - (127 - d.leading_zeros() as i64);
+                // |n/d| >= 2^e iff n >= d 2^e (shifts stay below 2^127: both < 2^64)
+                let at_least = if e >= 0 { n >= d << e } else { n << (-e) >= d };
+                Some(if at_least { e } else { e - 1 })
+            }
+            Repr::Big(b) => {
+                let (n, d) = (b.numer().magnitude(), b.denom().magnitude());
+                let e = n.bits() as i64 - d.bits() as i64;
+                let at_least = if e >= 0 { n >= &(d << e as usize) } else { &(n << (-e) as usize) >= d };
+                Some(if at_least { e } else { e - 1 })
+            }
+        }
+    }
+
     /// `self^e` for a non-negative exponent.
     pub fn pow(&self, e: u32) -> Rational {
         num_traits::pow(self.clone(), e as usize)

@@ -9,7 +9,7 @@
 //! `lambda_max`: the constant is then certified *sharp*, not just an upper
 //! bound.
 
-use exact::{best_rational_approximation, decimal_at_least, rational_from_f64, Matrix, Rational};
+use exact::{best_rational_approximation, decimal_at_least, power_of_two, rational_from_f64, Matrix, Rational};
 use num_traits::Zero;
 
 /// A certified rational `Sigma^2`.
@@ -38,10 +38,17 @@ pub fn sigma2_bound_holds(p: &Matrix, q: &Matrix, sign: i8, s: &Rational) -> boo
 /// test allows, trying in turn: `0` (when the estimate is not positive),
 /// simple rationals near the estimate (which certify the sharp value when
 /// `lambda_max` is rational), decimals just above it (relative margins
-/// `1e-14 .. 1e-10`), and, when the floating-point estimate is off (an
-/// ill-conditioned `P`), an exact bisection that brackets `lambda_max` to
-/// `1e-13` relative with the exact test alone. `None` only if no finite
-/// bracket is found.
+/// `1e-14 .. 1e-10`), and, when none of those is both a bound and within
+/// `1e-10` of `lambda_max` (an ill-conditioned `P`, or a constant outside the
+/// range of doubles, where the floating-point estimate means nothing), an
+/// exact search that needs no estimate: powers of two bracket `lambda_max`
+/// by galloping over the exponent, then bisection on the exponent and on
+/// the value brackets it to a relative `1e-13`, every step decided by the
+/// exact test and every comparison made in rational arithmetic. So the
+/// result is always within `1e-10` of `lambda_max` when it exists (`sharp`
+/// or not), whatever the scale: `Sigma^2 = 3e-321` (noise `1e-160`) is found
+/// as exactly as `0.27`. `None` only if no power of two between `2^-8000`
+/// and `2^8000` bounds `Q`.
 ///
 /// ```
 /// use exact::{Matrix, Rational};
@@ -53,25 +60,13 @@ pub fn sigma2_bound_holds(p: &Matrix, q: &Matrix, sign: i8, s: &Rational) -> boo
 /// let s = certify_sigma2(&p, &qm, 1, 0.27000000000000002).unwrap();
 /// assert_eq!(s.value, q(27, 100));
 /// assert!(s.sharp);
+/// // The same Q times 2^-1200: no double holds lambda_max, the estimate is 0,
+/// // and the exact search still finds 27/100 * 2^-1200.
+/// let tiny = exact::power_of_two(-1200);
+/// let s = certify_sigma2(&p, &qm.scale(&tiny), 1, 0.0).unwrap();
+/// assert_eq!(s.value, q(27, 100) * tiny);
 /// ```
 pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option<ExactSigma2> {
-    if !estimate.is_finite() {
-        return None;
-    }
-    // Candidates, generated lazily (most certificates accept the first).
-    let simple = [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000, 1 << 20, 1 << 30];
-    let margins = [1e-14, 1e-13, 1e-12, 1e-11, 1e-10];
-    let candidates = (estimate <= 1e-12)
-        .then(Rational::zero)
-        .into_iter()
-        .chain(simple.into_iter().filter(|_| estimate > 0.0).filter_map(|denominator| {
-            let r = best_rational_approximation(estimate, denominator)?;
-            ((exact::rational_to_f64(&r) - estimate).abs() <= 1e-13 * estimate).then_some(r)
-        }))
-        .chain((estimate > 0.0).then(|| rational_from_f64(estimate)).flatten())
-        .chain(
-            margins.into_iter().filter(|_| estimate > 0.0).filter_map(|m| decimal_at_least(estimate * (1.0 + m), 16)),
-        );
     let accept = |s: &Rational| -> Option<ExactSigma2> {
         let gap = sigma2_gap(p, q, sign, s);
         if s.is_negative() || !gap.is_positive_semidefinite() {
@@ -85,55 +80,120 @@ pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option
     let tight = |e: &ExactSigma2| {
         e.sharp || !sigma2_bound_holds(p, q, sign, &(&e.value * Rational::new_small(9_999_999_999, 10_000_000_000)))
     };
-    let mut upper: Option<Rational> = None;
-    let mut tried: Vec<Rational> = Vec::new();
-    for s in candidates {
-        if tried.contains(&s) {
-            continue;
-        }
-        tried.push(s.clone());
-        if let Some(e) = accept(&s) {
-            if tight(&e) {
-                return Some(e);
+    // Candidates near a usable estimate (a normal positive double), tried
+    // lazily: most certificates accept the first.
+    if estimate.is_finite() && estimate >= f64::MIN_POSITIVE {
+        let simple = [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000, 1 << 20, 1 << 30];
+        let margins = [1e-14, 1e-13, 1e-12, 1e-11, 1e-10];
+        let candidates = simple
+            .into_iter()
+            .filter_map(|denominator| {
+                let r = best_rational_approximation(estimate, denominator)?;
+                ((exact::rational_to_f64(&r) - estimate).abs() <= 1e-13 * estimate).then_some(r)
+            })
+            // the estimate rounded to 15 significant digits: the exact value
+            // when Sigma^2 is a short decimal at any scale (3e-300, 3e300)
+            .chain(exact::parse_number(&format!("{estimate:.14e}")).ok())
+            .chain(rational_from_f64(estimate))
+            .chain(margins.into_iter().filter_map(|m| decimal_at_least(estimate * (1.0 + m), 16)));
+        let mut tried: Vec<Rational> = Vec::new();
+        for s in candidates {
+            if tried.contains(&s) {
+                continue;
             }
-            upper = Some(e.value);
-            break;
-        }
-    }
-    // The floating-point estimate was off (an ill-conditioned P): bracket
-    // lambda_max exactly and bisect with the exact test, on short decimals.
-    let mut hi = match upper {
-        Some(u) => u,
-        None => {
-            let mut hi = decimal_at_least(estimate.max(1e-300) * 2.0 + 1e-12, 16)?;
-            let mut grow = 0;
-            while !sigma2_bound_holds(p, q, sign, &hi) {
-                hi = &hi * Rational::from(4) + Rational::new_small(1, 1_000_000);
-                grow += 1;
-                if grow > 60 {
-                    return None;
+            tried.push(s.clone());
+            if let Some(e) = accept(&s) {
+                if tight(&e) {
+                    return Some(e);
                 }
+                break; // a bound, but loose: the estimate is off; search exactly
             }
-            hi
         }
-    };
-    let mut lo = Rational::zero();
-    if sigma2_bound_holds(p, q, sign, &lo) {
-        return accept(&lo);
     }
-    for _ in 0..100 {
-        let (lf, hf) = (exact::rational_to_f64(&lo), exact::rational_to_f64(&hi));
-        if hf - lf <= 1e-13 * hf {
-            break;
+    if sigma2_bound_holds(p, q, sign, &Rational::zero()) {
+        return accept(&Rational::zero());
+    }
+    let (lo, hi, e) = exact_search(p, q, sign, estimate)?;
+    // A simple rational in the bracket (scaled by 2^e) is lambda_max itself
+    // when the bound is also singular there: the sharp value, at any scale.
+    let mantissa = exact::rational_to_f64(&(&hi / &power_of_two(e)));
+    for denominator in [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000] {
+        let Some(r) = best_rational_approximation(mantissa, denominator) else { continue };
+        let candidate = r * power_of_two(e);
+        if candidate > lo && candidate <= hi {
+            if let Some(found) = accept(&candidate).filter(|f| f.sharp) {
+                return Some(found);
+            }
         }
-        let mid = decimal_at_least(0.5 * (lf + hf), 16)
-            .filter(|m| m > &lo && m < &hi)
-            .unwrap_or_else(|| (&lo + &hi) / Rational::from(2));
+    }
+    accept(&hi)
+}
+
+/// The exact search of [`certify_sigma2`]: `(lo, hi, e)` with the bound
+/// failing at `lo`, holding at `hi`, `hi - lo <= 1e-13 hi` (so `hi` is within
+/// `1e-13` of `lambda_max`) and `2^e <= lo < hi <= 2^(e+1)`, assuming the
+/// bound fails at 0.
+fn exact_search(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option<(Rational, Rational, i64)> {
+    const MAX_EXPONENT: i64 = 8000;
+    let holds = |e: i64| sigma2_bound_holds(p, q, sign, &power_of_two(e));
+    // Start at the estimate's exponent when it has one.
+    let start = if estimate.is_finite() && estimate > 0.0 { estimate.log2().floor() as i64 } else { 0 };
+    let start = start.clamp(-MAX_EXPONENT, MAX_EXPONENT);
+    // Gallop to a bracket 2^lo_e (fails) < lambda_max <= 2^hi_e (holds).
+    let (mut lo_e, mut hi_e);
+    if holds(start) {
+        hi_e = start;
+        let mut step = 1;
+        loop {
+            let e = hi_e - step;
+            if e < -MAX_EXPONENT {
+                return None;
+            }
+            if holds(e) {
+                hi_e = e;
+                step *= 2;
+            } else {
+                lo_e = e;
+                break;
+            }
+        }
+    } else {
+        lo_e = start;
+        let mut step = 1;
+        loop {
+            let e = lo_e + step;
+            if e > MAX_EXPONENT {
+                return None;
+            }
+            if holds(e) {
+                hi_e = e;
+                break;
+            }
+            lo_e = e;
+            step *= 2;
+        }
+    }
+    // Bisect the exponent down to consecutive powers of two.
+    while hi_e - lo_e > 1 {
+        let mid = lo_e + (hi_e - lo_e) / 2;
+        if holds(mid) {
+            hi_e = mid;
+        } else {
+            lo_e = mid;
+        }
+    }
+    // Bisect the value in [2^lo_e, 2^hi_e]: dyadic midpoints stay short.
+    let mut lo = power_of_two(lo_e);
+    let mut hi = power_of_two(hi_e);
+    let tolerance = Rational::new_small(1, 10_000_000_000_000);
+    let half = Rational::new_small(1, 2);
+    while &hi - &lo > &hi * &tolerance {
+        let mid = (&lo + &hi) * &half;
         if sigma2_bound_holds(p, q, sign, &mid) {
             hi = mid;
         } else {
             lo = mid;
         }
     }
-    accept(&hi)
+    Some((lo, hi, lo_e))
 }

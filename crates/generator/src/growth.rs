@@ -1,6 +1,6 @@
 //! The sharpest growth constant `Sigma^2` from the generalized eigenproblem.
 
-use exact::Matrix;
+use exact::{binary_exponent, power_of_two, Matrix};
 use nalgebra::{DVector, SymmetricEigen};
 
 /// The result of the generalized symmetric eigenproblem `Q v = l P v`.
@@ -34,6 +34,14 @@ pub enum GrowthError {
     /// The symmetric eigen-iteration did not converge.
     #[error("the symmetric eigenvalue iteration did not converge")]
     NoConvergence,
+    /// The data or the result lie outside what doubles represent: entries
+    /// spanning more than 2^1000 within `P` or `Q` (small ones would round
+    /// to zero), or a `lambda_max` beyond the double range.
+    #[error("Sigma^2 or the matrices P, Q lie outside the range of double precision ({detail}); rescale time or the noise amplitudes")]
+    OutOfRange {
+        /// What is out of range.
+        detail: String,
+    },
 }
 
 /// `Sigma^2 = max(0, lambda_max(sQ, sP))` with `s = sign` (+1 or -1).
@@ -51,6 +59,65 @@ pub enum GrowthError {
 /// assert!((g.sigma2 - 3.0).abs() < 1e-14);
 /// ```
 pub fn growth_constant(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstant, GrowthError> {
+    // Scale P by 2^-ep (ep even, so the direction rescales by 2^(ep/2)) and
+    // Q by 2^-eq before rounding to doubles: the generalized eigenvalues
+    // scale by 2^(eq - ep) exactly, and a Q of size 1e-321 (noise 1e-160) no
+    // longer rounds to subnormals that carry no digits.
+    let (p_lo, p_hi) = exponent_range(p);
+    let (q_lo, q_hi) = exponent_range(q);
+    for (name, lo, hi) in [("P", p_lo, p_hi), ("Q", q_lo, q_hi)] {
+        if hi - lo > 1000 {
+            return Err(GrowthError::OutOfRange {
+                detail: format!("the entries of {name} span 2^{lo} to 2^{hi}: the small ones would round to zero"),
+            });
+        }
+    }
+    let ep = 2 * (p_hi.clamp(-2000, 2000) / 2);
+    let eq = q_hi.clamp(-2000, 2000);
+    if ep.abs() <= 600 && eq.abs() <= 600 {
+        // Far from both ends of the double range: no scaling needed (the
+        // common case, kept free of exact scalings).
+        return growth_constant_normalised(p, q, sign);
+    }
+    let g = growth_constant_normalised(&p.scale(&power_of_two(-ep)), &q.scale(&power_of_two(-eq)), sign)?;
+    let factor = |e: i64| -> f64 { 2f64.powi(e.clamp(-1100, 1100) as i32) };
+    let scale = |x: f64| -> f64 {
+        // 2^(eq - ep) may itself be out of range when x is not: apply it in two halves.
+        let d = eq - ep;
+        x * factor(d / 2) * factor(d - d / 2)
+    };
+    let largest = scale(g.largest_eigenvalue);
+    let log2 = |x: f64| x.abs().log2() + (eq - ep) as f64;
+    if !largest.is_finite() || (g.largest_eigenvalue > 0.0 && largest < f64::MIN_POSITIVE) {
+        return Err(GrowthError::OutOfRange {
+            detail: format!("lambda_max is about 2^{:.0}", log2(g.largest_eigenvalue)),
+        });
+    }
+    let half = factor(-ep / 2);
+    Ok(GrowthConstant {
+        sigma2: largest.max(0.0),
+        largest_eigenvalue: largest,
+        eigenvalues: g.eigenvalues.iter().map(|x| scale(*x)).collect(),
+        direction: g.direction.iter().map(|x| x * half).collect(),
+        relative_residual: g.relative_residual,
+    })
+}
+
+/// `floor(log2)` of the smallest and the largest non-zero entry in
+/// magnitude (`(0, 0)` for the zero matrix).
+fn exponent_range(m: &Matrix) -> (i64, i64) {
+    let mut range: Option<(i64, i64)> = None;
+    for i in 0..m.nrows() {
+        for j in 0..m.ncols() {
+            if let Some(e) = binary_exponent(&m[(i, j)]) {
+                range = Some(range.map_or((e, e), |(lo, hi)| (lo.min(e), hi.max(e))));
+            }
+        }
+    }
+    range.unwrap_or((0, 0))
+}
+
+fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstant, GrowthError> {
     let s = if sign < 0 { -1.0 } else { 1.0 };
     let pf = p.to_dmatrix() * s;
     let qf = q.to_dmatrix() * s;

@@ -319,6 +319,19 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     } else {
         None
     };
+    if let Some(e) = &exact {
+        // The certificate states Sigma^2 as a double beside the rational:
+        // one that no double holds is not rounded to 0 (towards "stable").
+        let f = exact::rational_to_f64(&e.value);
+        if !e.value.is_zero() && !(f.is_finite() && f >= f64::MIN_POSITIVE) {
+            analysis.verdict = Verdict::Inconclusive;
+            analysis.reason = format!(
+                "a definite second variation was found, but Sigma^2 = 2^{} (about, proved exactly) lies outside the range of double precision: rescale time or the noise amplitudes",
+                exact::binary_exponent(&e.value).unwrap_or(0)
+            );
+            return analysis;
+        }
+    }
     analysis.verdict = Verdict::Stable;
     analysis.reason = format!(
         "the second variation is {} definite: formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t)",

@@ -7,7 +7,7 @@ use nalgebra::Complex;
 use serde_json::{json, Map, Value};
 
 /// Version of the certificate format.
-pub const CERTIFICATE_VERSION: u64 = 1;
+pub const CERTIFICATE_VERSION: u64 = 2;
 
 /// The engine version written into certificates.
 pub const ENGINE_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -164,7 +164,13 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
     if let Some(s2) = a.sigma2() {
         put("sigma2", float_json(s2));
     }
-    if let (Some(stop), Some(s2)) = (spec.stopping, a.sigma2()) {
+    // T is a guarantee: computed from Sigma^2 rounded up (the exact rational
+    // when there is one), and rounded down itself (see StoppingTime::time).
+    let sigma2_up = a.stable.as_ref().map(|s| match &s.exact {
+        Some(e) => exact::rational_to_f64_up(&e.value),
+        None => s.sigma2(),
+    });
+    if let (Some(stop), Some(s2)) = (spec.stopping, sigma2_up) {
         let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
         put(
             "stopping",

@@ -88,7 +88,7 @@ pub fn is_fluid_spec(v: &Value) -> bool {
 
 /// Parse a fluid spec from text.
 pub fn parse_fluid_spec(text: &str) -> Result<FluidSpec> {
-    let value: Value = serde_json::from_str(text).map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    let value: Value = crate::json::parse_json(text)?;
     fluid_spec_from_value(value)
 }
 

@@ -14,11 +14,120 @@ pub struct SpecError {
     pub message: String,
 }
 
+/// Longest path and message kept in a [`SpecError`]: both quote input (a
+/// key, an expression, a literal), and a 50 MB literal must not become 50 MB
+/// of stderr.
+pub const MAX_MESSAGE_BYTES: usize = 1000;
+
 impl SpecError {
-    /// An error at `path`.
+    /// An error at `path`; an over-long path or message is cut to an excerpt
+    /// that says how much was left out.
     pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        SpecError { path: path.into(), message: message.into() }
+        SpecError { path: excerpt(path.into(), 300), message: excerpt(message.into(), MAX_MESSAGE_BYTES) }
     }
+}
+
+/// `text` if it has at most `limit` bytes, else its start and end around a
+/// note of how many bytes were omitted.
+pub fn excerpt(text: String, limit: usize) -> String {
+    if text.len() <= limit {
+        return text;
+    }
+    let head = (0..=limit * 2 / 3).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
+    let tail_len = limit / 4;
+    let tail = (text.len() - tail_len..=text.len()).find(|&i| text.is_char_boundary(i)).unwrap_or(text.len());
+    format!("{} […{} bytes omitted…] {}", &text[..head], tail - head, &text[tail..])
+}
+
+/// Parse JSON text, rejecting an object with the same key twice (serde_json
+/// keeps the last, so a certificate with two `"verdict"`s would be read as
+/// whichever came second, and a human reading the first would be misled).
+/// The error names the JSON path of the repeated key.
+///
+/// ```
+/// let e = spec::parse_json(r#"{"a": {"b": 1, "b": 2}}"#).unwrap_err();
+/// assert_eq!(e.path, "$.a.b");
+/// assert!(spec::parse_json(r#"{"a": [{"b": 1}, {"b": 2}]}"#).is_ok());
+/// // escapes are decoded first: "\u0062" is "b"
+/// assert!(spec::parse_json(r#"{"b": 1, "\u0062": 2}"#).is_err());
+/// ```
+pub fn parse_json(text: &str) -> Result<Value> {
+    let value: Value = serde_json::from_str(text).map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    if let Some((path, key)) = duplicate_key(text) {
+        return Err(SpecError::new(
+            path,
+            format!("the key '{key}' appears twice in this object; a key may appear once"),
+        ));
+    }
+    Ok(value)
+}
+
+enum Frame {
+    Object { path: String, keys: std::collections::HashSet<String>, expecting_key: bool, last: String },
+    Array { path: String, index: usize },
+}
+
+/// The path of the first repeated key of an object in valid JSON text.
+fn duplicate_key(text: &str) -> Option<(String, String)> {
+    let bytes = text.as_bytes();
+    let mut stack: Vec<Frame> = Vec::new();
+    let value_path = |stack: &Vec<Frame>| -> String {
+        match stack.last() {
+            None => "$".to_string(),
+            Some(Frame::Object { path, last, .. }) => child(path, last),
+            Some(Frame::Array { path, index }) => index_path(path, *index),
+        }
+    };
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'{' => {
+                let path = value_path(&stack);
+                stack.push(Frame::Object { path, keys: Default::default(), expecting_key: true, last: String::new() });
+            }
+            b'[' => {
+                let path = value_path(&stack);
+                stack.push(Frame::Array { path, index: 0 });
+            }
+            b'}' | b']' => {
+                stack.pop();
+            }
+            b',' => match stack.last_mut() {
+                Some(Frame::Object { expecting_key, .. }) => *expecting_key = true,
+                Some(Frame::Array { index, .. }) => *index += 1,
+                None => {}
+            },
+            b'"' => {
+                let start = i;
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' {
+                    if bytes[i] == b'\\' {
+                        i += 1;
+                    }
+                    i += 1;
+                }
+                if let Some(Frame::Object { path, keys, expecting_key, last }) = stack.last_mut() {
+                    if *expecting_key {
+                        let raw = &text[start..=i.min(bytes.len() - 1)];
+                        let key: String = serde_json::from_str(raw).unwrap_or_else(|_| raw.to_string());
+                        if !keys.insert(key.clone()) {
+                            let shown = excerpt(key, 100);
+                            return Some((child(path, &shown), shown));
+                        }
+                        *last = key;
+                        *expecting_key = false;
+                    }
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
+fn index_path(path: &str, i: usize) -> String {
+    format!("{path}[{i}]")
 }
 
 pub(crate) type Result<T> = std::result::Result<T, SpecError>;

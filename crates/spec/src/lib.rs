@@ -44,7 +44,7 @@ pub use fluid::{
     certify_fluid, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value, is_fluid_spec,
     parse_fluid_spec, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
-pub use json::SpecError;
+pub use json::{excerpt, parse_json, SpecError, MAX_MESSAGE_BYTES};
 pub use parse::{parse_spec, spec_from_value, CasimirSource, Spec, Stopping, MAX_NOISE_FIELDS};
 pub use pretty::to_pretty_json;
 pub use settings::EngineSettings;
@@ -132,8 +132,7 @@ impl AnySpec {
 /// assert!(matches!(spec::parse_any_spec(fluid).unwrap(), spec::AnySpec::Fluid(_)));
 /// ```
 pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
-    let value: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    let value: serde_json::Value = json::parse_json(text)?;
     if is_fluid_spec(&value) {
         fluid_spec_from_value(value).map(|s| AnySpec::Fluid(Box::new(s)))
     } else {

@@ -105,7 +105,7 @@ pub const MAX_NOISE_FIELDS: usize = 256;
 /// assert_eq!(err.path, "$.noise[0]");
 /// ```
 pub fn parse_spec(text: &str) -> Result<Spec> {
-    let value: Value = serde_json::from_str(text).map_err(|e| SpecError::new("$", format!("malformed JSON: {e}")))?;
+    let value: Value = crate::json::parse_json(text)?;
     spec_from_value(value)
 }
 
