@@ -380,3 +380,146 @@ fn simulate_rejects_bad_parameters() {
         assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
     }
 }
+
+/// Regression: `simulate --bins 0` was reported as an `--observable` error
+/// and the t-end errors said `--t_end`. Each message must name the flag the
+/// user typed.
+#[test]
+fn simulate_errors_name_the_flag_that_was_given() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let s = spec.to_str().unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (&[s, "--bins", "0"], "--bins:"),
+        (&[s, "--t-end", "-1"], "--t-end:"),
+        (&[s, "--t-end", "nan"], "--t-end:"),
+        (&[s, "--outputs", "0"], "--outputs:"),
+        (&[s, "--dt", "0"], "--dt:"),
+        (&[s, "--paths", "0"], "--paths:"),
+    ];
+    for (args, flag) in cases {
+        let o = simulate(args, "2");
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.starts_with(&format!("error: {flag}")), "{args:?}: {err}");
+        assert!(!err.contains("t_end") && !err.contains("--observable"), "{args:?}: {err}");
+    }
+}
+
+/// Regression: `simulate --bins 1000000000` allocated outputs x bins
+/// counters per block of paths, past 4 GB. Bins, outputs, their product and
+/// the statistics held per block are now limited, and a run beyond a limit
+/// is refused before any work with the flag and the limit named.
+#[test]
+fn simulate_refuses_huge_histograms_up_front() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let s = spec.to_str().unwrap();
+    // (arguments, the flag, the limit quoted: 10 000 bins, 100 000 outputs,
+    // 10^7 histogram cells, 2^31 bytes = 2.1 GB of statistics)
+    let cases: [(&[&str], &str, &str); 4] = [
+        (&[s, "--bins", "1000000000"], "--bins", "at most 10000 bins"),
+        (&[s, "--outputs", "1000000"], "--outputs", "at most 100000 output times"),
+        (&[s, "--outputs", "10000", "--bins", "10000"], "--outputs/--bins", "limit of 10000000"),
+        // Within each limit, but 391 blocks of 256 paths x ~1000 times x
+        // 10^4 bins would hold 33 GB.
+        (&[s, "--paths", "100000", "--outputs", "1000", "--bins", "10000"], "--paths/--outputs/--bins", "limit 2.1 GB"),
+    ];
+    for (args, flag, limit) in cases {
+        let started = std::time::Instant::now();
+        let o = simulate(args, "2");
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.starts_with(&format!("error: {flag}:")) && err.contains(limit), "{args:?}: {err}");
+        // Nothing is simulated: a certify of the rigid body takes
+        // milliseconds, so 10 s only allows for a loaded machine.
+        assert!(started.elapsed().as_secs_f64() < 10.0, "{args:?}: took {:?}", started.elapsed());
+    }
+}
+
+/// Regression: `RAYON_NUM_THREADS=10000 simulate` started 10 000 threads
+/// (97 s and 1.2 GB for a small run). The pool is capped at 4 x the
+/// available cores (at most 256), with a note; an invalid value falls back
+/// to the cores, with a note.
+#[test]
+fn huge_thread_counts_are_capped() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let base = std::env::temp_dir().join(format!("verify-threads-{}", std::process::id()));
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cap = (4 * cores).min(256);
+    for (value, note, threads) in [("10000", "capped at", cap), ("many", "not a positive integer", cores)] {
+        let out = base.join(value);
+        let args = [
+            spec.to_str().unwrap(),
+            "--paths",
+            "200",
+            "--t-end",
+            "2",
+            "--outputs",
+            "10",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        let started = std::time::Instant::now();
+        let o = simulate(&args, value);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{value}: {err}");
+        assert!(err.contains("RAYON_NUM_THREADS") && err.contains(note), "{value}: {err}");
+        // 400 paths x 200 steps take milliseconds; 30 s is far below the
+        // 97 s of 10 000 threads and leaves room for a loaded machine.
+        assert!(started.elapsed().as_secs_f64() < 30.0, "{value}: took {:?}", started.elapsed());
+        let report: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("rigid-body-major-axis.json")).unwrap()).unwrap();
+        assert_eq!(report["parameters"]["threads"].as_u64(), Some(threads as u64), "{value}");
+    }
+}
+
+/// Regression: exit-2 messages echoed the whole offending input. Values are
+/// now quoted as 100-character excerpts with their length, and any message
+/// is cut to about 2000 bytes. A command-line argument cannot exceed 128 KiB
+/// on Linux (MAX_ARG_STRLEN), so options get 120 000 bytes; the spec's name
+/// gets 50 MB.
+#[test]
+fn huge_inputs_are_quoted_as_excerpts() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let s = spec.to_str().unwrap();
+    let big = "x".repeat(120_000);
+    let param = format!("I2={big}");
+    let named = format!("{big}=1:2:3");
+    let flag = format!("--{big}");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["simulate", s, "--observable", &big], "--observable"),
+        (vec!["simulate", s, "--scheme", &big], "--scheme"),
+        (vec!["simulate", s, "--paths", &big], "--paths"),
+        (vec!["simulate", s, &flag], "unexpected argument"),
+        (vec!["sweep", s, "--param", &param], "--param"),
+        (vec!["sweep", s, "--param", &named], "--param"),
+        (vec!["sweep", s, "--param", "I2=1:2:3", "--shard", &big], "--shard"),
+        (vec!["plot-sweep", s, "--spec", s, "--shade", &big], "--shade"),
+    ];
+    for (args, what) in cases {
+        let o = verify(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{what}: {}", &err[..err.len().min(300)]);
+        assert!(err.contains(what), "{what}: {}", &err[..err.len().min(300)]);
+        // An excerpt is 100 characters and the message's own text about
+        // 150; the safety net alone would allow 2000.
+        assert!(err.len() < 1000, "{what}: {} bytes of stderr", err.len());
+    }
+
+    // A spec whose name is 50 MB: certify's summary and an error quote the
+    // name as an excerpt (the certificate on stdout carries it whole).
+    let mut v: Value = serde_json::from_str(&fixture("rigid-body-major-axis.json")).unwrap();
+    v["name"] = Value::from("n".repeat(50_000_000));
+    let good = temp_file("huge-name.json", &v.to_string());
+    let o = verify(&["certify", good.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", &stderr(&o)[..stderr(&o).len().min(300)]);
+    assert!(stderr(&o).contains("(50000000 bytes): stable"), "{}", &stderr(&o)[..stderr(&o).len().min(300)]);
+    assert!(o.stderr.len() < 1000, "{} bytes of stderr", o.stderr.len());
+    v["noise"] = serde_json::json!([["sigma", 0]]);
+    let bad = temp_file("huge-name-bad.json", &v.to_string());
+    for args in [vec!["certify", bad.to_str().unwrap()], vec!["simulate", bad.to_str().unwrap()]] {
+        let o = verify(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains("$.noise[0]"), "{args:?}: {}", &stderr(&o)[..stderr(&o).len().min(300)]);
+        assert!(o.stderr.len() < 4000, "{args:?}: {} bytes of stderr", o.stderr.len());
+    }
+}

@@ -197,6 +197,8 @@ fn results_do_not_depend_on_the_thread_count() {
     assert_eq!(run(1), run(2));
 }
 
+/// Bad parameters and parameters beyond the memory limits are refused by
+/// `validate`, each naming its field.
 #[test]
 fn bad_parameters_are_rejected() {
     let spec = spec_of("rigid-body-major-axis.json");
@@ -213,7 +215,48 @@ fn bad_parameters_are_rejected() {
                 ..settings(10, 0.01, 1.0, 2)
             },
         ),
-        ("dt", settings(10, 1e-15, 1.0, 2)),
+        ("steps", settings(10, 1e-15, 1.0, 2)),
+        (
+            "bins",
+            EnsembleSettings {
+                observable: Observable { index: 0, lo: 0.0, hi: 1.0, bins: 0 },
+                ..settings(10, 0.01, 1.0, 2)
+            },
+        ),
+        // The limits: 10^9 bins (8 GB of counts per output time) and more
+        // output times than MAX_OUTPUTS (10^5).
+        (
+            "bins",
+            EnsembleSettings {
+                observable: Observable { index: 0, lo: 0.0, hi: 1.0, bins: 1_000_000_000 },
+                ..settings(10, 0.01, 1.0, 2)
+            },
+        ),
+        ("outputs", settings(10, 1e-6, 1.0, 200_000)),
+        // 1000 outputs x 10^4 bins = 10^7 cells is the limit itself; 2000 exceed it.
+        (
+            "histogram_cells",
+            EnsembleSettings {
+                observable: Observable { index: 0, lo: 0.0, hi: 1.0, bins: 10_000 },
+                ..settings(10, 0.001, 2.0, 2000)
+            },
+        ),
+        // Within every per-run limit, but 10^6 paths are 3907 blocks of 256,
+        // each holding 1001 x 10^4 counts: 313 GB.
+        (
+            "statistics",
+            EnsembleSettings {
+                observable: Observable { index: 0, lo: 0.0, hi: 1.0, bins: 10_000 },
+                ..settings(1_000_000, 0.001, 1.0, 1000)
+            },
+        ),
+        (
+            "range",
+            EnsembleSettings {
+                observable: Observable { index: 0, lo: 1.0, hi: 1.0, bins: 4 },
+                ..settings(10, 0.01, 1.0, 2)
+            },
+        ),
     ];
     for (field, s) in cases {
         match run_ensemble(&target, &s, &|_| {}) {

@@ -478,3 +478,43 @@ fn fluid_specs_can_be_swept() {
         assert_eq!(r["sigma2"].as_f64(), cert["sigma2"].as_f64());
     }
 }
+
+/// Regression: two sweeps on one output file (fresh or `--resume`) both
+/// exited 0 and left garbled, missing and repeated lines; the second even
+/// truncated the first's lines on opening. The first now holds an exclusive
+/// lock: the others exit 2 naming the file as in use, without touching it,
+/// and the first's output has every point exactly once.
+#[test]
+fn a_second_sweep_on_the_same_file_is_refused() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let out = tmp("contended.jsonl");
+    let _ = std::fs::remove_file(&out);
+    // 300 x 300 = 90 000 exact points: about 3 s for this test build on 2
+    // cores (1 s in release with nothing else running), against a few
+    // milliseconds for each refused run.
+    let (n, args) = (300u64 * 300, ["--param", "I2=1/10:6:300", "--param", "I3=1/10:6:300"]);
+    let mut all = vec!["sweep", spec.to_str().unwrap()];
+    all.extend_from_slice(&args);
+    all.extend_from_slice(&["-o", out.to_str().unwrap()]);
+    let mut first = Command::new(env!("CARGO_BIN_EXE_verify")).args(&all).stderr(Stdio::null()).spawn().unwrap();
+    // The first line is written after the lock is taken.
+    let started = Instant::now();
+    while std::fs::metadata(&out).map(|m| m.len()).unwrap_or(0) == 0 {
+        assert!(started.elapsed() < Duration::from_secs(120), "the first sweep wrote nothing");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let mut resume = all.clone();
+    resume.push("--resume");
+    for second in [&all, &resume] {
+        let o = verify(second);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{second:?}: {err}");
+        assert!(err.contains(out.to_str().unwrap()) && err.contains("in use by another sweep"), "{err}");
+    }
+    // The refusals are only meaningful while the first still runs.
+    assert!(first.try_wait().unwrap().is_none(), "the first sweep finished too soon to test the lock");
+    assert!(first.wait().unwrap().success());
+    let lines = lines_of(&out);
+    assert_eq!(lines.len() as u64, n, "one line per point");
+    assert_eq!(index_set(&out), (0..n).collect::<Vec<_>>(), "every index exactly once");
+}

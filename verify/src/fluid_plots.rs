@@ -2,6 +2,8 @@
 //! Sigma^2 per x-mode beside the paper's constants, the convergence table,
 //! and Sigma^2 along the Galilean-shift curve.
 
+use crate::messages::excerpt;
+use crate::paths::{ensure_output_dir, file_stem_noted};
 use crate::plots::{write_xy, XyChart};
 use crate::Failure;
 use serde_json::Value;
@@ -25,7 +27,10 @@ fn points(rows: &Value, x: &str, y: &str) -> Vec<(f64, f64)> {
 }
 
 fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
-    let name = cert["name"].as_str().unwrap_or("fluid");
+    // The name is data: titles quote an excerpt, files use a safe stem.
+    let full_name = cert["name"].as_str().unwrap_or("fluid");
+    let name = excerpt(full_name);
+    let file_stem = file_stem_noted(full_name);
     let fail = |e: Box<dyn std::error::Error>| Failure::Failed(format!("{name}: drawing failed: {e}"));
     let mut written = vec![];
     let mut hlines = vec![];
@@ -37,7 +42,7 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
     }
     let modes = points(&cert["modes"], "k", "sigma2");
     if !modes.is_empty() && (modes.iter().any(|(_, s)| *s > 0.0) || hlines.iter().any(|h| h.1 > 0.0)) {
-        let stem = out.join(format!("{name}-modes"));
+        let stem = out.join(format!("{file_stem}-modes"));
         let zero = modes.iter().all(|(_, s)| *s == 0.0);
         write_xy(
             &stem,
@@ -56,7 +61,7 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
             },
         )
         .map_err(fail)?;
-        written.push(stem.with_extension("png"));
+        written.push(crate::paths::with_suffix(&stem, ".png"));
     }
     let table = &cert["convergence"];
     let ours = points(table, "ny", "sigma2");
@@ -76,7 +81,7 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
             }
         }
         if !series.is_empty() {
-            let stem = out.join(format!("{name}-convergence"));
+            let stem = out.join(format!("{file_stem}-convergence"));
             write_xy(
                 &stem,
                 &XyChart {
@@ -89,7 +94,7 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
                 },
             )
             .map_err(fail)?;
-            written.push(stem.with_extension("png"));
+            written.push(crate::paths::with_suffix(&stem, ".png"));
         }
     }
     let curve = points(&cert["optimisation"]["shift_curve"], "c", "sigma2");
@@ -97,7 +102,7 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
         // distance from the admissible edge: the curve starts a quarter of the range beyond it
         let edge = curve[0].0 - (curve[1].0 - curve[0].0) / 3.0;
         let shifted: Vec<(f64, f64)> = curve.iter().map(|(c, s)| ((c - edge).abs(), *s)).collect();
-        let stem = out.join(format!("{name}-shift"));
+        let stem = out.join(format!("{file_stem}-shift"));
         write_xy(
             &stem,
             &XyChart {
@@ -114,14 +119,14 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
             },
         )
         .map_err(fail)?;
-        written.push(stem.with_extension("png"));
+        written.push(crate::paths::with_suffix(&stem, ".png"));
     }
     Ok(written)
 }
 
 /// Run `plot-fluid`.
 pub fn run(args: &PlotFluidArgs) -> Result<(), Failure> {
-    std::fs::create_dir_all(&args.out).map_err(|e| Failure::Failed(format!("{}: {e}", args.out.display())))?;
+    ensure_output_dir(&args.out, "--out")?;
     for path in &args.certificates {
         let text = std::fs::read_to_string(path)
             .map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))?;

@@ -31,11 +31,14 @@ use std::process::ExitCode;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod fluid_plots;
+mod messages;
+mod paths;
 mod plots;
 mod simulate_cmd;
 mod sweep_cmd;
 mod sweep_plots;
 mod table;
+mod threads;
 
 #[derive(Parser)]
 #[command(name = "verify", version, about = "Stochastic energy–Casimir stability certificates")]
@@ -100,13 +103,17 @@ fn read(path: &Path) -> Result<String, Failure> {
 }
 
 fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failure> {
+    if let Some(path) = output {
+        paths::check_output_file(path, "-o")?;
+    }
     let text = read(spec_path)?;
     let spec = parse_any_spec(&text).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
     let cert = spec.certify();
     let pretty = spec::to_pretty_json(&cert);
     match output {
-        Some(path) => std::fs::write(path, pretty)
-            .map_err(|e| Failure::Failed(format!("{}: cannot write: {e}", path.display())))?,
+        // Atomic: a failed write (a full disk) leaves no partial certificate
+        // and keeps an existing one.
+        Some(path) => paths::write_atomic(path, pretty.as_bytes()).map_err(|e| paths::write_failure(path, &e))?,
         None => print!("{pretty}"),
     }
     eprintln!("{}", summary(&cert));
@@ -117,7 +124,7 @@ fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failur
 fn summary(cert: &Value) -> String {
     let mut s = format!(
         "{}: {} ({})",
-        cert["name"].as_str().unwrap_or("?"),
+        messages::excerpt(cert["name"].as_str().unwrap_or("?")),
         cert["verdict"].as_str().unwrap_or("?"),
         cert["level"].as_str().unwrap_or("?")
     );
@@ -152,15 +159,17 @@ fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
         match check_certificate(&text) {
             Ok(report) => {
                 let s2 = report.sigma2.map(|x| format!(", Sigma^2 = {x}")).unwrap_or_default();
-                println!("ok   {}: {} {}{}", path.display(), report.name, report.verdict, s2);
+                println!("ok   {}: {} {}{}", path.display(), messages::excerpt(&report.name), report.verdict, s2);
             }
             Err(CheckError::BadInput(e)) => {
-                eprintln!("BAD  {}: {e}", path.display());
-                bad_input.push(format!("{}: {e}", path.display()));
+                let m = messages::cut_message(&format!("{}: {e}", path.display()));
+                eprintln!("BAD  {m}");
+                bad_input.push(m);
             }
             Err(e) => {
-                eprintln!("FAIL {}: {e}", path.display());
-                failures.push(format!("{}: {e}", path.display()));
+                let m = messages::cut_message(&format!("{}: {e}", path.display()));
+                eprintln!("FAIL {m}");
+                failures.push(m);
             }
         }
     }
@@ -200,14 +209,37 @@ fn run(cli: Cli) -> Result<(), Failure> {
 }
 
 fn main() -> ExitCode {
-    match run(Cli::parse()) {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // clap quotes a bad option value whole: quote an excerpt instead.
+        // Help and version (exit 0) are printed as they are.
+        Err(e) if e.use_stderr() => {
+            use clap::error::{ContextKind, ContextValue};
+            let mut text = e.render().to_string();
+            for kind in [ContextKind::InvalidValue, ContextKind::InvalidArg] {
+                if let Some(ContextValue::String(value)) = e.get(kind) {
+                    text = messages::quoting(text, value);
+                }
+            }
+            eprint!("{}", messages::cut_message(&text));
+            return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
+        }
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+    };
+    threads::configure_global_pool();
+    // Every message is cut to an excerpt when long: the last safety net
+    // against echoing a huge input (a 50 MB name or value) back.
+    match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Failed(m)) => {
-            eprintln!("error: {m}");
+            eprintln!("error: {}", messages::cut_message(&m));
             ExitCode::from(1)
         }
         Err(Failure::BadInput(m)) => {
-            eprintln!("error: {m}");
+            eprintln!("error: {}", messages::cut_message(&m));
             ExitCode::from(2)
         }
     }

@@ -2,6 +2,7 @@
 //! Mono, see `assets/DejaVu-LICENSE.txt`) so no system font library is
 //! needed.
 
+use crate::paths::with_suffix;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -182,24 +183,33 @@ where
     Ok(())
 }
 
+/// Draw one chart file atomically: `draw` renders into a temporary file
+/// beside `path`, which then replaces `path` (see
+/// [`crate::paths::write_atomic_with`]); a failed drawing leaves no partial
+/// chart and keeps an existing one.
+pub(crate) fn draw_file(path: &Path, draw: impl FnOnce(&Path) -> DrawResult) -> DrawResult {
+    crate::paths::write_atomic_with(path, |tmp| draw(tmp).map_err(|e| std::io::Error::other(e.to_string())))?;
+    Ok(())
+}
+
 /// Write `stem.svg` and `stem.png`.
 pub fn write_density(stem: &Path, chart: &DensityChart) -> DrawResult {
     register_font();
-    let svg = stem.with_extension("svg");
-    draw_density(SVGBackend::new(&svg, (1000, 600)).into_drawing_area(), chart)?;
-    let png = stem.with_extension("png");
-    draw_density(BitMapBackend::new(&png, (1000, 600)).into_drawing_area(), chart)?;
-    Ok(())
+    draw_file(&with_suffix(stem, ".svg"), |p| {
+        draw_density(SVGBackend::new(p, (1000, 600)).into_drawing_area(), chart)
+    })?;
+    draw_file(&with_suffix(stem, ".png"), |p| {
+        draw_density(BitMapBackend::new(p, (1000, 600)).into_drawing_area(), chart)
+    })
 }
 
 /// Write `stem.svg` and `stem.png`.
 pub fn write_growth(stem: &Path, chart: &GrowthChart) -> DrawResult {
     register_font();
-    let svg = stem.with_extension("svg");
-    draw_growth(SVGBackend::new(&svg, (1000, 600)).into_drawing_area(), chart)?;
-    let png = stem.with_extension("png");
-    draw_growth(BitMapBackend::new(&png, (1000, 600)).into_drawing_area(), chart)?;
-    Ok(())
+    draw_file(&with_suffix(stem, ".svg"), |p| draw_growth(SVGBackend::new(p, (1000, 600)).into_drawing_area(), chart))?;
+    draw_file(&with_suffix(stem, ".png"), |p| {
+        draw_growth(BitMapBackend::new(p, (1000, 600)).into_drawing_area(), chart)
+    })
 }
 
 /// A named series of points: (label, points, colour index, dashed).
@@ -292,9 +302,6 @@ where
 /// Write `stem.svg` and `stem.png`.
 pub fn write_xy(stem: &Path, chart: &XyChart) -> DrawResult {
     register_font();
-    let svg = stem.with_extension("svg");
-    draw_xy(SVGBackend::new(&svg, (1000, 600)).into_drawing_area(), chart)?;
-    let png = stem.with_extension("png");
-    draw_xy(BitMapBackend::new(&png, (1000, 600)).into_drawing_area(), chart)?;
-    Ok(())
+    draw_file(&with_suffix(stem, ".svg"), |p| draw_xy(SVGBackend::new(p, (1000, 600)).into_drawing_area(), chart))?;
+    draw_file(&with_suffix(stem, ".png"), |p| draw_xy(BitMapBackend::new(p, (1000, 600)).into_drawing_area(), chart))
 }

@@ -2,6 +2,8 @@
 //! exact moments, the exceedance probability against the certified bound,
 //! and the charts.
 
+use crate::messages::excerpt;
+use crate::paths::{ensure_output_dir, file_stem_noted, write_atomic, write_failure};
 use crate::plots::{write_density, write_growth, DensityChart, GrowthChart};
 use crate::Failure;
 use nalgebra::DMatrix;
@@ -34,10 +36,11 @@ pub struct SimulateArgs {
     /// `lie` (coadjoint-orbit preserving) or `heun` (Stratonovich Heun).
     #[arg(long, default_value = "lie")]
     pub scheme: String,
-    /// Number of output times.
+    /// Number of output times (at most 100 000).
     #[arg(long, default_value_t = 200)]
     pub outputs: usize,
-    /// Histogram bins of the observable.
+    /// Histogram bins of the observable (at most 10 000, and outputs x bins
+    /// at most 10^7).
     #[arg(long, default_value_t = 80)]
     pub bins: usize,
     /// Initial size |dmu_0|_P^2 (default: the spec's stopping delta, else 1e-3).
@@ -62,6 +65,55 @@ fn io(e: impl std::fmt::Display) -> Failure {
     Failure::Failed(e.to_string())
 }
 
+/// The command-line flag of a field of [`EnsembleSettings`], for messages
+/// (`t_end` is `--t-end`); `None` for fields the command computes itself.
+fn flag(field: &str) -> Option<&'static str> {
+    Some(match field {
+        "paths" => "--paths",
+        "dt" => "--dt",
+        "t_end" => "--t-end",
+        "steps" => "--t-end/--dt",
+        "outputs" => "--outputs",
+        "bins" => "--bins",
+        "histogram_cells" => "--outputs/--bins",
+        "statistics" => "--paths/--outputs/--bins",
+        "observable" => "--observable",
+        "epsilon" => "--epsilon",
+        _ => return None,
+    })
+}
+
+/// An ensemble error as a failure naming the flag: bad input (exit 2) for a
+/// field the user sets, an internal failure (exit 1) otherwise.
+fn ensemble_failure(e: simulate::EnsembleError) -> Failure {
+    match e {
+        simulate::EnsembleError::Invalid { field, message } => match flag(field) {
+            Some(flag) => bad(format!("{flag}: {message}")),
+            None => Failure::Failed(format!("internal: the ensemble's {field}: {message}")),
+        },
+        other => Failure::Failed(format!("internal: {other}")),
+    }
+}
+
+/// The limits on the histogram, checked before anything is read or run.
+fn check_histogram_limits(args: &SimulateArgs) -> Result<(), Failure> {
+    let (max_bins, max_outputs, max_cells) =
+        (EnsembleSettings::MAX_BINS, EnsembleSettings::MAX_OUTPUTS, EnsembleSettings::MAX_HISTOGRAM_CELLS);
+    if args.bins > max_bins {
+        return Err(bad(format!("--bins: at most {max_bins} bins, got {}", args.bins)));
+    }
+    if args.outputs > max_outputs {
+        return Err(bad(format!("--outputs: at most {max_outputs} output times, got {}", args.outputs)));
+    }
+    if args.outputs as u64 * args.bins as u64 > max_cells as u64 {
+        return Err(bad(format!(
+            "--outputs/--bins: outputs x bins = {} histogram cells exceeds the limit of {max_cells}",
+            args.outputs as u64 * args.bins as u64
+        )));
+    }
+    Ok(())
+}
+
 /// Rough cost per path-step in seconds, from the benchmarks: closed-form
 /// exponentials (so3, se3) versus a matrix exponential per step.
 fn cost_per_step(model: &Model) -> f64 {
@@ -73,6 +125,8 @@ fn cost_per_step(model: &Model) -> f64 {
 }
 
 pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
+    check_histogram_limits(args)?;
+    ensure_output_dir(&args.out, "--out")?;
     let text =
         std::fs::read_to_string(&args.spec).map_err(|e| bad(format!("{}: cannot read: {e}", args.spec.display())))?;
     if serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| spec::is_fluid_spec(&v)) {
@@ -83,7 +137,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     }
     let spec = spec::parse_spec(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let scheme = Scheme::from_name(&args.scheme)
-        .ok_or_else(|| bad(format!("--scheme: '{}' is not 'lie' or 'heun'", args.scheme)))?;
+        .ok_or_else(|| bad(format!("--scheme: '{}' is not 'lie' or 'heun'", excerpt(&args.scheme))))?;
     let cert = spec::certify(&spec);
     let analysis = &cert.analysis;
     let system = &spec.system;
@@ -92,7 +146,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let mu_e: Vec<f64> = system.equilibrium().iter().map(exact::rational_to_f64).collect();
     let observable = match &args.observable {
         Some(name) => coords.iter().position(|c| c == name).ok_or_else(|| {
-            bad(format!("--observable: unknown coordinate '{name}' (coordinates: {})", coords.join(", ")))
+            bad(format!("--observable: unknown coordinate '{}' (coordinates: {})", excerpt(name), coords.join(", ")))
         })?,
         None => mu_e.iter().position(|x| *x != 0.0).unwrap_or(0),
     };
@@ -131,10 +185,13 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         norm: Some((p.clone(), mu_e.clone())),
         epsilon: Some(epsilon),
     };
-    settings.validate(n).map_err(|e| bad(format!("--{e}")))?;
+    settings.validate(n).map_err(ensemble_failure)?;
     let threads = rayon::current_num_threads() as f64;
+    // More threads than cores (RAYON_NUM_THREADS up to 4 per core) do not
+    // run faster: the estimate counts the cores that work.
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get) as f64;
     let runs = if stable.is_some() { 2.0 } else { 1.0 };
-    let estimate = settings.path_steps() * cost_per_step(&model) * runs / threads;
+    let estimate = settings.path_steps() * cost_per_step(&model) * runs / threads.min(cores);
     if estimate > 900.0 && !args.force {
         return Err(bad(format!(
             "--paths/--dt/--t-end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass --force",
@@ -154,8 +211,14 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     // observable actually explores, for the histogram.
     let pilot = EnsembleSettings { paths: (args.paths / 100).clamp(1, 200), ..settings.clone() };
     let extent = run_ensemble(&Target::Nonlinear { model: &model, scheme, mu0: mu0.clone() }, &pilot, &|_| {})
-        .map_err(|e| bad(format!("--{e}")))?
+        .map_err(ensemble_failure)?
         .observable_extent;
+    if !(extent.0.is_finite() && extent.1.is_finite()) {
+        return Err(bad(format!(
+            "--dt: the pilot run's paths left every bounded range ({} reached {:?}); lower --dt",
+            coords[observable], extent
+        )));
+    }
     let half = 0.5 * (extent.1 - extent.0).max(1e-9);
     let centre = 0.5 * (extent.0 + extent.1);
     let settings = EnsembleSettings {
@@ -169,15 +232,12 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         }
     };
     let nonlinear = run_ensemble(&Target::Nonlinear { model: &model, scheme, mu0: mu0.clone() }, &settings, &tick)
-        .map_err(|e| bad(format!("--{e}")))?;
+        .map_err(ensemble_failure)?;
     let linear = match (stable, &analysis.linearisation) {
         (Some(_), Some(lin)) => {
             let lm = LinearModel::new(lin);
             let s = EnsembleSettings { norm: Some((p.clone(), vec![0.0; n])), ..settings.clone() };
-            Some(
-                run_ensemble(&Target::Linear { model: &lm, x0: x0.clone() }, &s, &tick)
-                    .map_err(|e| bad(format!("--{e}")))?,
-            )
+            Some(run_ensemble(&Target::Linear { model: &lm, x0: x0.clone() }, &s, &tick).map_err(ensemble_failure)?)
         }
         _ => None,
     };
@@ -218,8 +278,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         .collect();
     // Outputs.
     let dir = &args.out;
-    std::fs::create_dir_all(dir).map_err(|e| io(format!("{}: {e}", dir.display())))?;
-    let stem = dir.join(&spec.name);
+    // The name is data: a safe stem keeps every file inside --out.
+    let file_stem = file_stem_noted(&spec.name);
+    let name = excerpt(&spec.name);
     let observable_name = &coords[observable];
     let series = |stats: &EnsembleStats| -> Value {
         json!({
@@ -252,13 +313,22 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         "histogram": { "range": [settings.observable.lo, settings.observable.hi], "counts": nonlinear.histogram },
         "exceedance": exceedance,
     });
-    std::fs::write(stem.with_extension("json"), spec::to_pretty_json(&report)).map_err(io)?;
-    write_csv(&stem, &nonlinear, linear.as_ref(), exact.as_deref(), bound.as_deref(), worst.as_deref(), delta)?;
+    let json_path = dir.join(format!("{file_stem}.json"));
+    write_atomic(&json_path, spec::to_pretty_json(&report).as_bytes()).map_err(|e| write_failure(&json_path, &e))?;
+    write_csv(
+        &dir.join(format!("{file_stem}.csv")),
+        &nonlinear,
+        linear.as_ref(),
+        exact.as_deref(),
+        bound.as_deref(),
+        worst.as_deref(),
+        delta,
+    )?;
     let mean_obs: Vec<f64> = nonlinear.mean.iter().map(|m| m[observable]).collect();
     write_density(
-        &dir.join(format!("{}-density", spec.name)),
+        &dir.join(format!("{file_stem}-density")),
         &DensityChart {
-            title: format!("{}: density of {observable_name} ({} paths, {})", spec.name, args.paths, scheme.as_str()),
+            title: format!("{name}: density of {observable_name} ({} paths, {})", args.paths, scheme.as_str()),
             observable: observable_name,
             times,
             histogram: &nonlinear.histogram,
@@ -289,9 +359,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         }
         curves.push(("nonlinear ensemble (mean)".into(), over(&nonlinear.norm_mean), 3, false));
         write_growth(
-            &dir.join(format!("{}-growth", spec.name)),
+            &dir.join(format!("{file_stem}-growth")),
             &GrowthChart {
-                title: format!("{}: growth of E|dmu_t|_P^2", spec.name),
+                title: format!("{name}: growth of E|dmu_t|_P^2"),
                 times,
                 curves,
                 band: Some((
@@ -307,7 +377,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     // Summary.
     eprintln!(
         "{}: {} paths x {} steps ({}), Casimir drift {:.1e}; outputs in {}",
-        spec.name,
+        name,
         args.paths,
         nonlinear.steps,
         scheme.as_str(),
@@ -331,7 +401,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
 }
 
 fn write_csv(
-    stem: &std::path::Path,
+    path: &std::path::Path,
     nonlinear: &EnsembleStats,
     linear: Option<&EnsembleStats>,
     exact: Option<&[f64]>,
@@ -355,6 +425,5 @@ fn write_csv(
             opt(bound, k),
         ));
     }
-    std::fs::write(stem.with_extension("csv"), out).map_err(io)?;
-    Ok(())
+    write_atomic(path, out.as_bytes()).map_err(|e| write_failure(path, &e))
 }

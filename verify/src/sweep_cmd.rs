@@ -1,12 +1,14 @@
 //! `verify sweep`: certify a spec over a grid or random samples of its
 //! parameters, one JSON line per point, resumable and shardable.
 
+use crate::messages::{excerpt, quoting};
+use crate::paths::{check_output_file, ensure_output_dir};
 use crate::{read, Failure};
 use clap::Args;
 use spec::{parse_any_spec, ParamRange};
-use std::fs::OpenOptions;
-use std::io::{Seek, SeekFrom, Write};
-use std::path::PathBuf;
+use std::fs::{File, OpenOptions, TryLockError};
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use sweep::{Done, Evaluator, Level, Plan, Sampling, Shard};
 
@@ -53,8 +55,65 @@ fn bad(m: impl Into<String>) -> Failure {
     Failure::BadInput(m.into())
 }
 
+/// Open the output file for a sweep and take an exclusive lock on it
+/// before changing anything: a second sweep on the same file (resumed or
+/// not) is refused, instead of both writing and garbling it. Only then is
+/// the file emptied (a fresh sweep) or cut back to its complete lines
+/// (`--resume`, which also returns the points already done). The file is
+/// opened for appending, so every chunk of whole lines goes to its end.
+/// The lock is released when the process exits, however it exits.
+fn open_locked(path: &Path, resume: bool, id: &str, len: u64) -> Result<(File, Done), Failure> {
+    check_output_file(path, "-o")?;
+    let mut file = OpenOptions::new()
+        .read(true)
+        .append(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| bad(format!("-o {}: cannot open: {e}", path.display())))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(TryLockError::WouldBlock) => {
+            return Err(bad(format!(
+                "-o {}: the file is in use by another sweep (it holds the lock); wait for it to finish, or choose another --output",
+                path.display()
+            )))
+        }
+        // A filesystem without locks (some network mounts): go on, warned.
+        Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
+            eprintln!("note: -o {}: cannot lock the file here ({e}); do not run two sweeps on it at once", path.display())
+        }
+        Err(TryLockError::Error(e)) => {
+            return Err(Failure::Failed(format!("-o {}: cannot lock the file: {e}", path.display())))
+        }
+    }
+    let failed = |e: std::io::Error| Failure::Failed(format!("-o {}: {e}", path.display()));
+    // A device or FIFO (-o /dev/stdout) has no length to cut or lines to resume.
+    let regular = file.metadata().map_err(failed)?.is_file();
+    if !resume {
+        if regular {
+            file.set_len(0).map_err(failed)?;
+        }
+        return Ok((file, Done::none()));
+    }
+    if !regular {
+        return Err(bad(format!("-o {}: --resume needs a regular file", path.display())));
+    }
+    let existing = sweep::scan(&mut file, id, len).map_err(|e| {
+        bad(format!("{}: cannot resume: {e} (use another --output, or drop --resume to overwrite)", path.display()))
+    })?;
+    if existing.truncated_line {
+        eprintln!("{}: dropping an incomplete last line (that point is computed again)", path.display());
+    }
+    file.set_len(existing.valid_len).map_err(failed)?;
+    eprintln!("{}: {} points already done", path.display(), existing.done.len());
+    Ok((file, existing.done))
+}
+
 /// Run `verify sweep`.
 pub fn run(args: &SweepArgs) -> Result<(), Failure> {
+    if let Some(dir) = &args.plot {
+        ensure_output_dir(dir, "--plot")?;
+    }
     let text = read(&args.spec)?;
     let spec = parse_any_spec(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let ranges: Vec<ParamRange> = if args.params.is_empty() {
@@ -62,7 +121,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     } else {
         args.params
             .iter()
-            .map(|p| ParamRange::parse(p).map_err(|m| bad(format!("--param {m}"))))
+            .map(|p| ParamRange::parse(p).map_err(|m| bad(format!("--param {}", quoting(m, p)))))
             .collect::<Result<_, _>>()?
     };
     let names: Vec<String> = ranges.iter().map(|r| r.name.clone()).collect();
@@ -70,43 +129,22 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         Some(points) => Sampling::Random { points, seed: args.seed },
         None => Sampling::Grid,
     };
-    let plan = Plan::new(ranges, sampling).map_err(|m| bad(format!("{}: {m}", args.spec.display())))?;
+    let plan = Plan::new(ranges, sampling)
+        .map_err(|m| bad(format!("{}: {}", args.spec.display(), names.iter().fold(m, |m, n| quoting(m, n)))))?;
     let level = if args.numeric { Level::Numeric } else { Level::Spec };
     let id = sweep::sweep_id(&spec, &plan, level);
-    let evaluator = Evaluator::new(spec, names, level).map_err(|m| bad(format!("--param: {m}")))?;
+    let evaluator = Evaluator::new(spec, names.clone(), level)
+        .map_err(|m| bad(format!("--param: {}", names.iter().fold(m, |m, n| quoting(m, n)))))?;
     let shard = match &args.shard {
-        Some(s) => Shard::parse(s).map_err(|m| bad(format!("--shard {m}")))?,
+        Some(s) => Shard::parse(s).map_err(|m| bad(format!("--shard '{}': {m}", excerpt(s))))?,
         None => Shard::ALL,
     };
 
-    let mut done = Done::none();
-    let mut sink: Box<dyn Write + Send> = match &args.output {
-        None => Box::new(std::io::stdout()),
+    let (mut sink, done): (Box<dyn Write + Send>, Done) = match &args.output {
+        None => (Box::new(std::io::stdout()), Done::none()),
         Some(path) => {
-            let mut file = OpenOptions::new()
-                .read(true)
-                .write(true)
-                .create(true)
-                .truncate(!args.resume)
-                .open(path)
-                .map_err(|e| bad(format!("{}: cannot open: {e}", path.display())))?;
-            if args.resume {
-                let existing = sweep::scan(&mut file, &id, plan.len()).map_err(|e| {
-                    bad(format!(
-                        "{}: cannot resume: {e} (use another --output, or drop --resume to overwrite)",
-                        path.display()
-                    ))
-                })?;
-                if existing.truncated_line {
-                    eprintln!("{}: dropping an incomplete last line (that point is computed again)", path.display());
-                }
-                file.set_len(existing.valid_len)
-                    .and_then(|_| file.seek(SeekFrom::End(0)))
-                    .map_err(|e| Failure::Failed(format!("{}: {e}", path.display())))?;
-                done = existing.done;
-                eprintln!("{}: {} points already done", path.display(), done.len());
-            }
-            Box::new(file)
+            let (file, done) = open_locked(path, args.resume, &id, plan.len())?;
+            (Box::new(file), done)
         }
     };
 

@@ -10,7 +10,9 @@
 //! * One swept parameter: `Sigma^2` and `T(eps, delta)` against it, with
 //!   the reference constants dashed beside the engine's.
 
-use crate::plots::{draw_legend, palette, register_font, DrawResult};
+use crate::messages::excerpt;
+use crate::paths::{ensure_output_dir, file_stem_noted, with_suffix};
+use crate::plots::{draw_file, draw_legend, palette, register_font, DrawResult};
 use crate::{read, Failure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -52,7 +54,9 @@ pub fn run(args: &PlotSweepArgs) -> Result<(), Failure> {
     let shade = match args.shade.as_str() {
         "sigma2" => Shade::Sigma2,
         "logT" | "logt" => Shade::LogT,
-        other => return Err(Failure::BadInput(format!("--shade: unknown '{other}' (expected sigma2 or logT)"))),
+        other => {
+            return Err(Failure::BadInput(format!("--shade: unknown '{}' (expected sigma2 or logT)", excerpt(other))))
+        }
     };
     let written = plot_files(&args.lines, &args.spec, &args.out, Some(shade))?;
     for w in written {
@@ -79,6 +83,7 @@ pub fn plot_files(
 ) -> Result<Vec<PathBuf>, Failure> {
     let spec =
         parse_any_spec(&read(spec_path)?).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
+    let known = spec.parameter_names();
     let mut names: Option<Vec<String>> = None;
     let mut id: Option<String> = None;
     let mut points = Vec::new();
@@ -94,7 +99,11 @@ pub fn plot_files(
             match &id {
                 None => id = Some(this_id.to_string()),
                 Some(i) if i != this_id => {
-                    return Err(at(&format!("a record of another sweep ({this_id}, the first line's is {i})")))
+                    return Err(at(&format!(
+                        "a record of another sweep ({}, the first line's is {})",
+                        excerpt(this_id),
+                        excerpt(i)
+                    )))
                 }
                 _ => {}
             }
@@ -102,6 +111,9 @@ pub fn plot_files(
             let these: Vec<String> = order(params.keys().cloned().collect(), &spec);
             if names.get_or_insert_with(|| these.clone()) != &these {
                 return Err(at("the swept parameters differ from the first line's"));
+            }
+            if let Some(unknown) = these.iter().find(|n| !known.contains(n)) {
+                return Err(at(&format!("'{}' is not a parameter of the spec", excerpt(unknown))));
             }
             let Some(verdict) = v["verdict"].as_str() else { continue };
             let x = these.iter().map(|n| params[n.as_str()].as_f64().unwrap_or(f64::NAN)).collect();
@@ -115,8 +127,9 @@ pub fn plot_files(
         }
     }
     let names = names.ok_or_else(|| Failure::BadInput("no sweep lines to plot".into()))?;
-    std::fs::create_dir_all(out).map_err(|e| Failure::Failed(format!("{}: {e}", out.display())))?;
-    let stem = out.join(spec.name());
+    ensure_output_dir(out, "--out")?;
+    // The name is data: a safe stem keeps every file inside the directory.
+    let stem = out.join(file_stem_noted(spec.name()));
     let fail = |e: Box<dyn std::error::Error>| Failure::Failed(format!("drawing failed: {e}"));
     let fixed = fixed_values(&spec);
     match names.len() {
@@ -143,7 +156,7 @@ pub fn plot_files(
 }
 
 fn png(stem: &Path, what: &str) -> PathBuf {
-    PathBuf::from(format!("{}-{what}.png", stem.display()))
+    with_suffix(stem, &format!("-{what}.png"))
 }
 
 /// The swept names in the spec's range order when it has one, else as read.
@@ -210,11 +223,8 @@ fn step(values: impl Iterator<Item = f64>) -> Option<f64> {
 impl Map<'_> {
     fn write(&self, stem: &Path) -> DrawResult {
         register_font();
-        let svg = PathBuf::from(format!("{}-map.svg", stem.display()));
-        self.draw(SVGBackend::new(&svg, (1100, 800)).into_drawing_area())?;
-        let png = png(stem, "map");
-        self.draw(BitMapBackend::new(&png, (1100, 800)).into_drawing_area())?;
-        Ok(())
+        draw_file(&with_suffix(stem, "-map.svg"), |p| self.draw(SVGBackend::new(p, (1100, 800)).into_drawing_area()))?;
+        draw_file(&png(stem, "map"), |p| self.draw(BitMapBackend::new(p, (1100, 800)).into_drawing_area()))
     }
 
     /// The stable points' shade value and its range.
@@ -239,7 +249,7 @@ impl Map<'_> {
         let regular = self.points.iter().all(|p| on_grid(p.x[0], x0, dx) && on_grid(p.x[1], y0, dy))
             && ((x1 - x0) / dx + 1.0) * ((y1 - y0) / dy + 1.0) < 4e6;
         let (px, py) = (dx.max(1e-12) / 2.0, dy.max(1e-12) / 2.0);
-        let title = format!("{}: verdicts over ({}, {})", self.spec.name(), self.names[0], self.names[1]);
+        let title = format!("{}: verdicts over ({}, {})", excerpt(self.spec.name()), self.names[0], self.names[1]);
         let mut chart = ChartBuilder::on(&main)
             .caption(title, ("sans-serif", 22))
             .margin(14)
@@ -429,9 +439,10 @@ impl LineCharts<'_> {
     fn write(&self, stem: &Path) -> DrawResult {
         register_font();
         for what in ["sigma2", "T"] {
-            let svg = PathBuf::from(format!("{}-{what}.svg", stem.display()));
-            self.draw(SVGBackend::new(&svg, (1000, 600)).into_drawing_area(), what)?;
-            self.draw(BitMapBackend::new(&png(stem, what), (1000, 600)).into_drawing_area(), what)?;
+            draw_file(&with_suffix(stem, &format!("-{what}.svg")), |p| {
+                self.draw(SVGBackend::new(p, (1000, 600)).into_drawing_area(), what)
+            })?;
+            draw_file(&png(stem, what), |p| self.draw(BitMapBackend::new(p, (1000, 600)).into_drawing_area(), what))?;
         }
         Ok(())
     }
@@ -496,10 +507,10 @@ impl LineCharts<'_> {
         };
         let pad = (x1 - x0).max(1e-12) * 0.03;
         let (title, y_desc) = if what == "sigma2" {
-            (format!("{}: Sigma^2 against {}", self.spec.name(), self.name), "Sigma^2".to_string())
+            (format!("{}: Sigma^2 against {}", excerpt(self.spec.name()), self.name), "Sigma^2".to_string())
         } else {
             (
-                format!("{}: stopping time T(eps, delta) against {}", self.spec.name(), self.name),
+                format!("{}: stopping time T(eps, delta) against {}", excerpt(self.spec.name()), self.name),
                 "T = ln(eps/delta) / Sigma^2".to_string(),
             )
         };

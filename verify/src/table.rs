@@ -1,5 +1,7 @@
 //! The no-argument run: certify every fixture and print a table.
 
+use crate::messages::{cut_message, excerpt};
+use crate::paths::write_atomic;
 use crate::Failure;
 use serde_json::Value;
 use spec::{check_certificate, parse_any_spec, CheckError};
@@ -60,7 +62,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
             Ok(s) => s,
             Err(e) => {
                 bad += 1;
-                eprintln!("error: {}: {e}", path.display());
+                eprintln!("error: {}", cut_message(&format!("{}: {e}", path.display())));
                 let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("?").to_string();
                 rows.push([name, "bad input".into(), "-".into(), "-".into(), "-".into(), "-".into(), "-".into()]);
                 continue;
@@ -69,7 +71,9 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
         let cert = spec.certify();
         let cpath = cert_path(path);
         if write {
-            std::fs::write(&cpath, spec::to_pretty_json(&cert))?;
+            // Atomic: an interrupted or failed write keeps the committed certificate.
+            write_atomic(&cpath, spec::to_pretty_json(&cert).as_bytes())
+                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", cpath.display()))?;
         }
         let status = match std::fs::read_to_string(&cpath) {
             Err(_) => "missing".to_string(),
@@ -77,12 +81,12 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
                 Ok(_) => "checked".to_string(),
                 Err(CheckError::Failed { path, message }) => {
                     failed += 1;
-                    eprintln!("FAIL {}: {path}: {message}", cpath.display());
+                    eprintln!("FAIL {}", cut_message(&format!("{}: {path}: {message}", cpath.display())));
                     "FAILED".to_string()
                 }
                 Err(e) => {
                     failed += 1;
-                    eprintln!("FAIL {}: {e}", cpath.display());
+                    eprintln!("FAIL {}", cut_message(&format!("{}: {e}", cpath.display())));
                     "FAILED".to_string()
                 }
             },
@@ -93,7 +97,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
             .or_else(|| j.pointer("/paper/choice_sigma2"))
             .map_or("-".into(), format_number);
         rows.push([
-            spec.name().to_string(),
+            excerpt(spec.name()),
             j["verdict"].as_str().unwrap_or("?").to_string(),
             j.get("sigma2").map_or("-".into(), format_number),
             first_choice,

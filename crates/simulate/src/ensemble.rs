@@ -79,12 +79,32 @@ pub enum EnsembleError {
 }
 
 impl EnsembleSettings {
+    /// Most histogram bins of the observable.
+    pub const MAX_BINS: usize = 10_000;
+    /// Most output times.
+    pub const MAX_OUTPUTS: usize = 100_000;
+    /// Most histogram cells, `outputs x bins` (80 MB of counts).
+    pub const MAX_HISTOGRAM_CELLS: usize = 10_000_000;
+    /// Most bytes of statistics held while running: every block of
+    /// [`BLOCK`] paths keeps its own statistics (histogram, means, norms at
+    /// each output time) until the blocks are reduced in order, which makes
+    /// the numbers independent of the thread count. 10^6 paths with 200
+    /// outputs and 80 bins hold 0.57 GB (0.69 GB peak measured).
+    pub const MAX_STATISTICS_BYTES: u64 = 2 << 30;
+
     /// Number of steps.
     pub fn steps(&self) -> u64 {
         (self.t_end / self.dt).round().max(1.0) as u64
     }
 
-    /// Check the parameters (not the cost; see [`Self::path_steps`]).
+    /// Check the parameters (not the cost; see [`Self::path_steps`]),
+    /// including the limits on the memory the statistics take
+    /// ([`Self::MAX_BINS`], [`Self::MAX_OUTPUTS`],
+    /// [`Self::MAX_HISTOGRAM_CELLS`], [`Self::MAX_STATISTICS_BYTES`]).
+    /// An error names the field: `paths`, `dt`, `t_end`, `steps` (`t_end /
+    /// dt`), `outputs`, `bins`, `histogram_cells` (`outputs x bins`),
+    /// `statistics` (paths, outputs and bins together), `observable`,
+    /// `range` (the histogram range) or `epsilon`.
     pub fn validate(&self, dim: usize) -> Result<(), EnsembleError> {
         let bad = |field, message: String| Err(EnsembleError::Invalid { field, message });
         if self.paths == 0 {
@@ -97,7 +117,10 @@ impl EnsembleSettings {
             return bad("t_end", format!("must be a positive number, got {}", self.t_end));
         }
         if self.t_end / self.dt > 1e12 {
-            return bad("dt", format!("t_end/dt = {:e} steps per path is beyond reason", self.t_end / self.dt));
+            return bad("steps", format!("t_end/dt = {:e} steps per path is beyond reason", self.t_end / self.dt));
+        }
+        if self.outputs > Self::MAX_OUTPUTS {
+            return bad("outputs", format!("at most {} output times, got {}", Self::MAX_OUTPUTS, self.outputs));
         }
         if self.outputs == 0 || self.outputs as u64 > self.steps() {
             return bad("outputs", format!("must be between 1 and the number of steps ({})", self.steps()));
@@ -106,8 +129,37 @@ impl EnsembleSettings {
         if o.index >= dim {
             return bad("observable", format!("coordinate {} does not exist (dimension {dim})", o.index));
         }
-        if o.bins == 0 || o.lo >= o.hi || !o.lo.is_finite() || !o.hi.is_finite() {
-            return bad("observable", "needs bins >= 1 and a finite range lo < hi".into());
+        if o.bins == 0 || o.bins > Self::MAX_BINS {
+            return bad("bins", format!("must be between 1 and {}, got {}", Self::MAX_BINS, o.bins));
+        }
+        let cells = self.outputs as u64 * o.bins as u64;
+        if cells > Self::MAX_HISTOGRAM_CELLS as u64 {
+            return bad(
+                "histogram_cells",
+                format!("outputs x bins = {cells} histogram cells exceeds the limit of {}", Self::MAX_HISTOGRAM_CELLS),
+            );
+        }
+        if o.lo >= o.hi || !o.lo.is_finite() || !o.hi.is_finite() {
+            return bad("range", format!("the histogram needs a finite range lo < hi, got [{}, {}]", o.lo, o.hi));
+        }
+        // What run_ensemble holds: per block, at each output time, the
+        // histogram, the mean of every coordinate and three norm statistics.
+        let steps = self.steps();
+        let stride = (steps / self.outputs as u64).max(1);
+        let times = steps / stride + 1;
+        let blocks = self.paths.div_ceil(BLOCK) as u64;
+        let per_time = 8 * (o.bins as u64 + dim as u64 + 3);
+        let bytes = (blocks as f64) * (times as f64) * (per_time as f64);
+        if bytes > Self::MAX_STATISTICS_BYTES as f64 {
+            return bad(
+                "statistics",
+                format!(
+                    "{blocks} blocks of {BLOCK} paths x {times} output times x {} bins would hold {:.1} GB of statistics (limit {:.1} GB); lower the paths, the outputs or the bins",
+                    o.bins,
+                    bytes / 1e9,
+                    Self::MAX_STATISTICS_BYTES as f64 / 1e9
+                ),
+            );
         }
         if let Some(e) = self.epsilon {
             if !(e.is_finite() && e > 0.0) {

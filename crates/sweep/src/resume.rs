@@ -44,6 +44,9 @@ pub fn scan(file: &mut std::fs::File, id: &str, len: u64) -> Result<Existing, Re
     let mut bytes = Vec::new();
     file.read_to_end(&mut bytes)?;
     let mut out = Existing::default();
+    // Indices in file order (not sorted, possibly repeated after a
+    // concatenation); Done sorts and deduplicates them once at the end.
+    let mut indices = Vec::new();
     let mut start = 0usize;
     let mut line_no = 0usize;
     while start < bytes.len() {
@@ -64,7 +67,8 @@ pub fn scan(file: &mut std::fs::File, id: &str, len: u64) -> Result<Existing, Re
             Some(s) if s == id => {}
             Some(s) => {
                 return Err(foreign(format!(
-                    "a record of another sweep (id {s}; this sweep's id is {id}): the spec, the ranges, the sampling or the level differ"
+                    "a record of another sweep (id {}; this sweep's id is {id}): the spec, the ranges, the sampling or the level differ",
+                    short(s)
                 )))
             }
             None => return Err(foreign("not a sweep record (no \"sweep\" id)".into())),
@@ -73,8 +77,77 @@ pub fn scan(file: &mut std::fs::File, id: &str, len: u64) -> Result<Existing, Re
         let Some(index) = index else {
             return Err(foreign(format!("no valid \"index\" below {len}")));
         };
-        out.done.insert(index);
+        indices.push(index);
         out.valid_len = start as u64;
     }
+    out.done = Done::from_indices(indices);
     Ok(out)
+}
+
+/// A string read from the file, quoted in a message: sweep ids are 16 hex
+/// digits, so anything much longer is cut (a line may be megabytes).
+fn short(text: &str) -> String {
+    const KEEP: usize = 40;
+    match text.char_indices().nth(KEEP) {
+        Some((cut, _)) => format!("{}… ({} bytes)", &text[..cut], text.len()),
+        None => text.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn file_with(name: &str, text: &str) -> (std::path::PathBuf, std::fs::File) {
+        let path = std::env::temp_dir().join(format!("sweep-resume-{name}-{}", std::process::id()));
+        std::fs::File::create(&path).unwrap().write_all(text.as_bytes()).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
+        (path, file)
+    }
+
+    /// A resume of a 10^12-point grid whose only line carries an index near
+    /// 10^12: the old bitset allocated index/8 bytes (125 GB) here; the
+    /// points done now take one entry.
+    #[test]
+    fn resume_near_a_huge_index_stores_one_entry() {
+        let range = |name: &str| spec::ParamRange::parse(&format!("{name}=0:1:1000000")).unwrap();
+        let plan = crate::Plan::new(vec![range("p"), range("q")], crate::Sampling::Grid).unwrap();
+        let len = plan.len();
+        assert_eq!(len, 1_000_000_000_000);
+        let last = len - 1;
+        let (path, mut file) = file_with("huge", &format!("{{\"sweep\":\"abc\",\"index\":{last}}}\n"));
+        let existing = scan(&mut file, "abc", len).unwrap();
+        assert_eq!(existing.done.len(), 1);
+        assert_eq!(existing.done.stored(), 1);
+        assert!(existing.done.contains(last));
+        assert!(!existing.done.contains(last - 1) && !existing.done.contains(0));
+        std::fs::remove_file(path).unwrap();
+    }
+
+    /// Lines out of order and repeated (concatenated shards of one sweep)
+    /// count once each.
+    #[test]
+    fn repeated_and_unordered_lines_count_once() {
+        let text: String =
+            [5u64, 1, 5, 3, 1].iter().map(|i| format!("{{\"sweep\":\"abc\",\"index\":{i}}}\n")).collect();
+        let (path, mut file) = file_with("unordered", &text);
+        let existing = scan(&mut file, "abc", 10).unwrap();
+        assert_eq!(existing.done.len(), 3);
+        let done: Vec<u64> = (0..10).filter(|i| existing.done.contains(*i)).collect();
+        assert_eq!(done, [1, 3, 5]);
+        std::fs::remove_file(path).unwrap();
+    }
+
+    /// A foreign id of a megabyte is quoted as an excerpt.
+    #[test]
+    fn a_huge_foreign_id_is_not_echoed() {
+        let id = "z".repeat(1_000_000);
+        let (path, mut file) = file_with("foreign", &format!("{{\"sweep\":\"{id}\",\"index\":0}}\n"));
+        let message = scan(&mut file, "abc", 10).unwrap_err().to_string();
+        // 40 characters kept, plus the fixed explanation (about 200 bytes).
+        assert!(message.len() < 400, "{} bytes", message.len());
+        assert!(message.contains("(1000000 bytes)"), "{message}");
+        std::fs::remove_file(path).unwrap();
+    }
 }

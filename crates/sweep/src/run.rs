@@ -10,10 +10,17 @@ use std::sync::mpsc::sync_channel;
 use std::time::Instant;
 
 /// Which points are already done (read back from an output file).
-#[derive(Clone, Debug, Default)]
+///
+/// A sorted, deduplicated list of indices, searched by bisection: memory
+/// is proportional to the number of lines written (8 bytes a point), not
+/// to the largest index, so resuming a 10^12-point plan whose file holds a
+/// few lines near the end takes a few bytes (a bitset over the indices took
+/// 125 GB there). A compressed bitmap (the `roaring` crate) would be
+/// smaller for dense runs, but the list is already far smaller than the
+/// file it was read from (a line is about 200 bytes), with no dependency.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Done {
-    bits: Vec<u64>,
-    count: u64,
+    sorted: Vec<u64>,
 }
 
 impl Done {
@@ -22,31 +29,41 @@ impl Done {
         Done::default()
     }
 
-    /// Mark point `index`.
+    /// The points `indices`, in any order, repeats allowed (`O(n log n)`).
+    pub fn from_indices(mut indices: Vec<u64>) -> Done {
+        indices.sort_unstable();
+        indices.dedup();
+        indices.shrink_to_fit();
+        Done { sorted: indices }
+    }
+
+    /// Mark point `index` (`O(1)` when indices come in increasing order,
+    /// else a shift of the larger ones; use [`Done::from_indices`] for many).
     pub fn insert(&mut self, index: u64) {
-        let (w, b) = ((index / 64) as usize, index % 64);
-        if w >= self.bits.len() {
-            self.bits.resize(w + 1, 0);
-        }
-        if self.bits[w] & (1 << b) == 0 {
-            self.bits[w] |= 1 << b;
-            self.count += 1;
+        if let Err(at) = self.sorted.binary_search(&index) {
+            self.sorted.insert(at, index);
         }
     }
 
     /// Whether point `index` is done.
     pub fn contains(&self, index: u64) -> bool {
-        self.bits.get((index / 64) as usize).is_some_and(|w| w & (1 << (index % 64)) != 0)
+        self.sorted.binary_search(&index).is_ok()
     }
 
     /// Number of points marked.
     pub fn len(&self) -> u64 {
-        self.count
+        self.sorted.len() as u64
     }
 
     /// Whether no point is marked.
     pub fn is_empty(&self) -> bool {
-        self.count == 0
+        self.sorted.is_empty()
+    }
+
+    /// Number of indices held in memory (equal to [`Done::len`]: one per
+    /// point, whatever the indices are).
+    pub fn stored(&self) -> usize {
+        self.sorted.len()
     }
 }
 
@@ -204,5 +221,27 @@ fn merge(total: &mut Summary, s: &Summary) {
     total.invalid += s.invalid;
     for (t, x) in total.verdicts.iter_mut().zip(s.verdicts) {
         *t += x;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Marking index 10^12 takes one entry, not a bitset up to 10^12.
+    #[test]
+    fn done_memory_follows_the_points_not_the_indices() {
+        let mut done = Done::none();
+        done.insert(1_000_000_000_000);
+        assert_eq!(done.stored(), 1);
+        assert!(done.contains(1_000_000_000_000));
+        assert!(!done.contains(999_999_999_999) && !done.contains(0));
+        // Repeats are kept once, in any order.
+        for i in [7, 3, 1_000_000_000_000, 7, u64::MAX] {
+            done.insert(i);
+        }
+        assert_eq!(done.len(), 4);
+        assert_eq!(done, Done::from_indices(vec![u64::MAX, 3, 7, 1_000_000_000_000, 3]));
+        assert!(done.contains(u64::MAX) && done.contains(3) && !done.contains(4));
     }
 }
