@@ -132,6 +132,16 @@ impl StableEvidence {
             None => self.growth.sigma2,
         }
     }
+
+    /// `Sigma^2` as a double at or above the certified rational (the
+    /// nearest double may lie below it): what a stopping time, a guarantee,
+    /// is computed from. The floating-point value when nothing is certified.
+    pub fn sigma2_bound(&self) -> f64 {
+        match &self.exact {
+            Some(e) => exact::rational_to_f64_up(&e.value),
+            None => self.growth.sigma2,
+        }
+    }
 }
 
 /// Everything the pipeline found.
@@ -171,6 +181,11 @@ impl Analysis {
     /// `Sigma^2` when the verdict is `stable` (the certified value).
     pub fn sigma2(&self) -> Option<f64> {
         self.stable.as_ref().map(StableEvidence::sigma2)
+    }
+
+    /// [`StableEvidence::sigma2_bound`], if stable.
+    pub fn sigma2_bound(&self) -> Option<f64> {
+        self.stable.as_ref().map(StableEvidence::sigma2_bound)
     }
 }
 

@@ -166,11 +166,7 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
     }
     // T is a guarantee: computed from Sigma^2 rounded up (the exact rational
     // when there is one), and rounded down itself (see StoppingTime::time).
-    let sigma2_up = a.stable.as_ref().map(|s| match &s.exact {
-        Some(e) => exact::rational_to_f64_up(&e.value),
-        None => s.sigma2(),
-    });
-    if let (Some(stop), Some(s2)) = (spec.stopping, sigma2_up) {
+    if let (Some(stop), Some(s2)) = (spec.stopping, a.sigma2_bound()) {
         let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
         put(
             "stopping",

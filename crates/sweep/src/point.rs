@@ -139,7 +139,8 @@ impl Evaluator {
                     verdict: Some(a.verdict.as_str()),
                     level: spec::verification_level(&a),
                     sigma2,
-                    stopping_time: stopping_time(s.stopping, sigma2),
+                    // T from Sigma^2 rounded up, as in the certificate
+                    stopping_time: stopping_time(s.stopping, a.sigma2_bound()),
                     growth_rate: a.instability.as_ref().map(|i| i.eigenvalue.re),
                     error: None,
                 }
