@@ -338,7 +338,8 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         // The certificate states Sigma^2 as a double beside the rational:
         // one that no double holds is not rounded to 0 (towards "stable").
         let f = exact::rational_to_f64(&e.value);
-        if !e.value.is_zero() && !(f.is_finite() && f >= f64::MIN_POSITIVE) {
+        let representable = f.is_finite() && f >= f64::MIN_POSITIVE;
+        if !e.value.is_zero() && !representable {
             analysis.verdict = Verdict::Inconclusive;
             analysis.reason = format!(
                 "a definite second variation was found, but Sigma^2 = 2^{} (about, proved exactly) lies outside the range of double precision: rescale time or the noise amplitudes",

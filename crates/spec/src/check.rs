@@ -245,15 +245,46 @@ fn check_direction(pair: (Option<Value>, Option<Value>), analysis: &generator::A
     let pn = (x.transpose() * &p * &x)[(0, 0)];
     let qn = (x.transpose() * &q * &x)[(0, 0)];
     let lmax = stable.growth.largest_eigenvalue;
+    // A simple top eigenvalue fixes the direction up to the sign convention,
+    // so it is compared with the re-derived one (to 1e-9 of its largest
+    // entry; a component moved from 0 to 5e-8 changes v^T P v only at second
+    // order, which the residual tests below cannot see). A multiple one
+    // leaves an eigenspace: then only the residuals are tested.
+    let eigenvalues = &stable.growth.eigenvalues;
+    let spread = eigenvalues.iter().fold(0.0f64, |m, e| m.max(e.abs())).max(f64::MIN_POSITIVE);
+    let second = eigenvalues.iter().rev().nth(1).copied();
+    let simple = second.is_none_or(|l2| lmax - l2 > 1e-6 * spread);
+    if simple {
+        let expected = &stable.growth.direction;
+        let scale = expected.iter().fold(0.0f64, |m, e| m.max(e.abs())).max(f64::MIN_POSITIVE);
+        if let Some(i) = (0..v.len()).find(|&i| (v[i] - expected[i]).abs() > 1e-9 * scale) {
+            return Err(fail(
+                &format!("{path}[{i}]"),
+                format!("re-derived {:e}, certificate says {:e} (the top eigenvalue is simple)", expected[i], v[i]),
+            ));
+        }
+    }
     // The direction comes from a floating-point solve whose accuracy degrades
     // with the conditioning of P (large Casimir terms): test it relative to
     // that scale, up to round-off (1e-8 of the norms involved).
     let scale = (q.norm() + lmax.abs() * p.norm()) * x.norm_squared();
-    if (pn - 1.0).abs() > 1e-6 {
+    // v^T P v = 1 to the accuracy a floating solve with this P allows
+    // (relative to |P| |v|^2, which is about the condition of P along v).
+    if (pn - 1.0).abs() > 1e-9 * (p.norm() * x.norm_squared()).max(1.0) {
         return Err(fail(path, format!("v^T P v = {pn}, expected 1")));
     }
     if (qn - lmax * pn).abs() > 1e-8 * scale.max(f64::MIN_POSITIVE) {
         return Err(fail(path, format!("v^T Q v = {qn}, expected lambda_max v^T P v = {}", lmax * pn)));
+    }
+    // The residual vector is first-order sensitive to a change of v away
+    // from the eigenspace (the quadratic forms above are not).
+    let residual = (&q * &x - &p * &x * lmax).norm();
+    let bound = 1e-9 * (q.norm() + lmax.abs() * p.norm()) * x.norm();
+    if residual > bound.max(f64::MIN_POSITIVE) {
+        return Err(fail(
+            path,
+            format!("|Q v - lambda_max P v| = {residual:e} is above {bound:e}: not an eigenvector"),
+        ));
     }
     Ok(())
 }
