@@ -158,7 +158,17 @@ fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
         };
         match check_certificate(&text) {
             Ok(report) => {
-                let s2 = report.sigma2.map(|x| format!(", Sigma^2 = {x}")).unwrap_or_default();
+                // Display prints every digit of 3e300 or 3e-300: exponent form there
+                let s2 = report
+                    .sigma2
+                    .map(|x| {
+                        if x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+                            format!(", Sigma^2 = {x}")
+                        } else {
+                            format!(", Sigma^2 = {x:e}")
+                        }
+                    })
+                    .unwrap_or_default();
                 println!("ok   {}: {} {}{}", path.display(), messages::excerpt(&report.name), report.verdict, s2);
             }
             Err(CheckError::BadInput(e)) => {
