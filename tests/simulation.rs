@@ -241,8 +241,10 @@ fn bad_parameters_are_rejected() {
                 ..settings(10, 0.001, 2.0, 2000)
             },
         ),
-        // Within every per-run limit, but 10^6 paths are 3907 blocks of 256,
-        // each holding 1001 x 10^4 counts: 313 GB.
+        // Within every per-run limit, but a wave of 64 blocks (10^6 paths are
+        // 3907 blocks of 256) each holding 1001 output times x (10^4 bins + 3
+        // coordinates + 3 norm statistics) doubles: 64 x 1001 x 10006 x 8 bytes
+        // = 5.1 GB, above the 2 GiB limit.
         (
             "statistics",
             EnsembleSettings {

@@ -353,6 +353,28 @@ proptest! {
     }
 }
 
+#[test]
+fn sigma2_does_not_move_with_the_scale_of_inertias_or_casimirs() {
+    // Sigma^2 = 3 sigma^2 = 27/100 for I = (3, 2, 1) s at every scale s (P and
+    // Q both scale by 1/s), and for the Casimir |Pi|^2/2 times any constant.
+    for (scale, casimir) in [
+        ("1", "(Pi1^2 + Pi2^2 + Pi3^2)/2"),
+        ("1e-300", "(Pi1^2 + Pi2^2 + Pi3^2)/2"),
+        ("1e300", "(Pi1^2 + Pi2^2 + Pi3^2)/2"),
+        ("1", "1000000*(Pi1^2 + Pi2^2 + Pi3^2)"),
+        ("1", "(Pi1^2 + Pi2^2 + Pi3^2)/1000000"),
+    ] {
+        let mut v = rigid_body("3/10", json!({"casimirs": [casimir]}));
+        for (name, i) in [("I1", 3), ("I2", 2), ("I3", 1)] {
+            // i * scale written as a literal: "3e-300" (scale "1e-300" minus its leading 1)
+            v["parameters"][name] = json!(if scale == "1" { i.to_string() } else { format!("{i}{}", &scale[1..]) });
+        }
+        let cert = certify_value(&v);
+        assert_eq!(cert["sigma2_exact"], "27/100", "scale {scale}, casimir {casimir}: {}", cert["reason"]);
+        checks(&cert);
+    }
+}
+
 // ---- 8. Smaller things ----------------------------------------------------------
 
 #[test]

@@ -9,53 +9,17 @@ pub const EXCERPT_CHARS: usize = 100;
 /// and tail around a note of what was left out.
 pub const MAX_MESSAGE_BYTES: usize = 2000;
 
-/// Bytes kept from the head and the tail of a cut message.
-const HEAD_BYTES: usize = 1500;
-const TAIL_BYTES: usize = 300;
-
 /// `text` for quoting in a message: at most [`EXCERPT_CHARS`] characters,
-/// followed by `…` and the total length when it is longer. Control
-/// characters are escaped (`\n`, `\u{1b}`), so a quoted value cannot break
-/// lines or drive the terminal.
-///
-/// `excerpt("Pi1")` is `Pi1`; a 10^6-byte value becomes its first 100
-/// characters and `… (1000000 bytes)`.
+/// control characters escaped, and the total length when it is longer
+/// ([`exact::quote`]).
 pub fn excerpt(text: &str) -> String {
-    let mut out = String::new();
-    let mut taken = 0usize;
-    for (count, c) in text.chars().enumerate() {
-        if count == EXCERPT_CHARS {
-            break;
-        }
-        if c.is_control() {
-            out.extend(c.escape_debug());
-        } else {
-            out.push(c);
-        }
-        taken += c.len_utf8();
-    }
-    if taken < text.len() {
-        out.push_str(&format!("… ({} bytes)", text.len()));
-    }
-    out
+    exact::quote(text, EXCERPT_CHARS)
 }
 
-/// `message` if it is at most [`MAX_MESSAGE_BYTES`] long; else its first
-/// 1500 and last 300 bytes (at character boundaries) around a note of how
-/// many bytes were omitted.
+/// `message` if it is at most [`MAX_MESSAGE_BYTES`] long; else its head and
+/// tail around a note of how many bytes were omitted ([`exact::cut`]).
 pub fn cut_message(message: &str) -> String {
-    if message.len() <= MAX_MESSAGE_BYTES {
-        return message.to_string();
-    }
-    let mut head = HEAD_BYTES;
-    while !message.is_char_boundary(head) {
-        head -= 1;
-    }
-    let mut tail = message.len() - TAIL_BYTES;
-    while !message.is_char_boundary(tail) {
-        tail += 1;
-    }
-    format!("{} … [{} bytes omitted] … {}", &message[..head], tail - head, &message[tail..])
+    exact::cut(message, MAX_MESSAGE_BYTES)
 }
 
 /// `message` with every occurrence of the user's `input` replaced by its
@@ -96,8 +60,8 @@ mod tests {
         let cut = cut_message(&long);
         assert!(cut.len() < MAX_MESSAGE_BYTES + 100, "{}", cut.len());
         assert!(cut.starts_with("error: xxx") && cut.ends_with("xxx: expected K/N"));
-        // 1 000 024 bytes in all, 1500 + 300 kept.
-        assert!(cut.contains(&format!("[{} bytes omitted]", long.len() - HEAD_BYTES - TAIL_BYTES)), "{cut}");
+        // 1 000 024 bytes in all; 2/3 of 2000 (1333) kept at the head and 1/4 (500) at the tail.
+        assert!(cut.contains(&format!("[…{} bytes omitted…]", long.len() - 1333 - 500)), "{cut}");
         // Character boundaries: a multi-byte character is never split.
         let wide = "é".repeat(5000);
         assert!(cut_message(&wide).starts_with("éé"));

@@ -84,27 +84,27 @@ pub fn parse_number(text: &str) -> Result<Rational, NumberError> {
     let lower = t.to_ascii_lowercase();
     let stripped = lower.trim_start_matches(['+', '-']);
     if stripped.starts_with("nan") || stripped.starts_with("inf") {
-        return Err(NumberError::NotFinite { text: short(t) });
+        return Err(NumberError::NotFinite { text: crate::quote(t, 60) });
     }
     let value = if let Some((num, den)) = t.split_once('/') {
         let n = parse_decimal(num.trim(), t)?;
         let d = parse_decimal(den.trim(), t)?;
         if d.is_zero() {
-            return Err(NumberError::ZeroDenominator { text: short(t) });
+            return Err(NumberError::ZeroDenominator { text: crate::quote(t, 60) });
         }
         n / d
     } else {
         parse_decimal(t, t)?
     };
     if !rational_to_f64(&value).is_finite() {
-        return Err(NumberError::NotFinite { text: short(t) });
+        return Err(NumberError::NotFinite { text: crate::quote(t, 60) });
     }
     Ok(value)
 }
 
 /// Parse `[+-]digits[.digits][(e|E)[+-]digits]` exactly.
 fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
-    let malformed = || NumberError::Malformed { text: short(whole) };
+    let malformed = || NumberError::Malformed { text: crate::quote(whole, 60) };
     let bytes = s.as_bytes();
     let mut i = 0;
     let mut negative = false;
@@ -147,7 +147,7 @@ fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
         }
         // Long digit strings are rejected before conversion, so no overflow.
         if exp_digits.trim_start_matches('0').len() > 6 {
-            return Err(NumberError::NotFinite { text: short(whole) });
+            return Err(NumberError::NotFinite { text: crate::quote(whole, 60) });
         }
         exponent = exp_digits.parse::<i64>().map_err(|_| malformed())?;
         if exp_negative {
@@ -176,7 +176,7 @@ fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
     // The decimal point position plus the digit count bounds the magnitude.
     let magnitude = total_exponent + digits.trim_start_matches('0').len() as i64;
     if !(-MAX_DECIMAL_EXPONENT..=MAX_DECIMAL_EXPONENT).contains(&magnitude) {
-        return Err(NumberError::NotFinite { text: short(whole) });
+        return Err(NumberError::NotFinite { text: crate::quote(whole, 60) });
     }
     let ten = BigInt::from(10);
     let value = if total_exponent >= 0 {
@@ -381,7 +381,7 @@ pub const MAX_CERTIFICATE_DIGITS: usize = 20_000;
 /// ```
 pub fn parse_certificate_rational(text: &str) -> Result<Rational, NumberError> {
     let t = text.trim();
-    let malformed = || NumberError::Malformed { text: short(t) };
+    let malformed = || NumberError::Malformed { text: crate::quote(t, 60) };
     let digits = t.bytes().filter(u8::is_ascii_digit).count();
     if digits > MAX_CERTIFICATE_DIGITS {
         return Err(NumberError::TooLong { digits, limit: MAX_CERTIFICATE_DIGITS });
@@ -397,21 +397,11 @@ pub fn parse_certificate_rational(text: &str) -> Result<Rational, NumberError> {
         Some((n, d)) => {
             let (n, d) = (integer(n)?, integer(d)?);
             if d.is_zero() {
-                return Err(NumberError::ZeroDenominator { text: short(t) });
+                return Err(NumberError::ZeroDenominator { text: crate::quote(t, 60) });
             }
             Ok(Rational::new(n, d))
         }
         None => Ok(Rational::from_integer(integer(t)?)),
-    }
-}
-
-/// At most 60 characters of `t`, for messages.
-fn short(t: &str) -> String {
-    if t.len() <= 60 {
-        t.to_string()
-    } else {
-        let cut = (0..=60).rev().find(|&i| t.is_char_boundary(i)).unwrap_or(0);
-        format!("{}… ({} characters)", &t[..cut], t.len())
     }
 }
 

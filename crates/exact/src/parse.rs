@@ -283,18 +283,6 @@ fn max_bits(p: &Poly) -> u64 {
     p.terms().map(|(_, c)| c.size_bits()).max().unwrap_or(1)
 }
 
-/// Monomials of total degree at most `d` in `v` variables, `C(v + d, v)`, saturating.
-fn monomial_count(v: usize, d: u32) -> usize {
-    let mut c: u128 = 1;
-    for i in 1..=v as u128 {
-        c = c * (d as u128 + i) / i;
-        if c > usize::MAX as u128 {
-            return usize::MAX;
-        }
-    }
-    c as usize
-}
-
 fn saturating_pow(b: usize, e: u32) -> usize {
     (0..e).fold(1usize, |acc, _| acc.saturating_mul(b))
 }
@@ -487,7 +475,8 @@ impl<'a> Parser<'a> {
             // Terms of base^m: at most the monomials of degree <= m deg(base)
             // in the variables base uses, refused before they are formed.
             let vars = (0..self.nvars()).filter(|&i| base.terms().any(|(mono, _)| mono[i] > 0)).count();
-            let terms = monomial_count(vars, degree).min(saturating_pow(base.num_terms(), m));
+            let at_most = crate::poly::monomial_count(vars + 1, degree).min(usize::MAX as u128) as usize;
+            let terms = at_most.min(saturating_pow(base.num_terms(), m));
             if terms > l.max_terms.saturating_mul(4) {
                 return self.err(
                     ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms, max_terms: l.max_terms },

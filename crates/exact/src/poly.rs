@@ -410,6 +410,35 @@ impl Poly {
     }
 }
 
+/// The number of monomials of degree exactly `d` in `n` variables,
+/// `C(n + d - 1, d)`, saturating at `u128::MAX`: what
+/// [`monomials_of_degree`] would list, counted without listing it (60
+/// variables of degree 8 are 6.5e9 monomials). Monomials of degree *at most*
+/// `d` in `n` variables are `monomial_count(n + 1, d)`.
+///
+/// ```
+/// // x^2, y^2, z^2, xy, xz, yz
+/// assert_eq!(exact::monomial_count(3, 2), 6);
+/// assert_eq!(exact::monomial_count(3, 2) as usize, exact::monomials_of_degree(3, 2).len());
+/// // C(67, 8) = 6,522,361,560 (Python's math.comb)
+/// assert_eq!(exact::monomial_count(60, 8), 6_522_361_560);
+/// assert_eq!(exact::monomial_count(64, 200), u128::MAX);
+/// ```
+pub fn monomial_count(n: usize, d: u32) -> u128 {
+    if n == 0 {
+        return u128::from(d == 0);
+    }
+    let mut c: u128 = 1;
+    for i in 1..=d as u128 {
+        // c * (n - 1 + i) / i stays an integer at every step
+        match c.checked_mul(n as u128 - 1 + i) {
+            Some(v) => c = v / i,
+            None => return u128::MAX,
+        }
+    }
+    c
+}
+
 /// All exponent vectors of total degree `d` in `n` variables, in a fixed order.
 pub fn monomials_of_degree(n: usize, d: u16) -> Vec<Monomial> {
     fn rec(n: usize, d: u16, i: usize, cur: &mut Monomial, out: &mut Vec<Monomial>) {

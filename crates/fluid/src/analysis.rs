@@ -323,12 +323,20 @@ pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<Fluid
     let profile = &problem.profile;
     let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
     profile.check(fine.nodes())?;
-    let e = noise_exponent(profile, fine.nodes());
+    let (scaled, e) = normalise_noise(problem, &fine);
+    let a = analyse_normalised(&scaled, settings, &fine);
+    Ok(if e == 0 { a } else { rescale(a, e) })
+}
+
+/// The problem with its noise divided by `2^e` (exactly), and `e`: the
+/// exponent of the largest noise value on the samples and the nodes of
+/// `fine` (0 for no noise).
+fn normalise_noise(problem: &FluidProblem, fine: &YGrid) -> (FluidProblem, i32) {
+    let e = noise_exponent(&problem.profile, fine.nodes());
     if e == 0 {
-        return Ok(analyse_normalised(problem, settings, &fine));
+        return (problem.clone(), 0);
     }
-    let scaled = FluidProblem { profile: profile.with_noise_factor(pow2(-e)), ..problem.clone() };
-    Ok(rescale(analyse_normalised(&scaled, settings, &fine), e))
+    (FluidProblem { profile: problem.profile.with_noise_factor(pow2(-e)), ..problem.clone() }, e)
 }
 
 /// `2^e` for `-1022 <= e <= 1023`.
@@ -421,15 +429,6 @@ fn rescale(a: FluidAnalysis, e: i32) -> FluidAnalysis {
     }
 }
 
-/// The noise scale used by [`analyse`] for this problem: the pipeline's
-/// `Q` is that of the noise divided by `2^e`, and its `Sigma^2` values are
-/// multiplied by `4^e`.
-pub fn noise_scale_exponent(problem: &FluidProblem) -> i32 {
-    let profile = &problem.profile;
-    let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
-    noise_exponent(profile, fine.nodes())
-}
-
 /// Whether `bound V - Q ⪰ 0` (with `V ≻ 0`) is proved by the verified
 /// Cholesky test for each `(m, bound)`: x-mode `m` of the finest grid, with
 /// the matrices built exactly as [`analyse`] builds them (the same noise
@@ -442,9 +441,10 @@ pub fn prove_mode_bounds(problem: &FluidProblem, bounds: &[(usize, f64)]) -> Vec
     if matches!(problem.model, FluidModel::Compressible { .. }) || bounds.is_empty() {
         return vec![false; bounds.len()];
     }
-    let e = noise_scale_exponent(problem);
-    let profile = problem.profile.with_noise_factor(pow2(-e));
-    let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
+    let p = &problem.profile;
+    let fine = YGrid::new(p.boundary, p.interval.0, p.interval.1, problem.ny);
+    let (scaled, e) = normalise_noise(problem, &fine);
+    let profile = scaled.profile;
     let coef = profile.coefficients(&fine);
     let Some(form) = form_for(&choose(&profile), &profile, &coef, &fine) else { return vec![false; bounds.len()] };
     let ks = wavenumbers(problem);

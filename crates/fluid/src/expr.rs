@@ -85,20 +85,18 @@ fn err<T>(message: impl Into<String>, position: usize) -> Result<T, ExprError> {
     Err(ExprError { message: message.into(), position })
 }
 
-/// The arithmetic a tape is evaluated in.
-pub trait Scalar: Copy {
+/// The arithmetic a tape is evaluated in: the four operations and negation
+/// through `std::ops`, and the functions below.
+pub trait Scalar:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::Neg<Output = Self>
+{
     /// A constant.
     fn constant(x: f64) -> Self;
-    /// `a + b`.
-    fn add(self, o: Self) -> Self;
-    /// `a - b`.
-    fn sub(self, o: Self) -> Self;
-    /// `a b`.
-    fn mul(self, o: Self) -> Self;
-    /// `a / b`.
-    fn div(self, o: Self) -> Self;
-    /// `-a`.
-    fn neg(self) -> Self;
     /// `(sin a, cos a)`.
     fn sin_cos(self) -> (Self, Self);
     /// `exp a`.
@@ -112,21 +110,6 @@ pub trait Scalar: Copy {
 impl Scalar for f64 {
     fn constant(x: f64) -> Self {
         x
-    }
-    fn add(self, o: Self) -> Self {
-        self + o
-    }
-    fn sub(self, o: Self) -> Self {
-        self - o
-    }
-    fn mul(self, o: Self) -> Self {
-        self * o
-    }
-    fn div(self, o: Self) -> Self {
-        self / o
-    }
-    fn neg(self) -> Self {
-        -self
     }
     fn sin_cos(self) -> (Self, Self) {
         (self.sin(), self.cos())
@@ -145,21 +128,6 @@ impl Scalar for f64 {
 impl Scalar for Interval {
     fn constant(x: f64) -> Self {
         Interval::point(x)
-    }
-    fn add(self, o: Self) -> Self {
-        self + o
-    }
-    fn sub(self, o: Self) -> Self {
-        self - o
-    }
-    fn mul(self, o: Self) -> Self {
-        self * o
-    }
-    fn div(self, o: Self) -> Self {
-        self / o
-    }
-    fn neg(self) -> Self {
-        -self
     }
     fn sin_cos(self) -> (Self, Self) {
         (self.sin(), self.cos())
@@ -190,8 +158,59 @@ impl<T: Scalar> Jet<T> {
         if factorial == 1.0 {
             self.0[k]
         } else {
-            self.0[k].mul(Self::c(factorial))
+            self.0[k] * Self::c(factorial)
         }
+    }
+}
+
+impl<T: Scalar> std::ops::Add for Jet<T> {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Jet(std::array::from_fn(|k| self.0[k] + o.0[k]))
+    }
+}
+
+impl<T: Scalar> std::ops::Sub for Jet<T> {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        Jet(std::array::from_fn(|k| self.0[k] - o.0[k]))
+    }
+}
+
+impl<T: Scalar> std::ops::Mul for Jet<T> {
+    type Output = Self;
+    fn mul(self, o: Self) -> Self {
+        let (a, b) = (self.0, o.0);
+        Jet(std::array::from_fn(|k| {
+            let mut s = a[0] * b[k];
+            for j in 1..=k {
+                s = s + a[j] * b[k - j];
+            }
+            s
+        }))
+    }
+}
+
+impl<T: Scalar> std::ops::Div for Jet<T> {
+    type Output = Self;
+    fn div(self, o: Self) -> Self {
+        let (a, b) = (self.0, o.0);
+        let mut c = [T::constant(0.0); 4];
+        for k in 0..4 {
+            let mut s = a[k];
+            for j in 1..=k {
+                s = s - b[j] * c[k - j];
+            }
+            c[k] = s / b[0];
+        }
+        Jet(c)
+    }
+}
+
+impl<T: Scalar> std::ops::Neg for Jet<T> {
+    type Output = Self;
+    fn neg(self) -> Self {
+        Jet(self.0.map(|x| -x))
     }
 }
 
@@ -199,37 +218,6 @@ impl<T: Scalar> Scalar for Jet<T> {
     fn constant(x: f64) -> Self {
         let z = T::constant(0.0);
         Jet([T::constant(x), z, z, z])
-    }
-    fn add(self, o: Self) -> Self {
-        Jet(std::array::from_fn(|k| self.0[k].add(o.0[k])))
-    }
-    fn sub(self, o: Self) -> Self {
-        Jet(std::array::from_fn(|k| self.0[k].sub(o.0[k])))
-    }
-    fn mul(self, o: Self) -> Self {
-        let (a, b) = (self.0, o.0);
-        Jet(std::array::from_fn(|k| {
-            let mut s = a[0].mul(b[k]);
-            for j in 1..=k {
-                s = s.add(a[j].mul(b[k - j]));
-            }
-            s
-        }))
-    }
-    fn div(self, o: Self) -> Self {
-        let (a, b) = (self.0, o.0);
-        let mut c = [T::constant(0.0); 4];
-        for k in 0..4 {
-            let mut s = a[k];
-            for j in 1..=k {
-                s = s.sub(b[j].mul(c[k - j]));
-            }
-            c[k] = s.div(b[0]);
-        }
-        Jet(c)
-    }
-    fn neg(self) -> Self {
-        Jet(self.0.map(T::neg))
     }
     fn sin_cos(self) -> (Self, Self) {
         let a = self.0;
@@ -239,12 +227,12 @@ impl<T: Scalar> Scalar for Jet<T> {
         for k in 1..4 {
             let (mut ss, mut cc) = (T::constant(0.0), T::constant(0.0));
             for j in 1..=k {
-                let ja = a[j].mul(Self::c(j as f64));
-                ss = ss.add(ja.mul(c[k - j]));
-                cc = cc.add(ja.mul(s[k - j]));
+                let ja = a[j] * Self::c(j as f64);
+                ss = ss + ja * c[k - j];
+                cc = cc + ja * s[k - j];
             }
-            s[k] = ss.div(Self::c(k as f64));
-            c[k] = cc.div(Self::c(k as f64)).neg();
+            s[k] = ss / Self::c(k as f64);
+            c[k] = -(cc / Self::c(k as f64));
         }
         (Jet(s), Jet(c))
     }
@@ -254,22 +242,22 @@ impl<T: Scalar> Scalar for Jet<T> {
         for k in 1..4 {
             let mut s = T::constant(0.0);
             for j in 1..=k {
-                s = s.add(a[j].mul(Self::c(j as f64)).mul(e[k - j]));
+                s = s + a[j] * Self::c(j as f64) * e[k - j];
             }
-            e[k] = s.div(Self::c(k as f64));
+            e[k] = s / Self::c(k as f64);
         }
         Jet(e)
     }
     fn sqrt(self) -> Self {
         let a = self.0;
         let mut r = [a[0].sqrt(); 4];
-        let two_r0 = r[0].mul(Self::c(2.0));
+        let two_r0 = r[0] * Self::c(2.0);
         for k in 1..4 {
             let mut s = a[k];
             for j in 1..k {
-                s = s.sub(r[j].mul(r[k - j]));
+                s = s - r[j] * r[k - j];
             }
-            r[k] = s.div(two_r0);
+            r[k] = s / two_r0;
         }
         Jet(r)
     }
@@ -277,18 +265,18 @@ impl<T: Scalar> Scalar for Jet<T> {
         // Repeated squaring (at most 12 products for |n| <= 64): exact zeros
         // stay zeros, so y^2 has third derivative 0, not 0 * y^-1.
         if n < 0 {
-            return Self::constant(1.0).div(self.powi(-n));
+            return Self::constant(1.0) / self.powi(-n);
         }
         let mut acc = Self::constant(1.0);
         let mut base = self;
         let mut e = n as u32;
         while e > 0 {
             if e & 1 == 1 {
-                acc = acc.mul(base);
+                acc = acc * base;
             }
             e >>= 1;
             if e > 0 {
-                base = base.mul(base);
+                base = base * base;
             }
         }
         acc
@@ -544,7 +532,7 @@ impl Parser<'_> {
                         "sqrt" => Func::Sqrt,
                         _ => {
                             return err(
-                                format!("unknown function '{}' (allowed: sin, cos, exp, sqrt)", excerpt(name)),
+                                format!("unknown function '{}' (allowed: sin, cos, exp, sqrt)", exact::quote(name, 40)),
                                 start,
                             )
                         }
@@ -565,22 +553,16 @@ impl Parser<'_> {
                         None => {
                             let known: Vec<&str> =
                                 ["y", "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
-                            err(format!("unknown symbol '{}' (known: {})", excerpt(name), known.join(", ")), start)
+                            err(
+                                format!("unknown symbol '{}' (known: {})", exact::quote(name, 40), known.join(", ")),
+                                start,
+                            )
                         }
                     },
                 }
             }
             Some(c) => err(format!("unexpected '{}'", c as char), at),
         }
-    }
-}
-
-/// A name quoted in a message: at most 40 characters of it.
-fn excerpt(s: &str) -> String {
-    if s.len() <= 40 {
-        s.to_string()
-    } else {
-        format!("{}… ({} characters)", &s[..40], s.len())
     }
 }
 
@@ -610,12 +592,12 @@ impl Expr {
             let x = match *n {
                 Node::Num(c) => T::constant(c),
                 Node::Y => y,
-                Node::Add(a, b) => v[a as usize].add(v[b as usize]),
-                Node::Sub(a, b) => v[a as usize].sub(v[b as usize]),
-                Node::Mul(a, b) => v[a as usize].mul(v[b as usize]),
-                Node::Div(a, b) => v[a as usize].div(v[b as usize]),
+                Node::Add(a, b) => v[a as usize] + v[b as usize],
+                Node::Sub(a, b) => v[a as usize] - v[b as usize],
+                Node::Mul(a, b) => v[a as usize] * v[b as usize],
+                Node::Div(a, b) => v[a as usize] / v[b as usize],
                 Node::Pow(a, k) => v[a as usize].powi(k),
-                Node::Neg(a) => v[a as usize].neg(),
+                Node::Neg(a) => -v[a as usize],
                 Node::Call(f, a) => {
                     let x = v[a as usize];
                     match f {

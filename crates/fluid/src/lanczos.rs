@@ -25,6 +25,14 @@ pub struct Ritz {
     pub scale: f64,
 }
 
+impl Ritz {
+    /// The result of a breakdown after `steps` steps: a value of NaN, which
+    /// callers must not floor (`NaN.max(0.0)` is `0`).
+    fn breakdown(steps: usize) -> Ritz {
+        Ritz { value: f64::NAN, residual: f64::INFINITY, iterations: steps, scale: f64::NAN }
+    }
+}
+
 /// Largest eigenvalue of the symmetric `n x n` operator `apply` (`y = T x`),
 /// to relative accuracy `tol` (with respect to the spectrum's scale).
 ///
@@ -52,13 +60,12 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
     let mut alpha: Vec<f64> = Vec::with_capacity(m_max);
     let mut beta: Vec<f64> = Vec::with_capacity(m_max);
     let mut w = vec![0.0; n];
-    let breakdown = |steps| Ritz { value: f64::NAN, residual: f64::INFINITY, iterations: steps, scale: f64::NAN };
-    let mut last = breakdown(0);
+    let mut last = Ritz::breakdown(0);
     for j in 0..m_max {
         apply(&v, &mut w);
         let a = dot(&v, &w);
         if !a.is_finite() {
-            return breakdown(j);
+            return Ritz::breakdown(j);
         }
         basis.push(v.clone());
         alpha.push(a);
@@ -72,7 +79,7 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
         let b = norm(&w);
         let steps = j + 1;
         if !b.is_finite() {
-            return breakdown(steps);
+            return Ritz::breakdown(steps);
         }
         let check = steps == m_max || steps % 8 == 0 || b <= 1e-300;
         if check {
@@ -129,9 +136,8 @@ pub fn largest_generalized_eigenvalue(
     let mut vq = vec![0.0; n];
     apply_v(&q, &mut vq);
     let nrm = dot(&q, &vq).sqrt();
-    let breakdown = |steps| Ritz { value: f64::NAN, residual: f64::INFINITY, iterations: steps, scale: f64::NAN };
     if !(nrm.is_finite() && nrm > 0.0) {
-        return breakdown(0);
+        return Ritz::breakdown(0);
     }
     q.iter_mut().for_each(|x| *x /= nrm);
     vq.iter_mut().for_each(|x| *x /= nrm);
@@ -145,7 +151,7 @@ pub fn largest_generalized_eigenvalue(
         apply_q(&q, &mut qx);
         let a = dot(&q, &qx);
         if !a.is_finite() {
-            return breakdown(j);
+            return Ritz::breakdown(j);
         }
         basis.push(q.clone());
         vbasis.push(vq.clone());
@@ -162,7 +168,7 @@ pub fn largest_generalized_eigenvalue(
         let b = dot(&p, &vp).max(0.0).sqrt();
         let steps = j + 1;
         if !b.is_finite() {
-            return breakdown(steps);
+            return Ritz::breakdown(steps);
         }
         if steps == m_max || steps % 8 == 0 || b <= 1e-300 {
             let (coefficients, theta, residual, scale) = top_ritz(&alpha, &beta, b);
@@ -181,7 +187,7 @@ pub fn largest_generalized_eigenvalue(
     }
     // The last step always checks (steps == m_max), and every early exit
     // above returned: `best` is set unless the recurrence broke down.
-    let Some((coefficients, theta, residual, steps, scale)) = best else { return breakdown(0) };
+    let Some((coefficients, theta, residual, steps, scale)) = best else { return Ritz::breakdown(0) };
     // The Ritz vector and its Rayleigh quotient, from Q and V directly.
     let mut x = vec![0.0; n];
     for (c, b) in coefficients.iter().zip(&basis) {

@@ -106,10 +106,7 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
 
 pub(crate) fn fail(path: &str, message: String) -> CheckError {
     // Messages quote certificate values, which may be anything a forger wrote.
-    CheckError::Failed {
-        path: crate::json::excerpt(path.to_string(), 300),
-        message: crate::json::excerpt(message, crate::json::MAX_MESSAGE_BYTES),
-    }
+    CheckError::Failed { path: exact::cut(path, 300), message: exact::cut(&message, crate::json::MAX_MESSAGE_BYTES) }
 }
 
 /// Remove `v[path]` and return it.

@@ -23,20 +23,8 @@ impl SpecError {
     /// An error at `path`; an over-long path or message is cut to an excerpt
     /// that says how much was left out.
     pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        SpecError { path: excerpt(path.into(), 300), message: excerpt(message.into(), MAX_MESSAGE_BYTES) }
+        SpecError { path: exact::cut(&path.into(), 300), message: exact::cut(&message.into(), MAX_MESSAGE_BYTES) }
     }
-}
-
-/// `text` if it has at most `limit` bytes, else its start and end around a
-/// note of how many bytes were omitted.
-pub fn excerpt(text: String, limit: usize) -> String {
-    if text.len() <= limit {
-        return text;
-    }
-    let head = (0..=limit * 2 / 3).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
-    let tail_len = limit / 4;
-    let tail = (text.len() - tail_len..=text.len()).find(|&i| text.is_char_boundary(i)).unwrap_or(text.len());
-    format!("{} […{} bytes omitted…] {}", &text[..head], tail - head, &text[tail..])
 }
 
 /// Parse JSON text, rejecting an object with the same key twice (serde_json
@@ -111,7 +99,7 @@ fn duplicate_key(text: &str) -> Option<(String, String)> {
                         let raw = &text[start..=i.min(bytes.len() - 1)];
                         let key: String = serde_json::from_str(raw).unwrap_or_else(|_| raw.to_string());
                         if !keys.insert(key.clone()) {
-                            let shown = excerpt(key, 100);
+                            let shown = exact::quote(&key, 100);
                             return Some((child(path, &shown), shown));
                         }
                         *last = key;

@@ -44,7 +44,7 @@ pub use fluid::{
     certify_fluid, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value, is_fluid_spec,
     parse_fluid_spec, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
-pub use json::{excerpt, parse_json, SpecError, MAX_MESSAGE_BYTES};
+pub use json::{parse_json, SpecError, MAX_MESSAGE_BYTES};
 pub use parse::{parse_spec, spec_from_value, CasimirSource, Spec, Stopping, MAX_NOISE_FIELDS};
 pub use pretty::to_pretty_json;
 pub use settings::EngineSettings;

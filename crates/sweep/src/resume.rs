@@ -68,8 +68,8 @@ pub fn scan(file: &mut std::fs::File, id: &str, len: u64) -> Result<Existing, Re
             Some(s) => {
                 return Err(foreign(format!(
                     "a record of another sweep (id {}; this sweep's id is {id}): the spec, the ranges, the sampling or the level differ",
-                    short(s)
-                )))
+                    exact::quote(s, 40) // ids are 16 hex digits; a line may be megabytes
+                )));
             }
             None => return Err(foreign("not a sweep record (no \"sweep\" id)".into())),
         }
@@ -82,16 +82,6 @@ pub fn scan(file: &mut std::fs::File, id: &str, len: u64) -> Result<Existing, Re
     }
     out.done = Done::from_indices(indices);
     Ok(out)
-}
-
-/// A string read from the file, quoted in a message: sweep ids are 16 hex
-/// digits, so anything much longer is cut (a line may be megabytes).
-fn short(text: &str) -> String {
-    const KEEP: usize = 40;
-    match text.char_indices().nth(KEEP) {
-        Some((cut, _)) => format!("{}… ({} bytes)", &text[..cut], text.len()),
-        None => text.to_string(),
-    }
 }
 
 #[cfg(test)]
