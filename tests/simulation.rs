@@ -171,7 +171,9 @@ fn linearised_ensembles_match_the_exact_moments() {
             assert!((m - exact).abs() <= 4.0 * se + 1e-12, "{name}: t = {t}: ensemble {m} ± {se}, exact {exact}");
             let bound = (sigma2 * t).exp();
             assert!(exact <= bound * (1.0 + 1e-9), "{name}: exact {exact} above the bound {bound}");
-            assert!(m - 4.0 * se <= bound, "{name}: ensemble {m} ± {se} above the bound {bound}");
+            // x0 has |x0|_P = 1 up to round-off (a floating-point vector), so
+            // at t = 0 the mean is 1 to a few ulps with no sampling error.
+            assert!(m - 4.0 * se <= bound * (1.0 + 1e-12), "{name}: ensemble {m} ± {se} above the bound {bound}");
         }
     }
 }

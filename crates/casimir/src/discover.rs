@@ -151,11 +151,22 @@ pub fn discover_casimirs(algebra: &LieAlgebra, max_degree: u32, max_unknowns: us
                 }
             }
         }
-        let mut echelon = Echelon::new();
-        for (_, row) in rows {
-            echelon.insert(row);
-        }
-        let solutions = echelon.null_space(monomials.len());
+        // Multi-modular first (exact and complete when it answers, see
+        // exact::sparse_null_space); rational elimination otherwise.
+        let sparse: Vec<exact::SparseRow> =
+            rows.values().map(|r| r.iter().map(|(c, v)| (*c, v.clone())).collect()).collect();
+        let solutions: Vec<BTreeMap<usize, Rational>> = match exact::sparse_null_space(&sparse, monomials.len()) {
+            Some(null) => {
+                null.into_iter().map(|v| v.into_iter().enumerate().filter(|(_, x)| !x.is_zero()).collect()).collect()
+            }
+            None => {
+                let mut echelon = Echelon::new();
+                for (_, row) in rows {
+                    echelon.insert(row);
+                }
+                echelon.null_space(monomials.len())
+            }
+        };
         if !solutions.is_empty() {
             // Keep only solutions independent of the products of earlier
             // generators of total degree d.

@@ -56,6 +56,8 @@ pub use bracket::lie_poisson_bracket;
 pub use discover::{discover_casimirs, DiscoveryReport};
 pub use ellipsoid::Ellipsoid;
 pub use error::SystemError;
-pub use search::{find_definite_choice, CasimirChoice, SearchOutcome, SearchSettings};
+pub use search::{
+    conserved_margin, find_definite_choice, level_scale, short_entries, CasimirChoice, SearchOutcome, SearchSettings,
+};
 pub use system::{ConservedKind, System};
 pub use variation::{MultiplierFamily, SecondVariation};

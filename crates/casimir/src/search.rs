@@ -8,13 +8,12 @@
 //! maximise it with the central-cut ellipsoid method (bisection in one
 //! dimension), which converges to the global maximum of a concave function
 //! inside the search ball; the ball grows if the maximiser sits on its edge.
-//! Then `M = s mu E E^T` (E selects independent conserved quantities) with
-//! `mu` above the Schur-complement bound, and the final rational `P` is
-//! confirmed definite by an exact LDLᵀ test.
+//! Then `M` completes the Schur complement exactly (see `choose_m`): once
+//! the rounded restricted Hessian is exactly definite, so is `P`.
 
 use crate::ellipsoid::Ellipsoid;
 use crate::variation::SecondVariation;
-use exact::{best_rational_approximation, Matrix, Rational};
+use exact::{best_rational_approximation, decimal_near, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use num_traits::{One, Zero};
 
@@ -225,13 +224,26 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
             variation.restricted(&family.at(&t)).sub(&r0).to_dmatrix()
         })
         .collect();
-    let r0f = r0.to_dmatrix();
+    // In an orthonormal basis of ker G^T (Z L^{-T}, Z^T Z = L L^T), so the
+    // margins do not depend on how the exact kernel basis is written.
+    let z = variation.kernel.to_dmatrix();
+    let orthonormal =
+        (z.ncols() > 0).then(|| (z.transpose() * &z).cholesky().and_then(|c| c.l().try_inverse())).flatten();
+    let whiten = |m: DMatrix<f64>| match &orthonormal {
+        Some(linv) => {
+            let w = linv * m * linv.transpose();
+            (&w + w.transpose()) * 0.5
+        }
+        None => m,
+    };
+    let raw: Vec<DMatrix<f64>> = raw.into_iter().map(whiten).collect();
+    let r0f = whiten(r0.to_dmatrix());
     let scales: Vec<f64> = raw.iter().map(|m| m.norm().max(f64::MIN_POSITIVE)).collect();
     let pencil = Pencil { r0: r0f.clone(), ri: raw.iter().zip(&scales).map(|(m, s)| m / *s).collect(), scales };
     let base_radius = 4.0 * r0f.norm().max(1.0);
 
     let mut margins = [f64::NEG_INFINITY; 2];
-    let mut found: Option<(i8, Vec<f64>, f64, f64)> = None;
+    let mut found: Option<(i8, Vec<f64>, f64)> = None;
     for (slot, sign) in [(0usize, 1i8), (1, -1)] {
         if found.is_some() {
             break; // the positive sign is preferred when both are possible
@@ -252,7 +264,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         margins[slot] = if k == 0 { 1.0 } else { best.2 };
         if found.is_none() && margins[slot] > settings.definiteness_tolerance {
             let t: Vec<f64> = best.0.iter().zip(&pencil.scales).map(|(u, s)| u / s).collect();
-            found = Some((sign, t, margins[slot], best.1));
+            found = Some((sign, t, margins[slot]));
         }
     }
     let not_found = || SearchOutcome::NotFound {
@@ -260,7 +272,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         best_negative_margin: margins[1],
         restricted_dimension: k,
     };
-    let Some((sign, t, relative_margin, smallest_eigenvalue)) = found else {
+    let Some((sign, t, relative_margin)) = found else {
         return not_found();
     };
     let t_rational = if f == 0 {
@@ -276,7 +288,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         }
     };
     let multipliers = family.at(&t_rational);
-    match choose_m(variation, &multipliers, sign, smallest_eigenvalue) {
+    match choose_m(variation, &multipliers, sign) {
         Some((m, p)) => SearchOutcome::Definite(CasimirChoice {
             sign,
             family_parameters: t_rational,
@@ -289,66 +301,89 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
     }
 }
 
-/// Pick `M = s mu E E^T` above the Schur-complement bound and confirm `P`
-/// exactly; `None` only if exact confirmation keeps failing.
-///
-/// `restricted_min` is the smallest eigenvalue of `s Z^T P0 Z` found by the
-/// search; it sets the scale of the added block.
-fn choose_m(
-    variation: &SecondVariation,
-    multipliers: &[Rational],
-    sign: i8,
-    restricted_min: f64,
-) -> Option<(Matrix, Matrix)> {
-    let r = variation.num_conserved();
-    let base = variation.base(multipliers);
-    let s = sign as f64;
-    let cols = &variation.range_columns;
-    if cols.is_empty() {
-        let m = Matrix::zeros(r, r);
-        return (base.definiteness() == Some(sign)).then_some((m, base));
-    }
-    let n = variation.dim();
-    let sp0 = base.to_dmatrix() * s;
+/// The natural size of the level-set block: `sqrt(l_min l_max)` of the
+/// pencil `(s B_zz, Z^T Z)`, the Euclidean Rayleigh quotients of `s B` on
+/// `ker G^T` (so it does not depend on how `Z` is written, nor on how the
+/// conserved quantities are scaled); `|B|_2` (or 1) when `ker G^T = 0`.
+/// The Casimir function adds this size along the conserved directions, so
+/// `P` is as well conditioned as the level-set block allows.
+pub fn level_scale(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> f64 {
+    let base = variation.base(multipliers).to_dmatrix() * (sign as f64);
     let z = variation.kernel.to_dmatrix();
-    let y = DMatrix::from_fn(n, cols.len(), |i, j| exact::rational_to_f64(&variation.gradients[(i, cols[j])]));
-    let w = y.transpose() * &y;
-    let w2 = &w * &w;
-    let yy = y.transpose() * &sp0 * &y;
-    let schur = if z.ncols() > 0 {
-        let rz = z.transpose() * &sp0 * &z;
-        let c = z.transpose() * &sp0 * &y;
-        match rz.clone().cholesky() {
-            Some(ch) => yy - c.transpose() * ch.solve(&c),
-            None => return None,
+    let fallback = || {
+        let norm = symmetric_eigen(base.clone())
+            .map(|e| e.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs())))
+            .unwrap_or(1.0);
+        if norm.is_finite() && norm > 0.0 {
+            norm
+        } else {
+            1.0
         }
-    } else {
-        yy
     };
-    // mu* = lambda_max(-S, W^2): smallest mu with mu W^2 + S > 0 (boundary).
-    let ch = w2.clone().cholesky()?;
-    let l_inv = ch.l().try_inverse()?;
-    let pencil = &l_inv * (-&schur) * l_inv.transpose();
-    let pencil = (&pencil + pencil.transpose()) * 0.5;
-    let mu_star = symmetric_eigen(pencil)?.eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-    let w2_max = symmetric_eigen(w2)?.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
-    let floor = if z.ncols() > 0 { restricted_min.max(f64::MIN_POSITIVE) } else { sp0.norm().max(1.0) };
-    let mut mu = 2.0 * mu_star.max(0.0) + floor / w2_max.max(f64::MIN_POSITIVE);
-    if !mu.is_finite() || mu <= 0.0 {
-        return None;
+    if z.ncols() == 0 {
+        return fallback();
     }
-    for _ in 0..40 {
-        let mu_rational = exact::decimal_at_least(mu, 3)?;
-        let mut m = Matrix::zeros(r, r);
-        let signed = if sign > 0 { mu_rational.clone() } else { -mu_rational.clone() };
-        for &c in cols {
-            m[(c, c)] = signed.clone();
+    let Some(ch) = (z.transpose() * &z).cholesky() else { return fallback() };
+    let Some(linv) = ch.l().try_inverse() else { return fallback() };
+    let r = &linv * (z.transpose() * &base * &z) * linv.transpose();
+    let Some(e) = symmetric_eigen((&r + r.transpose()) * 0.5) else { return fallback() };
+    let lo = e.eigenvalues.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    let hi = e.eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    let c = (lo.max(0.0) * hi.max(0.0)).sqrt();
+    if c.is_finite() && c > 0.0 {
+        c
+    } else {
+        fallback()
+    }
+}
+
+/// `D = c (Y^T Y)^{-1}` with `c` the [`level_scale`] rounded to three
+/// digits: adding `Y (s D) Y^T` to `P` adds `c |v|^2` along the conserved
+/// directions (the Euclidean norm of the part of `v` in the range of `G`).
+pub fn conserved_margin(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> Option<Matrix> {
+    let c = decimal_near(level_scale(variation, multipliers, sign), 3)?;
+    let y = variation.independent_gradients();
+    Some(y.transpose().mul(&y).inverse()?.scale(&c))
+}
+
+/// `K` rounded to `digits` significant digits (short numbers in the
+/// certificate).
+pub fn short_entries(k: &Matrix, digits: u32) -> Option<Matrix> {
+    let mut out = k.clone();
+    for i in 0..k.nrows() {
+        for j in 0..k.ncols() {
+            out[(i, j)] = decimal_near(exact::rational_to_f64(&k[(i, j)]), digits)?;
         }
+    }
+    Some(out)
+}
+
+/// The Casimir Hessian by exact Schur completion: `K = K0 + s D` with `K0`
+/// the [`SecondVariation::schur_bound`] and `D` the [`conserved_margin`], so
+/// `s (K - K0) = D ≻ 0` and `P` is definite *exactly* whenever the
+/// restricted Hessian `s B_zz` is (which the caller has confirmed). No
+/// search over a scale `mu`: a definite form found in floating point is
+/// never lost here. The same `K` rounded to 3, 6, 9 and 15 digits is tried
+/// first and kept when it is still definite (short numbers).
+fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> Option<(Matrix, Matrix)> {
+    let r = variation.num_conserved();
+    if variation.range_columns.is_empty() {
+        let base = variation.base(multipliers);
+        let m = Matrix::zeros(r, r);
+        return base.is_definite_with_sign(sign).then_some((m, base));
+    }
+    let k0 = variation.schur_bound(multipliers)?;
+    let d = conserved_margin(variation, multipliers, sign)?;
+    let k_exact = if sign > 0 { k0.add(&d) } else { k0.sub(&d) };
+    let mut candidates: Vec<Matrix> =
+        [3u32, 6, 9, 15].into_iter().filter_map(|digits| short_entries(&k_exact, digits)).collect();
+    candidates.push(k_exact);
+    for k in candidates {
+        let m = variation.m_from_k(&k);
         let p = variation.second_variation(multipliers, &m);
-        if p.definiteness() == Some(sign) {
+        if p.is_definite_with_sign(sign) {
             return Some((m, p));
         }
-        mu *= 2.0;
     }
     None
 }

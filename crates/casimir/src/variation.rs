@@ -100,4 +100,62 @@ impl SecondVariation {
         let z = &self.kernel;
         z.transpose().mul(&self.base(multipliers)).mul(z)
     }
+
+    /// `Y`: the independent conserved gradients (columns
+    /// [`Self::range_columns`] of `G`), `n × rk`.
+    pub fn independent_gradients(&self) -> Matrix {
+        let cols = &self.range_columns;
+        Matrix::from_fn(self.dim(), cols.len(), |i, j| self.gradients[(i, cols[j])].clone())
+    }
+
+    /// `W = Y (Y^T Y)^{-1}`, so that `Y^T W = I`: with the kernel `Z`, the
+    /// frame `T = [Z W]` splits a perturbation into its part along the
+    /// level set (`a`) and its conserved-quantity increments `b = Y^T v`,
+    /// and `T^T (Y K Y^T) T = diag(0, K)`.
+    pub fn complement(&self) -> Matrix {
+        let y = self.independent_gradients();
+        let gram = y.transpose().mul(&y);
+        let inv = gram.inverse().expect("independent columns have an invertible Gram matrix");
+        y.mul(&inv)
+    }
+
+    /// The blocks `(Z^T S Z, Z^T S W, W^T S W)` of a symmetric form `S` in
+    /// the frame `T = [Z W]` (see [`Self::complement`]).
+    pub fn frame_blocks(&self, s: &Matrix, w: &Matrix) -> (Matrix, Matrix, Matrix) {
+        let z = &self.kernel;
+        let sz = s.mul(z);
+        let sw = s.mul(w);
+        (z.transpose().mul(&sz), z.transpose().mul(&sw), w.transpose().mul(&sw))
+    }
+
+    /// The `M` (`r × r`) with `G M G^T = Y K Y^T`: `K` placed on the
+    /// independent columns.
+    pub fn m_from_k(&self, k: &Matrix) -> Matrix {
+        let r = self.num_conserved();
+        let cols = &self.range_columns;
+        let mut m = Matrix::zeros(r, r);
+        for (a, &ca) in cols.iter().enumerate() {
+            for (b, &cb) in cols.iter().enumerate() {
+                m[(ca, cb)] = k[(a, b)].clone();
+            }
+        }
+        m
+    }
+
+    /// The exact Schur bound `K0 = B_wz B_zz^{-1} B_zw - B_ww` (blocks of
+    /// `B = D^2h + sum lambda_j D^2K_j` in the frame `[Z W]`): for `s = ±1`,
+    /// `s (B + Y K Y^T)` is positive definite iff `s B_zz` is and
+    /// `s (K - K0)` is (the Schur complement of the `Z` block). `None` when
+    /// `B_zz` is singular. This bound is intrinsic: it is the quadratic form
+    /// `b -> -min {v^T B v : Y^T v = b}` and does not depend on the choice of
+    /// `Z` or `W`; rescaling a conserved quantity rescales its row and column.
+    pub fn schur_bound(&self, multipliers: &[Rational]) -> Option<Matrix> {
+        let w = self.complement();
+        let (bzz, bzw, bww) = self.frame_blocks(&self.base(multipliers), &w);
+        if bzz.nrows() == 0 {
+            return Some(bww.scale(&-Rational::from(1)));
+        }
+        let inv = bzz.inverse()?;
+        Some(bzw.transpose().mul(&inv).mul(&bzw).sub(&bww))
+    }
 }

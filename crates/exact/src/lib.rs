@@ -27,6 +27,7 @@
 #![warn(missing_docs)]
 
 mod matrix;
+mod modular;
 mod number;
 mod parse;
 mod poly;
@@ -34,11 +35,12 @@ mod rational;
 mod text;
 mod upoly;
 
-pub use matrix::{AffineSolution, Matrix};
+pub use matrix::{AffineSolution, Congruence, Inertia, Matrix};
+pub use modular::{sparse_null_space, SparseRow};
 pub use num_bigint::BigInt;
 pub use number::{
-    best_rational_approximation, binary_exponent, decimal_at_least, parse_certificate_rational, parse_number,
-    power_of_two, rational_from_f64, rational_to_f64, rational_to_f64_up, NumberError, Rational,
+    best_rational_approximation, binary_exponent, decimal_at_least, decimal_near, parse_certificate_rational,
+    parse_number, power_of_two, rational_from_f64, rational_to_f64, rational_to_f64_up, NumberError, Rational,
     MAX_CERTIFICATE_DIGITS, MAX_LITERAL_DIGITS,
 };
 pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};

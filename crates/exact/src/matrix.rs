@@ -354,6 +354,9 @@ impl Matrix {
     pub fn inverse(&self) -> Option<Matrix> {
         assert_eq!(self.rows, self.cols);
         let n = self.rows;
+        if n == 0 {
+            return Some(Matrix::zeros(0, 0));
+        }
         let mut aug = Matrix::zeros(n, 2 * n);
         for i in 0..n {
             for j in 0..n {
@@ -463,6 +466,165 @@ impl Matrix {
     }
 }
 
+/// The inertia of a symmetric matrix: how many eigenvalues are positive,
+/// negative and zero (Sylvester's law: congruence preserves these counts).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Inertia {
+    /// Positive eigenvalues.
+    pub positive: usize,
+    /// Negative eigenvalues.
+    pub negative: usize,
+    /// Zero eigenvalues.
+    pub zero: usize,
+}
+
+/// An exact congruence `P = L D L^T` (`L` unit lower triangular, `D`
+/// diagonal and positive) applied to a second symmetric matrix:
+/// `C = L^{-1} Q L^{-T}`. The generalized eigenvalues of `(Q, P)` are the
+/// eigenvalues of `D^{-1/2} C D^{-1/2}`, which floating point resolves to
+/// round-off in `|l_max|` however ill-conditioned `P` is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Congruence {
+    /// The pivots `D`.
+    pub d: Vec<Rational>,
+    /// The factor `L`.
+    pub l: Matrix,
+    /// `L^{-1} Q L^{-T}`.
+    pub c: Matrix,
+}
+
+impl Matrix {
+    /// The exact inertia of a symmetric matrix, by symmetric elimination
+    /// with diagonal pivots, and `2 × 2` pivots `[[0, b], [b, 0]]` (one
+    /// positive and one negative eigenvalue) when every remaining diagonal
+    /// entry is zero.
+    ///
+    /// ```
+    /// use exact::{Inertia, Matrix, Rational};
+    /// let q = |n: i64| Rational::from(n);
+    /// // [[0, 1, 0], [1, 0, 0], [0, 0, 0]]: eigenvalues 1, -1, 0.
+    /// let m = Matrix::from_rows(&[vec![q(0), q(1), q(0)], vec![q(1), q(0), q(0)], vec![q(0), q(0), q(0)]]);
+    /// assert_eq!(m.inertia(), Inertia { positive: 1, negative: 1, zero: 1 });
+    /// ```
+    pub fn inertia(&self) -> Inertia {
+        assert!(self.is_symmetric(), "inertia of a non-symmetric matrix");
+        let mut m = self.clone();
+        let mut active: Vec<usize> = (0..self.rows).collect();
+        let mut inertia = Inertia { positive: 0, negative: 0, zero: 0 };
+        while !active.is_empty() {
+            if let Some(pos) = active.iter().position(|&i| !m[(i, i)].is_zero()) {
+                let p = active.swap_remove(pos);
+                let pivot = m[(p, p)].clone();
+                if pivot.is_positive() {
+                    inertia.positive += 1;
+                } else {
+                    inertia.negative += 1;
+                }
+                for &i in &active {
+                    if m[(i, p)].is_zero() {
+                        continue;
+                    }
+                    let f = &m[(i, p)] / &pivot;
+                    for &j in &active {
+                        if !m[(p, j)].is_zero() {
+                            let v = &f * &m[(p, j)];
+                            m[(i, j)] -= v;
+                        }
+                    }
+                }
+                continue;
+            }
+            // Every remaining diagonal entry is zero.
+            let pair = active
+                .iter()
+                .enumerate()
+                .find_map(|(a, &i)| active.iter().position(|&j| !m[(i, j)].is_zero()).map(|b| (a, b)));
+            let Some((a, b)) = pair else {
+                inertia.zero += active.len();
+                break;
+            };
+            let (i, j) = (active[a], active[b]);
+            active.retain(|&k| k != i && k != j);
+            inertia.positive += 1;
+            inertia.negative += 1;
+            // Eliminate with the pivot block E = [[0, e], [e, 0]],
+            // E^{-1} = [[0, 1/e], [1/e, 0]]: M -= C E^{-1} C^T.
+            let e_inv = m[(i, j)].recip();
+            for &r in &active {
+                for &c in &active {
+                    let v = (&m[(r, i)] * &m[(j, c)] + &m[(r, j)] * &m[(i, c)]) * &e_inv;
+                    if !v.is_zero() {
+                        m[(r, c)] -= v;
+                    }
+                }
+            }
+        }
+        inertia
+    }
+
+    /// `P = L D L^T` exactly (no pivoting) and `C = L^{-1} Q L^{-T}`, or
+    /// `None` unless every pivot is positive (`P` positive definite).
+    ///
+    /// ```
+    /// use exact::{Matrix, Rational};
+    /// let q = |n: i64| Rational::from(n);
+    /// let p = Matrix::from_rows(&[vec![q(2), q(1)], vec![q(1), q(1)]]);
+    /// let qm = Matrix::from_rows(&[vec![q(1), q(0)], vec![q(0), q(0)]]);
+    /// let c = p.congruence(&qm).unwrap();
+    /// // L D L^T = P and L C L^T = Q, exactly.
+    /// let d = Matrix::from_fn(2, 2, |i, j| if i == j { c.d[i].clone() } else { q(0) });
+    /// assert_eq!(c.l.mul(&d).mul(&c.l.transpose()), p);
+    /// assert_eq!(c.l.mul(&c.c).mul(&c.l.transpose()), qm);
+    /// ```
+    pub fn congruence(&self, q: &Matrix) -> Option<Congruence> {
+        let n = self.rows;
+        assert!(self.is_symmetric() && q.is_symmetric() && q.rows == n, "congruence of non-matching matrices");
+        let mut m = self.clone();
+        let mut l = Matrix::identity(n);
+        let mut d = Vec::with_capacity(n);
+        for k in 0..n {
+            let pivot = m[(k, k)].clone();
+            if !pivot.is_positive() {
+                return None;
+            }
+            for i in (k + 1)..n {
+                if m[(i, k)].is_zero() {
+                    continue;
+                }
+                let f = &m[(i, k)] / &pivot;
+                for j in (k + 1)..n {
+                    if !m[(k, j)].is_zero() {
+                        let v = &f * &m[(k, j)];
+                        m[(i, j)] -= v;
+                    }
+                }
+                l[(i, k)] = f;
+            }
+            d.push(pivot);
+        }
+        // X = L^{-1} Q (forward substitution on each column), C = L^{-1} X^T.
+        let forward = |b: &Matrix| -> Matrix {
+            let mut x = b.clone();
+            for i in 0..n {
+                for k in 0..i {
+                    if l[(i, k)].is_zero() {
+                        continue;
+                    }
+                    for j in 0..n {
+                        if !x[(k, j)].is_zero() {
+                            let v = &l[(i, k)] * &x[(k, j)];
+                            x[(i, j)] -= v;
+                        }
+                    }
+                }
+            }
+            x
+        };
+        let c = forward(&forward(q).transpose());
+        Some(Congruence { d, l, c })
+    }
+}
+
 fn positive_definite_exact(a: &Matrix) -> bool {
     let n = a.rows;
     let mut m = a.clone();
@@ -518,6 +680,9 @@ mod tests {
         assert_eq!(a.mul(&inv), Matrix::identity(2));
         let singular = Matrix::from_rows(&[vec![q(1), q(2)], vec![q(2), q(4)]]);
         assert!(singular.inverse().is_none());
+        // Regression: the empty matrix (no independent conserved gradient at
+        // mu_e = 0) panicked with an index underflow.
+        assert_eq!(Matrix::zeros(0, 0).inverse(), Some(Matrix::zeros(0, 0)));
     }
 
     #[test]

@@ -311,6 +311,29 @@ pub fn decimal_at_least(x: f64, digits: u32) -> Option<Rational> {
     Some(Rational::from_integer(n) * unit)
 }
 
+/// `x` rounded to a decimal with `digits` significant digits (away from
+/// zero), as an exact rational; `0` for `0`, `None` for a non-finite `x` or
+/// `digits` outside `1..=17`. Short denominators (powers of ten) for
+/// numbers that only need to be near a floating-point value.
+///
+/// ```
+/// use exact::{decimal_near, Rational};
+/// assert_eq!(decimal_near(-0.25, 3).unwrap(), Rational::new_small(-1, 4));
+/// assert_eq!(decimal_near(0.0, 3).unwrap(), Rational::from(0));
+/// let r = decimal_near(-1.0 / 3.0, 15).unwrap();
+/// assert!((exact::rational_to_f64(&r) + 1.0 / 3.0).abs() < 1e-15);
+/// ```
+pub fn decimal_near(x: f64, digits: u32) -> Option<Rational> {
+    if x == 0.0 {
+        return (x.is_finite() && (1..=17).contains(&digits)).then(Rational::zero);
+    }
+    if x > 0.0 {
+        decimal_at_least(x, digits)
+    } else {
+        decimal_at_least(-x, digits).map(|r| -r)
+    }
+}
+
 /// `floor(log2 |r|)` for `r != 0` (exact, from the bit lengths and one
 /// comparison), `None` for zero.
 ///

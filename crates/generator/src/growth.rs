@@ -1,7 +1,8 @@
 //! The sharpest growth constant `Sigma^2` from the generalized eigenproblem.
 
-use exact::{binary_exponent, power_of_two, Matrix};
-use nalgebra::{DVector, SymmetricEigen};
+use exact::{binary_exponent, power_of_two, Matrix, Rational};
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use num_traits::Zero;
 
 /// The result of the generalized symmetric eigenproblem `Q v = l P v`.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,6 +20,9 @@ pub struct GrowthConstant {
     pub direction: Vec<f64>,
     /// Residual `|Q v - l P v| / (|Q| + |l| |P|)` of that eigenpair.
     pub relative_residual: f64,
+    /// `cond(sP) = lambda_max / lambda_min` in the algebra's coordinates
+    /// (infinite when not resolved above round-off).
+    pub condition_number: f64,
 }
 
 /// Why the eigenproblem could not be solved.
@@ -100,6 +104,7 @@ pub fn growth_constant(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstan
         eigenvalues: g.eigenvalues.iter().map(|x| scale(*x)).collect(),
         direction: g.direction.iter().map(|x| x * half).collect(),
         relative_residual: g.relative_residual,
+        condition_number: g.condition_number,
     })
 }
 
@@ -119,12 +124,7 @@ fn exponent_range(m: &Matrix) -> (i64, i64) {
 
 fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstant, GrowthError> {
     let s = if sign < 0 { -1.0 } else { 1.0 };
-    let pf = p.to_dmatrix() * s;
-    let qf = q.to_dmatrix() * s;
-    if pf.iter().chain(qf.iter()).any(|x| !x.is_finite()) {
-        return Err(GrowthError::NonFinite);
-    }
-    let n = pf.nrows();
+    let n = p.nrows();
     if n == 0 {
         return Ok(GrowthConstant {
             sigma2: 0.0,
@@ -132,14 +132,45 @@ fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: i8) -> Result<Growth
             eigenvalues: vec![],
             direction: vec![],
             relative_residual: 0.0,
+            condition_number: 1.0,
         });
     }
-    let chol = pf.clone().cholesky().ok_or(GrowthError::NotPositiveDefinite)?;
-    let l = chol.l();
-    // C = L^{-1} Q L^{-T}
-    let linv_q = l.solve_lower_triangular(&qf).ok_or(GrowthError::NotPositiveDefinite)?;
-    let c_t = l.solve_lower_triangular(&linv_q.transpose()).ok_or(GrowthError::NotPositiveDefinite)?;
-    let c = (&c_t + c_t.transpose()) * 0.5;
+    let pf = p.to_dmatrix() * s;
+    let qf = q.to_dmatrix() * s;
+    if pf.iter().chain(qf.iter()).any(|x| !x.is_finite()) {
+        return Err(GrowthError::NonFinite);
+    }
+    // The exact congruence sP = L D L^T, C = L^{-1} sQ L^{-T}: the
+    // generalized eigenvalues are those of D^{-1/2} C D^{-1/2}, whose
+    // entries are each computed from exact rationals with one rounding, so
+    // the eigenvalues are accurate to round-off in |l_max| whatever the
+    // condition of P (a floating-point Cholesky of P loses cond(P) eps).
+    let (sp, sq) =
+        if sign < 0 { (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1))) } else { (p.clone(), q.clone()) };
+    let congruence = sp.congruence(&sq).ok_or(GrowthError::NotPositiveDefinite)?;
+    let root_d: Vec<f64> = congruence.d.iter().map(|d| exact::rational_to_f64(d).sqrt()).collect();
+    let scaled = |i: usize, j: usize| -> f64 {
+        let c = &congruence.c[(i, j)];
+        if c.is_zero() {
+            return 0.0;
+        }
+        // c / (sqrt(d_i) sqrt(d_j)), one rounding per factor; when a factor
+        // leaves the normal range, from the exact c^2 / (d_i d_j) instead.
+        let direct = exact::rational_to_f64(c) / (root_d[i] * root_d[j]);
+        if direct.is_finite() && direct.abs() >= f64::MIN_POSITIVE && root_d[i] * root_d[j] >= f64::MIN_POSITIVE {
+            return direct;
+        }
+        let r = exact::rational_to_f64(&(c * c / (&congruence.d[i] * &congruence.d[j]))).sqrt();
+        if c.is_negative() {
+            -r
+        } else {
+            r
+        }
+    };
+    let c = DMatrix::from_fn(n, n, |i, j| if i <= j { scaled(i, j) } else { scaled(j, i) });
+    if c.iter().any(|x| !x.is_finite()) {
+        return Err(GrowthError::NonFinite);
+    }
     let eig = SymmetricEigen::try_new(c, f64::EPSILON, 1000 * (n + 1)).ok_or(GrowthError::NoConvergence)?;
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
@@ -149,9 +180,14 @@ fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: i8) -> Result<Growth
     if !lmax.is_finite() {
         return Err(GrowthError::NonFinite);
     }
-    // v = L^{-T} w has v^T sP v = 1.
+    // v = L^{-T} D^{-1/2} w has v^T sP v = w^T w = 1.
     let w: DVector<f64> = eig.eigenvectors.column(imax).into_owned();
-    let v = l.transpose().solve_upper_triangular(&w).ok_or(GrowthError::NotPositiveDefinite)?;
+    let y = DVector::from_fn(n, |i, _| w[i] / root_d[i]);
+    let lt = congruence.l.to_dmatrix().transpose();
+    let v = lt.solve_upper_triangular(&y).ok_or(GrowthError::NotPositiveDefinite)?;
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(GrowthError::NonFinite);
+    }
     // Fix the sign: the first entry within 1e-6 of the largest modulus is positive.
     let max_abs = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let pivot = v.iter().find(|x| x.abs() >= max_abs * (1.0 - 1e-6)).copied().unwrap_or(1.0);
@@ -165,5 +201,25 @@ fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: i8) -> Result<Growth
         eigenvalues,
         direction: v.iter().copied().collect(),
         relative_residual,
+        condition_number: condition_number(&pf),
     })
+}
+
+/// `lambda_max / lambda_min` of a positive definite matrix in floating
+/// point (Euclidean coordinates of the algebra's basis); infinite when the
+/// smallest eigenvalue is not resolved above round-off.
+pub fn condition_number(m: &DMatrix<f64>) -> f64 {
+    if m.nrows() == 0 {
+        return 1.0;
+    }
+    let Some(e) = SymmetricEigen::try_new(m.clone(), f64::EPSILON, 1000 * (m.nrows() + 1)) else {
+        return f64::INFINITY;
+    };
+    let lo = e.eigenvalues.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    let hi = e.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    if lo > hi * 1e-15 {
+        hi / lo
+    } else {
+        f64::INFINITY
+    }
 }

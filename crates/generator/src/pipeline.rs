@@ -113,6 +113,11 @@ pub struct StableEvidence {
 pub struct OptimumSummary {
     /// Floating-point infimum of `Sigma^2` over the freedom.
     pub infimum: f64,
+    /// A certified lower bound on `Sigma^2` for every choice in the family,
+    /// when one could be proved (see [`crate::Optimum::infimum_lower_bound`]).
+    pub infimum_lower_bound: Option<Rational>,
+    /// Its witness in `ker G^T`.
+    pub infimum_witness: Option<Vec<Rational>>,
     /// Whether the chosen `P` attains it.
     pub attained: bool,
     /// Whether the chosen `P` is within the tolerance of it.
@@ -320,6 +325,8 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
             let form = if o.choice.p == choice.p { form } else { generator_form(&linearisation, &o.choice.p) };
             let summary = OptimumSummary {
                 infimum: o.infimum,
+                infimum_lower_bound: o.infimum_lower_bound.clone(),
+                infimum_witness: o.infimum_witness.clone(),
                 attained: o.attained,
                 within_tolerance: o.within_tolerance,
                 q_depends_on_m: o.q_depends_on_m,

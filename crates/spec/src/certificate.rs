@@ -274,6 +274,14 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
             Some(o) => {
                 opt.insert("optimised".into(), Value::Bool(true));
                 opt.insert("infimum".into(), float_json(o.infimum));
+                if let (Some(lb), Some(x)) = (&o.infimum_lower_bound, &o.infimum_witness) {
+                    opt.insert("infimum_lower_bound".into(), Value::from(lb.to_string()));
+                    opt.insert(
+                        "infimum_witness".into(),
+                        Value::Array(x.iter().map(|r| Value::from(r.to_string())).collect()),
+                    );
+                }
+                opt.insert("gap".into(), float_json((s.growth.sigma2 - o.infimum).max(0.0)));
                 opt.insert("attained".into(), Value::Bool(o.attained));
                 opt.insert("within_tolerance".into(), Value::Bool(o.within_tolerance));
                 opt.insert("q_depends_on_M".into(), Value::Bool(o.q_depends_on_m));
@@ -298,6 +306,7 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
             "growth",
             obj! {
                 "largest_generalized_eigenvalue" => float_json(s.growth.largest_eigenvalue),
+                "condition_number_P" => float_json(s.growth.condition_number),
                 "generalized_eigenvalues" => Value::Array(s.growth.eigenvalues.iter().map(|x| float_json(*x)).collect()),
                 "fastest_direction" => Value::Array(s.growth.direction.iter().map(|x| float_json(*x)).collect()),
             },

@@ -73,12 +73,20 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
         return crate::fluid::check_fluid_certificate(cert);
     }
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
+    check_engine(map)?;
+    // From here on the file is a certificate: an embedded spec or settings
+    // that the engine rejects (a Casimir edited into a non-Casimir) make the
+    // certificate fail (exit 1), they are not bad input to the checker.
     let mut spec = spec_from_value(spec_value).map_err(|e| {
-        CheckError::BadInput(SpecError::new(format!("$.spec{}", e.path.trim_start_matches('$')), e.message))
+        fail(
+            &format!("$.spec{}", e.path.trim_start_matches('$')),
+            format!("the embedded spec is not valid: {}", e.message),
+        )
     })?;
     // The recorded settings are the ones to reproduce.
     let settings = map.get("settings");
-    spec.settings = EngineSettings::from_json(settings, "$.settings").map_err(CheckError::BadInput)?;
+    spec.settings = EngineSettings::from_json(settings, "$.settings")
+        .map_err(|e| fail(&e.path, format!("the recorded settings are not valid: {}", e.message)))?;
     // 1. The claims, exactly, along the checker's own path.
     crate::claims::verify_claims(&spec, cert)
         .map_err(|f| fail(&f.path, format!("claim does not hold: {}", f.message)))?;
@@ -102,6 +110,29 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
         verdict: rederived.analysis.verdict.as_str().to_string(),
         sigma2: rederived.analysis.sigma2(),
     })
+}
+
+/// The certificate must name this engine and version: every number in it
+/// is re-derived by this engine, and a certificate from another version is
+/// re-certified (`verify --write`), not trusted for having parsed.
+pub(crate) fn check_engine(map: &serde_json::Map<String, Value>) -> Result<(), CheckError> {
+    let engine = map.get("engine").ok_or_else(|| fail("$.engine", "missing in the certificate".into()))?;
+    let name = engine.get("name").and_then(Value::as_str);
+    let version = engine.get("version").and_then(Value::as_str);
+    if name != Some("verify") {
+        return Err(fail("$.engine.name", "expected \"verify\"".into()));
+    }
+    if version != Some(crate::certificate::ENGINE_VERSION) {
+        return Err(fail(
+            "$.engine.version",
+            format!(
+                "the certificate was written by engine version {}, this checker is {}: re-certify it with this version",
+                exact::quote(version.unwrap_or("(not a string)"), 40),
+                crate::certificate::ENGINE_VERSION
+            ),
+        ));
+    }
+    Ok(())
 }
 
 pub(crate) fn fail(path: &str, message: String) -> CheckError {
@@ -305,17 +336,13 @@ pub(crate) fn compare_with(
         (Value::Object(e), Value::Object(f)) => {
             for (k, ev) in e {
                 let p = format!("{path}.{k}");
-                if path == "$" && k == "engine" {
-                    continue; // a newer engine may re-check an older certificate
-                }
                 match f.get(k) {
                     Some(fv) => compare_with(ev, fv, &p, floor, tol)?,
                     None => return Err(fail(&p, "missing in the certificate".into())),
                 }
             }
             for k in f.keys() {
-                let engine = path == "$" && k == "engine";
-                if !e.contains_key(k) && !engine {
+                if !e.contains_key(k) {
                     return Err(fail(&format!("{path}.{k}"), "not produced by the engine for this spec".into()));
                 }
             }

@@ -19,7 +19,10 @@
 //!   conserves `P`: formal stability); `S sP - sQ ⪰ 0` for the certified
 //!   rational `S = sigma2_exact` (exact semidefiniteness), and not for
 //!   `(1 - 1e-9) S` (tightness, also exact);
-//!   the stored `P`, `Q` equal the rebuilt ones;
+//!   the stored `P`, `Q` equal the rebuilt ones; every stored generalized
+//!   eigenvalue of `(Q, P)` to `1e-9` of the largest (exact inertia counts);
+//!   the certified lower bound on every choice's `Sigma^2`, from its
+//!   witness in `ker G^T`;
 //! * `not_an_equilibrium`: `ad*_{Dh(mu_e)} mu_e` recomputed, nonzero, equal to
 //!   the stored residual;
 //! * `noise_incompatible`: the residuals `ad*_{sigma_i} mu_e` recomputed, one of
@@ -263,6 +266,10 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<&'static str> 
     if !drift.add(&drift.transpose()).is_zero() {
         return Err(failure("$.residuals.drift", "P A + A^T P is not zero: P is not conserved by the linear flow"));
     }
+    let (sp, sq) =
+        if sign > 0 { (p.clone(), q.clone()) } else { (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1))) };
+    verify_generalized_eigenvalues(&sp, &sq, cert)?;
+    verify_infimum_bound(&r, &g, &sp, &sq, cert)?;
     // Sigma^2.
     let sigma2_float = get(cert, &["sigma2"])?.as_f64().ok_or_else(|| failure("$.sigma2", "expected a number"))?;
     let Some(exact_value) = cert.get("sigma2_exact") else {
@@ -280,11 +287,14 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<&'static str> 
     if s.is_negative() {
         return Err(failure("$.sigma2_exact", "negative"));
     }
-    let (sp, sq) =
-        if sign > 0 { (p.clone(), q.clone()) } else { (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1))) };
     let gap = sp.scale(&s).sub(&sq);
     if !gap.is_positive_semidefinite() {
         return Err(failure("$.sigma2_exact", "sigma2 * sP - sQ is not positive semidefinite: the bound is false"));
+    }
+    if let Some(lb) = cert.get("optimisation").and_then(|o| o.get("infimum_lower_bound")) {
+        if rational(lb, "$.optimisation.infimum_lower_bound")? > s {
+            return Err(failure("$.optimisation.infimum_lower_bound", "exceeds the certified sigma2"));
+        }
     }
     let singular = gap.rank() < n;
     if let Some(sharp) = cert.get("sigma2_sharp") {
@@ -432,4 +442,97 @@ fn verify_unstable(spec: &Spec, cert: &Value) -> Claim<&'static str> {
         ));
     }
     Ok(if proved { "exact" } else { "numerical" })
+}
+
+/// Each stored generalized eigenvalue `e_k` (ascending) of `(sQ, sP)` is
+/// confirmed exactly to `1e-9` of the largest modulus `r`: by Sylvester's
+/// law of inertia the number of eigenvalues below `x` is the number of
+/// negative eigenvalues of `sQ - x sP` (`sP ≻ 0`), so
+/// `#{l < e_k - 1e-9 r} <= k - 1` and `#{l <= e_k + 1e-9 r} >= k` are
+/// exact statements, whatever floating point did to get `e_k`.
+fn verify_generalized_eigenvalues(sp: &Matrix, sq: &Matrix, cert: &Value) -> Claim<()> {
+    let path = "$.growth.generalized_eigenvalues";
+    let Some(list) = cert.get("growth").and_then(|g| g.get("generalized_eigenvalues")) else {
+        return Err(failure(path, "missing"));
+    };
+    let values: Vec<f64> = list
+        .as_array()
+        .ok_or_else(|| failure(path, "expected an array"))?
+        .iter()
+        .map(|x| x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| failure(path, "expected finite numbers")))
+        .collect::<Claim<_>>()?;
+    let n = sp.nrows();
+    if values.len() != n {
+        return Err(failure(path, format!("expected {n} eigenvalues, got {}", values.len())));
+    }
+    if values.windows(2).any(|w| w[0] > w[1]) {
+        return Err(failure(path, "not in ascending order"));
+    }
+    let radius = values.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let delta = (1e-9 * radius).max(f64::MIN_POSITIVE);
+    let below = |x: f64, inclusive: bool| -> Claim<usize> {
+        let x = exact::rational_from_f64(x).ok_or_else(|| failure(path, "not a finite number"))?;
+        let inertia = sq.sub(&sp.scale(&x)).inertia();
+        Ok(inertia.negative + if inclusive { inertia.zero } else { 0 })
+    };
+    for (k, &e) in values.iter().enumerate() {
+        if below(e - delta, false)? > k || below(e + delta, true)? < k + 1 {
+            return Err(failure(
+                &format!("{path}[{k}]"),
+                format!(
+                    "{e:e} is not the generalized eigenvalue #{k} of (Q, P) to within {delta:e} (exact inertia count)"
+                ),
+            ));
+        }
+    }
+    let top = cert.get("growth").and_then(|g| g.get("largest_generalized_eigenvalue")).and_then(Value::as_f64);
+    if n > 0 && top != values.last().copied() {
+        return Err(failure("$.growth.largest_generalized_eigenvalue", "is not the last generalized eigenvalue"));
+    }
+    Ok(())
+}
+
+/// The certified lower bound on `Sigma^2` for every Casimir choice: a
+/// vector `x` with `G^T x = 0` (so `x^T P x` and `x^T Q x` do not depend
+/// on `M`: `G M G^T x = 0`, and `x^T L(G M G^T) x = 0` when no conserved
+/// quantity is moved by the noise, checked here) and no free multipliers
+/// (`G` of full column rank), so every choice has
+/// `lambda_max >= x^T sQ x / x^T sP x`.
+fn verify_infimum_bound(r: &Rebuilt, g: &Matrix, sp: &Matrix, sq: &Matrix, cert: &Value) -> Claim<()> {
+    let opt = cert.get("optimisation");
+    let (Some(lb), witness) =
+        (opt.and_then(|o| o.get("infimum_lower_bound")), opt.and_then(|o| o.get("infimum_witness")))
+    else {
+        return Ok(());
+    };
+    let path = "$.optimisation.infimum_lower_bound";
+    let lb = rational(lb, path)?;
+    let x = rational_vector(
+        witness.ok_or_else(|| failure("$.optimisation.infimum_witness", "missing"))?,
+        "$.optimisation.infimum_witness",
+    )?;
+    if x.len() != r.n || g.transpose().mul_vec(&x).iter().any(|v| !v.is_zero()) {
+        return Err(failure("$.optimisation.infimum_witness", "not a vector of ker G^T"));
+    }
+    if g.rank() < g.ncols() {
+        return Err(failure(path, "the multipliers are not unique: the bound would hold for one choice only"));
+    }
+    // x^T L(G M G^T) x = sum_i (G^T B_i x)^T M (G^T B_i x) (the drift terms
+    // vanish as G^T x = 0): zero for every M iff G^T B_i x = 0.
+    for b in &r.b {
+        if g.transpose().mul_vec(&b.mul_vec(&x)).iter().any(|v| !v.is_zero()) {
+            return Err(failure(path, "the noise moves the witness off ker G^T: x^T Q x depends on M"));
+        }
+    }
+    let quad = |m: &Matrix| x.iter().zip(m.mul_vec(&x)).fold(Rational::zero(), |acc, (a, b)| acc + a * b);
+    let (px, qx) = (quad(sp), quad(sq));
+    if !px.is_positive() {
+        return Err(failure("$.optimisation.infimum_witness", "x^T sP x is not positive"));
+    }
+    let rho = qx / px;
+    let expected = if rho.is_positive() { rho } else { Rational::zero() };
+    if expected != lb {
+        return Err(failure(path, "is not max(0, x^T sQ x / x^T sP x) for the witness x"));
+    }
+    Ok(())
 }

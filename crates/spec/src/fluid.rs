@@ -532,10 +532,17 @@ pub fn fluid_certificate_json(spec: &FluidSpec, a: &FluidAnalysis) -> Value {
 pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
+    crate::check::check_engine(map)?;
+    // A certificate whose embedded spec or settings the engine rejects fails
+    // (exit 1); only a file that is not a certificate is bad input.
     let mut spec = fluid_spec_from_value(spec_value).map_err(|e| {
-        CheckError::BadInput(SpecError::new(format!("$.spec{}", e.path.trim_start_matches('$')), e.message))
+        fail(
+            &format!("$.spec{}", e.path.trim_start_matches('$')),
+            format!("the embedded spec is not valid: {}", e.message),
+        )
     })?;
-    spec.settings = read_settings(map.get("settings"), "$.settings").map_err(CheckError::BadInput)?;
+    spec.settings = read_settings(map.get("settings"), "$.settings")
+        .map_err(|e| fail(&e.path, format!("the recorded settings are not valid: {}", e.message)))?;
     // Independent claims first.
     if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {
         return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
