@@ -219,4 +219,7 @@ fn an_equilibrium_where_every_conserved_gradient_vanishes_does_not_panic() {
     let (verdict, sigma2) = certify(text);
     // P = D^2h = diag(2, 1, 2/3) is definite and Q = 0 without noise.
     assert_eq!((verdict.as_str(), sigma2), ("stable", Some(0.0)));
+    // The same with noise: the eigen-solver was handed the empty K block.
+    let noisy = text.replace(r#""noise": []"#, r#""noise": [["3/10", 0, 0]]"#);
+    assert_eq!(certify(&noisy).0, "stable");
 }

@@ -340,6 +340,9 @@ fn minimise_normalised(
 
 /// The positive part of a symmetric matrix (its negative eigenvalues set to 0).
 fn positive_part(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    if m.nrows() == 0 {
+        return Some(m.clone()); // nalgebra's eigen-solver panics on an empty matrix
+    }
     let e = sym_eigen((m + m.transpose()) * 0.5)?;
     let d = DMatrix::from_diagonal(&e.eigenvalues.map(|x| x.max(0.0)));
     Some(&e.eigenvectors * d * e.eigenvectors.transpose())
