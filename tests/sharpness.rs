@@ -223,3 +223,27 @@ fn an_equilibrium_where_every_conserved_gradient_vanishes_does_not_panic() {
     let noisy = text.replace(r#""noise": []"#, r#""noise": [["3/10", 0, 0]]"#);
     assert_eq!(certify(&noisy).0, "stable");
 }
+
+/// With free multipliers (the first integral `Pi3` makes the gradients
+/// dependent), the optimum is `Sigma^2 = 4 sigma^2 / (p^2 - 4 mgl I1) =
+/// 4 (9/100) / (9 - 4) = 0.072` (the fixture's closed form). Scaling the
+/// Casimirs and the first integral by 1e6 or 1e-6 scales the multiplier
+/// family; the rounding of the family parameters is relative, so the
+/// answer does not move.
+#[test]
+fn free_multipliers_give_the_same_sigma2_whatever_the_scale_of_the_conserved_quantities() {
+    let base = fixture("lagrange-top-fluctuating-gravity.json");
+    for factor in ["1", "1000000", "1/1000000"] {
+        let text = base.replace(
+            r#""first_integrals": ["Pi3"],"#,
+            &format!(
+                r#""first_integrals": ["({factor})*Pi3"],
+                   "casimirs": ["({factor})*(Gamma1^2 + Gamma2^2 + Gamma3^2)/2", "({factor})*(Pi1*Gamma1 + Pi2*Gamma2 + Pi3*Gamma3)"],"#
+            ),
+        );
+        let (verdict, sigma2) = certify(&text);
+        assert_eq!(verdict, "stable", "factor {factor}");
+        let s = sigma2.unwrap();
+        assert!((s - 0.072).abs() <= 1e-6 * 0.072, "factor {factor}: Sigma^2 = {s}");
+    }
+}

@@ -57,7 +57,8 @@ pub use discover::{discover_casimirs, DiscoveryReport};
 pub use ellipsoid::Ellipsoid;
 pub use error::SystemError;
 pub use search::{
-    conserved_margin, find_definite_choice, level_scale, short_entries, CasimirChoice, SearchOutcome, SearchSettings,
+    conserved_margin, find_definite_choice, level_scale, round_family_parameters, short_entries, CasimirChoice,
+    Objective, SearchOutcome, SearchSettings,
 };
 pub use system::{ConservedKind, System};
 pub use variation::{MultiplierFamily, SecondVariation};

@@ -176,32 +176,53 @@ impl Pencil {
     }
 }
 
-/// Round the family parameters to rationals, trying finer denominators until
-/// the exact restricted Hessian keeps the wanted sign.
-fn rational_parameters(
+/// The restricted `lambda_max` at rational family parameters.
+pub type Objective<'a> = dyn Fn(&[Rational]) -> Option<f64> + 'a;
+
+/// Round the family parameters `t` to rationals, the first candidate that
+/// keeps the exact restricted Hessian definite with the sign and (when an
+/// objective is given) does not raise it above `limit`: first the simplest
+/// rationals within `1e-9` of each entry (relative to `1 + |t_i|` in units
+/// of the normalised direction: an optimum at a simple rational, as in the
+/// closed-form examples, is found exactly), then decimals of 8, 12, 15 and
+/// 17 significant digits (relative, so independent of how the conserved
+/// quantities are scaled). `units` are the sizes of the family directions
+/// (a parameter is compared in units of its direction); simple rationals
+/// have denominators at most `max_denominator`.
+pub fn round_family_parameters(
     variation: &SecondVariation,
-    t: &[f64],
     sign: i8,
+    t: &[f64],
+    units: &[f64],
     max_denominator: u64,
+    objective: Option<(&Objective, f64)>,
 ) -> Option<Vec<Rational>> {
-    let mut denominator = 16u64;
-    loop {
-        let candidate: Option<Vec<Rational>> = t
-            .iter()
-            .map(|&x| if x == 0.0 { Some(Rational::zero()) } else { best_rational_approximation(x, denominator) })
-            .collect();
-        if let Some(candidate) = candidate {
-            let lambda = variation.family.at(&candidate);
-            let r = variation.restricted(&lambda);
-            if r.nrows() == 0 || r.definiteness() == Some(sign) {
-                return Some(candidate);
-            }
+    let simple = |denominator: u64| -> Option<Vec<Rational>> {
+        t.iter()
+            .zip(units)
+            .map(|(&x, &unit)| {
+                let r = if x == 0.0 { Rational::zero() } else { best_rational_approximation(x, denominator)? };
+                ((exact::rational_to_f64(&r) - x).abs() * unit <= 1e-9 * (1.0 + x.abs() * unit)).then_some(r)
+            })
+            .collect()
+    };
+    let decimal = |digits: u32| t.iter().map(|&x| exact::decimal_near(x, digits)).collect::<Option<Vec<Rational>>>();
+    let candidates = [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000]
+        .into_iter()
+        .filter(|&d| d <= max_denominator.max(1))
+        .filter_map(simple)
+        .chain([8u32, 12, 15, 17].into_iter().filter_map(decimal));
+    for candidate in candidates {
+        let r = variation.restricted(&variation.family.at(&candidate));
+        if r.nrows() > 0 && !r.is_definite_with_sign(sign) {
+            continue;
         }
-        if denominator >= max_denominator {
-            return None;
+        match &objective {
+            Some((f, limit)) if f(&candidate).is_none_or(|v| v > *limit) => continue,
+            _ => return Some(candidate),
         }
-        denominator = (denominator * 16).min(max_denominator);
     }
+    None
 }
 
 /// Find multipliers and `M` that make the second variation definite.
@@ -282,7 +303,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         }
         vec![]
     } else {
-        match rational_parameters(variation, &t, sign, settings.max_denominator) {
+        match round_family_parameters(variation, sign, &t, &pencil.scales, settings.max_denominator, None) {
             Some(t) => t,
             None => return not_found(),
         }

@@ -579,29 +579,7 @@ impl Matrix {
     pub fn congruence(&self, q: &Matrix) -> Option<Congruence> {
         let n = self.rows;
         assert!(self.is_symmetric() && q.is_symmetric() && q.rows == n, "congruence of non-matching matrices");
-        let mut m = self.clone();
-        let mut l = Matrix::identity(n);
-        let mut d = Vec::with_capacity(n);
-        for k in 0..n {
-            let pivot = m[(k, k)].clone();
-            if !pivot.is_positive() {
-                return None;
-            }
-            for i in (k + 1)..n {
-                if m[(i, k)].is_zero() {
-                    continue;
-                }
-                let f = &m[(i, k)] / &pivot;
-                for j in (k + 1)..n {
-                    if !m[(k, j)].is_zero() {
-                        let v = &f * &m[(k, j)];
-                        m[(i, j)] -= v;
-                    }
-                }
-                l[(i, k)] = f;
-            }
-            d.push(pivot);
-        }
+        let (d, l) = ldl_positive(self)?;
         // X = L^{-1} Q (forward substitution on each column), C = L^{-1} X^T.
         let forward = |b: &Matrix| -> Matrix {
             let mut x = b.clone();
@@ -626,12 +604,21 @@ impl Matrix {
 }
 
 fn positive_definite_exact(a: &Matrix) -> bool {
+    ldl_positive(a).is_some()
+}
+
+/// `A = L D L^T` by exact elimination without pivoting: the pivots `D` and
+/// the unit lower factor `L`, or `None` at the first pivot that is not
+/// positive (then `A` is not positive definite, by Sylvester's criterion).
+fn ldl_positive(a: &Matrix) -> Option<(Vec<Rational>, Matrix)> {
     let n = a.rows;
     let mut m = a.clone();
+    let mut l = Matrix::identity(n);
+    let mut d = Vec::with_capacity(n);
     for k in 0..n {
         let pivot = m[(k, k)].clone();
         if !pivot.is_positive() {
-            return false;
+            return None;
         }
         for i in (k + 1)..n {
             if m[(i, k)].is_zero() {
@@ -644,9 +631,11 @@ fn positive_definite_exact(a: &Matrix) -> bool {
                     m[(i, j)] -= v;
                 }
             }
+            l[(i, k)] = f;
         }
+        d.push(pivot);
     }
-    true
+    Some((d, l))
 }
 
 #[cfg(test)]

@@ -40,14 +40,11 @@ pub struct OptimiseSettings {
     pub tolerance: f64,
     /// Iterations of the ellipsoid method. Default 3000.
     pub max_iterations: usize,
-    /// Doublings of the Casimir-function scale `M` when approaching the
-    /// infimum (stopped early once they no longer help). Default 40.
-    pub max_doublings: usize,
 }
 
 impl Default for OptimiseSettings {
     fn default() -> Self {
-        OptimiseSettings { tolerance: 1e-6, max_iterations: 3000, max_doublings: 40 }
+        OptimiseSettings { tolerance: 1e-6, max_iterations: 3000 }
     }
 }
 
@@ -201,53 +198,12 @@ impl AffinePencil {
     }
 }
 
+/// Largest denominator of the simple rationals tried for the optimised
+/// multipliers (the search's default `max_denominator`).
+const SIMPLE_DENOMINATOR: u64 = 1_000_000;
+
 fn signed(m: &Matrix, sign: i8) -> DMatrix<f64> {
     m.to_dmatrix() * (sign as f64)
-}
-
-/// The restricted `lambda_max` at rational family parameters.
-type Objective<'a> = dyn Fn(&[Rational]) -> Option<f64> + 'a;
-
-/// Round the family parameters `t` to rationals, the first candidate that
-/// keeps the exact restricted Hessian definite with the sign and (when an
-/// objective is given) does not raise it above `limit`: first the simplest
-/// rationals within `1e-9` of each entry (relative to `1 + |t_i|` in units
-/// of the normalised direction: an optimum at a simple rational, as in the
-/// closed-form examples, is found exactly), then decimals of 8, 12, 15 and
-/// 17 significant digits (relative, so independent of how the conserved
-/// quantities are scaled).
-fn round_parameters(
-    variation: &SecondVariation,
-    sign: i8,
-    t: &[f64],
-    units: &[f64],
-    objective: Option<(&Objective, f64)>,
-) -> Option<Vec<Rational>> {
-    let simple = |denominator: u64| -> Option<Vec<Rational>> {
-        t.iter()
-            .zip(units)
-            .map(|(&x, &unit)| {
-                let r = if x == 0.0 { Rational::zero() } else { exact::best_rational_approximation(x, denominator)? };
-                ((exact::rational_to_f64(&r) - x).abs() * unit <= 1e-9 * (1.0 + x.abs() * unit)).then_some(r)
-            })
-            .collect()
-    };
-    let decimal = |digits: u32| t.iter().map(|&x| exact::decimal_near(x, digits)).collect::<Option<Vec<Rational>>>();
-    let candidates = [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000]
-        .into_iter()
-        .filter_map(simple)
-        .chain([8u32, 12, 15, 17].into_iter().filter_map(decimal));
-    for candidate in candidates {
-        let r = variation.restricted(&variation.family.at(&candidate));
-        if r.nrows() > 0 && !r.is_definite_with_sign(sign) {
-            continue;
-        }
-        match &objective {
-            Some((f, limit)) if f(&candidate).is_none_or(|v| v > *limit) => continue,
-            _ => return Some(candidate),
-        }
-    }
-    None
 }
 
 /// The exact choice at rational parameters `t` and rational `K` (on the
@@ -482,7 +438,7 @@ pub fn optimise_choice(
     let scales = direction_scales(&p_start, &q_start, &pencil.p_dirs, &pencil.q_dirs);
     let (theta, value, on_boundary) = minimise_normalised(&pencil, &theta0, &scales, settings.max_iterations);
     let infimum = value.max(0.0);
-    let t = round_parameters(variation, sign, &theta[..f], &scales[..f], None)?;
+    let t = casimir::round_family_parameters(variation, sign, &theta[..f], &scales[..f], SIMPLE_DENOMINATOR, None)?;
     let mut k = Matrix::zeros(rk, rk);
     for (i, (a, b, _)) in k_dirs.iter().enumerate() {
         let r = exact::decimal_near(theta[f + i], 15)?;
@@ -544,9 +500,16 @@ fn optimise_restricted(
             top_generalized(&signed(&restrict(&b), sign), &signed(&restrict(&lq(&b)), sign)).ok().map(|(l, _)| l)
         };
         let limit = value + 1e-12 * value.abs().max(first_growth.sigma2);
-        round_parameters(variation, sign, &t, &scales, Some((&restricted_max, limit)))
-            .or_else(|| round_parameters(variation, sign, &t, &scales, None))
-            .unwrap_or_else(|| first.family_parameters.clone())
+        casimir::round_family_parameters(
+            variation,
+            sign,
+            &t,
+            &scales,
+            SIMPLE_DENOMINATOR,
+            Some((&restricted_max, limit)),
+        )
+        .or_else(|| casimir::round_family_parameters(variation, sign, &t, &scales, SIMPLE_DENOMINATOR, None))
+        .unwrap_or_else(|| first.family_parameters.clone())
     };
     let multipliers = variation.family.at(&t_rational);
     // 2. The frame blocks at those multipliers.
