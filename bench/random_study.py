@@ -2238,6 +2238,10 @@ def main(argv=None):
     ap.add_argument("--reference-cache", default=None, metavar="FILE",
                     help="JSONL of an earlier run: reuse its reference results (matched by spec SHA-256)")
     ap.add_argument("--timeout", type=float, default=60.0)
+    ap.add_argument("--gate", action="store_true",
+                    help="exit 1 on a false verdict, a certificate its own check rejects, an exact "
+                         "re-check that fails, an inconclusive where an exact definite form exists, "
+                         "a within_tolerance claim the reference contradicts, or a timeout (for CI)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--cases", default="/work/study-cases", help="copy specs with flagged results here")
     ap.add_argument("--report-only", metavar="JSONL", default=None,
@@ -2413,6 +2417,18 @@ def main(argv=None):
     if args.md:
         with open(args.md, "w") as fh:
             fh.write(text + "\n")
+    if args.gate and names:
+        failed = []
+        for nm, s in stats.items():
+            for key in ("false_total", "exact_bound_fail", "inconclusive_ref_definite",
+                        "within_tol_claim_false", "timeouts"):
+                if s.get(key):
+                    failed.append(f"{nm}: {key} = {s[key]}")
+        if failed:
+            print("GATE FAILED: " + "; ".join(failed), file=sys.stderr)
+            return 1
+        print("gate passed: no false verdict, no failed re-check, no lost definite form, "
+              "no false within_tolerance claim, no timeout")
     return 0
 
 

@@ -1,7 +1,8 @@
 //! Time the phases of `certify` on one spec, for the side-by-side comparison
 //! with the numpy/scipy baseline (`bench/side_by_side.sh`) and for profilers.
 //!
-//! Usage: `bench_certify SPEC [REPS]` (`ONLY=analyse` times the analysis alone). Prints one JSON line with microseconds
+//! Usage: `bench_certify SPEC [REPS]` (`ONLY=analyse` times the analysis alone,
+//! `ONLY=numeric` the analysis at the numeric level). Prints one JSON line with microseconds
 //! per certificate for: parsing the spec (JSON + exact polynomials + checks),
 //! the analysis at the exact level (default) and at the numeric level
 //! (`exact = false`: the scope of the numpy timing), building the
@@ -23,10 +24,13 @@ fn main() {
     let text = std::fs::read_to_string(&path).expect("read spec");
     let spec = spec::parse_spec(&text).expect("valid spec");
     let analysis = generator::analyse(&spec.system, &spec.settings.pipeline);
-    if std::env::var("ONLY").as_deref() == Ok("analyse") {
-        // For profilers: the analysis alone.
+    let only = std::env::var("ONLY").unwrap_or_default();
+    if only == "analyse" || only == "numeric" {
+        // For profilers: the analysis alone (`numeric`: at the numeric level).
+        let mut settings = spec.settings.pipeline.clone();
+        settings.exact = only == "analyse";
         let us = per_call(reps, || {
-            std::hint::black_box(generator::analyse(&spec.system, &spec.settings.pipeline));
+            std::hint::black_box(generator::analyse(&spec.system, &settings));
         });
         println!("{{\"name\": \"{}\", \"us_analyse\": {us:.2}}}", spec.name);
         return;

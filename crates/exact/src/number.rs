@@ -294,8 +294,11 @@ pub fn decimal_at_least(x: f64, digits: u32) -> Option<Rational> {
     if !x.is_finite() || x <= 0.0 || !(1..=17).contains(&digits) {
         return None;
     }
-    let exact_x = Rational::from_float(x)?;
     let e = x.log10().floor() as i32 - (digits as i32 - 1);
+    if let Some(r) = decimal_ceiling_fast(x, e, digits) {
+        return Some(r);
+    }
+    let exact_x = Rational::from_float(x)?;
     let ten = BigInt::from(10);
     let unit = if e >= 0 {
         Rational::from_integer(num_traits::pow(ten, e as usize))
@@ -309,6 +312,59 @@ pub fn decimal_at_least(x: f64, digits: u32) -> Option<Rational> {
         n += 1;
     }
     Some(Rational::from_integer(n) * unit)
+}
+
+/// `ceil(x / 10^e) 10^e` without big integers, when `digits <= 15` and
+/// `|e| <= 18` and the comparison fits `i128` (a hand-written shortcut:
+/// this runs for every entry of every rounded matrix, and the big-rational
+/// path costs microseconds). `y = x / 10^e` is one correctly rounded
+/// operation (`10^|e|` is an exact double) and `y < 1e15 < 2^50`, so it is
+/// within 1/16 of the true quotient `t`; with `n = round(y)`, `ceil(t)` is
+/// `n` if `x <= n 10^e` and `n + 1` otherwise, decided exactly in integers
+/// from `x = m 2^k`.
+fn decimal_ceiling_fast(x: f64, e: i32, digits: u32) -> Option<Rational> {
+    if digits > 15 || !(-18..=18).contains(&e) {
+        return None;
+    }
+    let p = 10i64.pow(e.unsigned_abs());
+    let y = if e >= 0 { x / p as f64 } else { x * p as f64 };
+    if y.is_nan() || y >= 1e15 {
+        return None;
+    }
+    let n = y.round() as i64;
+    // x = m 2^k exactly (x is positive and normal or subnormal).
+    let bits = x.to_bits();
+    let exponent = ((bits >> 52) & 0x7ff) as i32;
+    let (m, k) = if exponent == 0 {
+        ((bits & ((1u64 << 52) - 1)) as i128, -1074)
+    } else {
+        (((bits & ((1u64 << 52) - 1)) | (1u64 << 52)) as i128, exponent - 1075)
+    };
+    // a 2^s for s >= 0, if it fits.
+    let shifted =
+        |a: i128, s: i32| -> Option<i128> { (s < 126 && (a == 0 || a.leading_zeros() as i32 > s + 1)).then(|| a << s) };
+    // x <= n 10^e, as `lhs <= rhs` in integers.
+    let (lhs, rhs) = if e >= 0 {
+        let rhs = n as i128 * p as i128;
+        if k >= 0 {
+            (shifted(m, k)?, rhs)
+        } else {
+            (m, shifted(rhs, -k)?)
+        }
+    } else {
+        let lhs = m * p as i128;
+        if k >= 0 {
+            (shifted(lhs, k)?, n as i128)
+        } else {
+            (lhs, shifted(n as i128, -k)?)
+        }
+    };
+    let ceiling = if lhs <= rhs { n } else { n + 1 };
+    if e >= 0 {
+        ceiling.checked_mul(p).map(Rational::from)
+    } else {
+        Some(Rational::new_small(ceiling, p))
+    }
 }
 
 /// `x` rounded to a decimal with `digits` significant digits (away from
@@ -436,6 +492,45 @@ pub(crate) fn one() -> Rational {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// The definition, by big integers only: the smallest multiple of
+    /// `10^e` that is `>= x`.
+    fn decimal_at_least_by_definition(x: f64, digits: u32) -> Rational {
+        let exact_x = Rational::from_float(x).unwrap();
+        let e = x.log10().floor() as i32 - (digits as i32 - 1);
+        let unit = if e >= 0 {
+            Rational::from_integer(num_traits::pow(BigInt::from(10), e as usize))
+        } else {
+            Rational::new(BigInt::from(1), num_traits::pow(BigInt::from(10), (-e) as usize))
+        };
+        let q = &exact_x / &unit;
+        let mut n = q.to_integer();
+        if Rational::from_integer(n.clone()) < q {
+            n += 1;
+        }
+        Rational::from_integer(n) * unit
+    }
+
+    proptest! {
+        /// The floating-point fast path of `decimal_at_least` gives the
+        /// same decimal as the definition, across magnitudes and digits.
+        #[test]
+        fn decimal_fast_path_is_exact(mantissa in 1.0f64..10.0, exponent in -25i32..25, digits in 1u32..=17) {
+            let x = mantissa * 10f64.powi(exponent);
+            prop_assert_eq!(decimal_at_least(x, digits).unwrap(), decimal_at_least_by_definition(x, digits));
+        }
+
+        /// Short decimals, where `x / 10^e` is at or next to an integer
+        /// (the case the fast path decides by an exact comparison).
+        #[test]
+        fn decimal_fast_path_at_short_decimals(n in 1i64..200_000, exponent in -20i32..20, digits in 1u32..=17) {
+            let x = n as f64 * 10f64.powi(exponent);
+            prop_assert_eq!(decimal_at_least(x, digits).unwrap(), decimal_at_least_by_definition(x, digits));
+            let below = f64::from_bits(x.to_bits() - 1);
+            prop_assert_eq!(decimal_at_least(below, digits).unwrap(), decimal_at_least_by_definition(below, digits));
+        }
+    }
 
     fn q(n: i64, d: i64) -> Rational {
         Rational::new(n.into(), d.into())

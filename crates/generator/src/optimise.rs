@@ -21,7 +21,7 @@
 //! certificate says which.
 
 use crate::form::generator_form;
-use crate::growth::{growth_constant, GrowthConstant};
+use crate::growth::{condition_number, growth_constant, GrowthConstant};
 use crate::linearise::Linearisation;
 use casimir::{CasimirChoice, Ellipsoid, SecondVariation};
 use exact::{Matrix, Rational};
@@ -121,6 +121,9 @@ struct AffinePencil {
     q0: DMatrix<f64>,
     p_dirs: Vec<DMatrix<f64>>,
     q_dirs: Vec<DMatrix<f64>>,
+    /// Keep `cond(P) <= cond_limit` (infinite: no limit). The set is
+    /// convex: `c lambda_min(P) - lambda_max(P)` is concave in `theta`.
+    cond_limit: f64,
 }
 
 enum Cut {
@@ -149,6 +152,22 @@ impl AffinePencil {
     fn cut(&self, theta: &[f64]) -> Cut {
         let (p, q) = self.at(theta);
         let quad = |m: &DMatrix<f64>, v: &DVector<f64>| (v.transpose() * m * v)[(0, 0)];
+        if self.cond_limit.is_finite() {
+            if let Some(e) = sym_eigen(p.clone()) {
+                let n = p.nrows();
+                let imin = (0..n).min_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j])).unwrap_or(0);
+                let imax = (0..n).max_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j])).unwrap_or(0);
+                let (lo, hi) = (e.eigenvalues[imin], e.eigenvalues[imax]);
+                if lo > 0.0 && hi > self.cond_limit * lo {
+                    // Supergradient of c lambda_min - lambda_max.
+                    let (umin, umax) =
+                        (e.eigenvectors.column(imin).into_owned(), e.eigenvectors.column(imax).into_owned());
+                    return Cut::Feasibility(
+                        self.p_dirs.iter().map(|d| self.cond_limit * quad(d, &umin) - quad(d, &umax)).collect(),
+                    );
+                }
+            }
+        }
         match top_generalized(&p, &q) {
             Ok((s, v)) => {
                 let a =
@@ -272,6 +291,7 @@ fn minimise_normalised(
         q0: pencil.at(start).1,
         p_dirs: pencil.p_dirs.iter().zip(scales).map(|(m, s)| m / *s).collect(),
         q_dirs: pencil.q_dirs.iter().zip(scales).map(|(m, s)| m / *s).collect(),
+        cond_limit: pencil.cond_limit,
     };
     let mut centre = vec![0.0; d];
     let mut best = (centre.clone(), normalised.value(&centre).unwrap_or(f64::INFINITY));
@@ -328,7 +348,7 @@ impl FramePencil {
     /// `K' = K1 + (K0' - K1)_+ + D` also makes `P` definite, and adding the
     /// positive `D` to `P` never raises a positive `lambda_max` (`Q` does
     /// not depend on `K`). So `Sigma^2 <= S` up to rounding.
-    fn k_for(&self, s: f64) -> Option<DMatrix<f64>> {
+    fn k_for(&self, s: f64, singular: bool) -> Option<DMatrix<f64>> {
         if s.is_nan() || s <= 0.0 {
             return None;
         }
@@ -337,20 +357,26 @@ impl FramePencil {
         } else {
             let x = &self.pz * s - &self.qz;
             let c = &self.pzw * s - &self.qzw;
-            let xc = match x.clone().cholesky() {
-                Some(ch) => ch.solve(&c),
-                None => {
-                    // At S = lambda_max itself X is singular: the pseudo-
-                    // inverse (eigenvalues below 1e-12 |X| dropped) gives the
-                    // K that attains it when the top eigenvectors do not
-                    // couple to the conserved directions (C^T v = 0).
-                    let e = sym_eigen((&x + x.transpose()) * 0.5)?;
-                    let top = e.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                    if e.eigenvalues.iter().any(|&v| v < -1e-12 * top) {
-                        return None;
-                    }
-                    let inv = e.eigenvalues.map(|v| if v > 1e-12 * top { 1.0 / v } else { 0.0 });
-                    &e.eigenvectors * DMatrix::from_diagonal(&inv) * e.eigenvectors.transpose() * c.clone()
+            // At S = lambda_max itself (`singular`) X is singular: the
+            // pseudo-inverse (eigenvalues below 1e-12 |X| dropped) gives the
+            // K that attains it when the top eigenvectors do not couple to
+            // the conserved directions (C^T v = 0). A Cholesky factor of a
+            // numerically singular X would give garbage along v.
+            let pseudo = || -> Option<DMatrix<f64>> {
+                let e = sym_eigen((&x + x.transpose()) * 0.5)?;
+                let top = e.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                if e.eigenvalues.iter().any(|&v| v < -1e-12 * top) {
+                    return None;
+                }
+                let inv = e.eigenvalues.map(|v| if v > 1e-12 * top { 1.0 / v } else { 0.0 });
+                Some(&e.eigenvectors * DMatrix::from_diagonal(&inv) * e.eigenvectors.transpose() * c.clone())
+            };
+            let xc = if singular {
+                pseudo()?
+            } else {
+                match x.clone().cholesky() {
+                    Some(ch) => ch.solve(&c),
+                    None => pseudo()?,
                 }
             };
             (&self.qw + c.transpose() * xc) / s - &self.pw
@@ -429,7 +455,13 @@ pub fn optimise_choice(
         p_dirs.push(signed(d, sign));
         q_dirs.push(signed(&lq(d), sign));
     }
-    let pencil = AffinePencil { p0: signed(&base0, sign), q0: signed(&lq(&base0), sign), p_dirs, q_dirs };
+    let pencil = AffinePencil {
+        p0: signed(&base0, sign),
+        q0: signed(&lq(&base0), sign),
+        p_dirs,
+        q_dirs,
+        cond_limit: f64::INFINITY,
+    };
     let mut theta0 = t0.clone();
     for (a, b, _) in &k_dirs {
         theta0.push(exact::rational_to_f64(&k_first[(*a, *b)]));
@@ -466,6 +498,13 @@ pub fn optimise_choice(
 /// The case where `Q` does not depend on `M`: minimise the restricted
 /// `lambda_max(Z^T sQ Z, Z^T sP Z)` over the free multipliers, then
 /// construct `K` for a target just above that infimum.
+///
+/// The restricted infimum over the multipliers may be approached at the
+/// edge of the region where `Z^T sP Z` is definite, where `P` is singular.
+/// Then the multipliers are chosen by the same minimisation with the
+/// condition number of `Z^T sP Z` limited (a convex constraint), tightened
+/// until `cond(P)` is within the limit; the certificate states the gap that
+/// costs.
 fn optimise_restricted(
     variation: &SecondVariation,
     lq: &dyn Fn(&Matrix) -> Matrix,
@@ -479,49 +518,230 @@ fn optimise_restricted(
     let f = t0.len();
     let z = &variation.kernel;
     let k = z.ncols();
+    let cond_limit = 1e8f64.max(10.0 * first_growth.condition_number.min(1e300));
+    let at = |t: &[Rational]| at_multipliers(variation, lq, first, first_growth, t, cond_limit, settings);
+    if f == 0 || k == 0 {
+        let found = at(&first.family_parameters)?;
+        let infimum = found.restricted_max.max(0.0);
+        return Some(found.into_optimum(first, first_growth, infimum, false, f, settings));
+    }
+    // 1. The multipliers: the restricted infimum over t, in orthonormal
+    // coordinates of ker G^T (`Z R^{-1}`; the exact kernel basis can be
+    // badly scaled, and the values do not depend on the basis).
     let zt = z.transpose();
-    let restrict = |m: &Matrix| zt.mul(m).mul(z);
-    // 1. The multipliers: the restricted infimum over t.
-    let t_rational = if f == 0 || k == 0 {
-        first.family_parameters.clone()
-    } else {
-        let base0 = variation.base(&variation.family.particular);
-        let pencil = AffinePencil {
-            p0: signed(&restrict(&base0), sign),
-            q0: signed(&restrict(&lq(&base0)), sign),
-            p_dirs: t_dirs.iter().map(|d| signed(&restrict(d), sign)).collect(),
-            q_dirs: t_dirs.iter().map(|d| signed(&restrict(&lq(d)), sign)).collect(),
-        };
-        let (p_start, q_start) = pencil.at(t0);
-        let scales = direction_scales(&p_start, &q_start, &pencil.p_dirs, &pencil.q_dirs);
-        let (t, value, _) = minimise_normalised(&pencil, t0, &scales, settings.max_iterations);
-        let restricted_max = |t: &[Rational]| -> Option<f64> {
-            let b = variation.base(&variation.family.at(t));
-            top_generalized(&signed(&restrict(&b), sign), &signed(&restrict(&lq(&b)), sign)).ok().map(|(l, _)| l)
-        };
-        let limit = value + 1e-12 * value.abs().max(first_growth.sigma2);
-        casimir::round_family_parameters(
+    let r_inv = orthonormalising(z);
+    let restrict = |m: &Matrix| congruent(&signed(&zt.mul(m).mul(z), sign), &r_inv);
+    let base0 = variation.base(&variation.family.particular);
+    let pencil = AffinePencil {
+        p0: restrict(&base0),
+        q0: restrict(&lq(&base0)),
+        p_dirs: t_dirs.iter().map(&restrict).collect(),
+        q_dirs: t_dirs.iter().map(|d| restrict(&lq(d))).collect(),
+        cond_limit: f64::INFINITY,
+    };
+    let (p_start, q_start) = pencil.at(t0);
+    let scales = direction_scales(&p_start, &q_start, &pencil.p_dirs, &pencil.q_dirs);
+    let (t_inf, value, on_edge) = minimise_normalised(&pencil, t0, &scales, settings.max_iterations);
+    // The condition number of the compression of sP to ker G^T in
+    // orthonormal coordinates is a lower bound on cond(sP) (its eigenvalues
+    // interlace): a cheap screen before the exact construction.
+    let restricted_condition = |t: &[f64]| condition_number(&pencil.at(t).0);
+    let restricted_max = |t: &[Rational]| -> Option<f64> {
+        let b = variation.base(&variation.family.at(t));
+        top_generalized(&restrict(&b), &restrict(&lq(&b))).ok().map(|(l, _)| l)
+    };
+    // The construction at rational multipliers near t (t itself if the
+    // screen lets it through).
+    let candidate = |t: &[f64]| -> Option<AtMultipliers> {
+        if restricted_condition(t) > cond_limit {
+            return None;
+        }
+        let v = pencil.value(t)?;
+        let limit = v + 1e-12 * v.abs().max(first_growth.sigma2);
+        let t_rational = casimir::round_family_parameters(
             variation,
             sign,
-            &t,
+            t,
             &scales,
             SIMPLE_DENOMINATOR,
             Some((&restricted_max, limit)),
         )
-        .or_else(|| casimir::round_family_parameters(variation, sign, &t, &scales, SIMPLE_DENOMINATOR, None))
-        .unwrap_or_else(|| first.family_parameters.clone())
+        .or_else(|| casimir::round_family_parameters(variation, sign, t, &scales, SIMPLE_DENOMINATOR, None))?;
+        at(&t_rational)
     };
-    let multipliers = variation.family.at(&t_rational);
-    // 2. The frame blocks at those multipliers.
+    // The minimiser with cond(Z^T sP Z) <= limit (a convex constraint).
+    let start_condition = restricted_condition(t0);
+    let limited = |limit: f64| -> Vec<f64> {
+        let pencil = AffinePencil {
+            cond_limit: limit.max(2.0 * start_condition),
+            p0: pencil.p0.clone(),
+            q0: pencil.q0.clone(),
+            p_dirs: pencil.p_dirs.clone(),
+            q_dirs: pencil.q_dirs.clone(),
+        };
+        minimise_normalised(&pencil, t0, &scales, settings.max_iterations).0
+    };
+    let mut found: Option<AtMultipliers> = None;
+    let keep = |here: AtMultipliers, found: &mut Option<AtMultipliers>| -> bool {
+        let conditioned = here.conditioned;
+        if found.as_ref().is_none_or(|b| here.sigma2() < b.sigma2()) {
+            *found = Some(here);
+        }
+        conditioned
+    };
+    // The unconstrained minimiser first; where P is nearly singular there,
+    // the minimiser with cond(Z^T sP Z) limited to 1e-1, 1e-2, ... of the
+    // limit (the rest of P adds to the condition number), refined by
+    // geometric bisection between the last limit that failed and the first
+    // that succeeded; the starting multipliers last.
+    if !candidate(&t_inf).is_some_and(|here| keep(here, &mut found)) {
+        let mut failed = cond_limit;
+        for fraction in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5] {
+            let limit = fraction * cond_limit;
+            if limit < 2.0 * start_condition {
+                break;
+            }
+            if candidate(&limited(limit)).is_some_and(|here| keep(here, &mut found)) {
+                let (mut lo, mut hi) = (limit, failed);
+                for _ in 0..3 {
+                    let mid = (lo * hi).sqrt();
+                    if candidate(&limited(mid)).is_some_and(|here| keep(here, &mut found)) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                break;
+            }
+            failed = limit;
+        }
+        if found.as_ref().is_none_or(|b| !b.conditioned) {
+            if let Some(here) = at(&first.family_parameters) {
+                keep(here, &mut found);
+            }
+        }
+    }
+    // The infimum estimate: the value at the unconstrained minimiser when P
+    // is resolved there (cond <= 1e12); at a nearly singular point the
+    // floating-point lambda_max is not to be trusted, and the estimate is
+    // the best certified value (flagged: the infimum may be lower).
+    const RESOLVED: f64 = 1e12;
+    let found = found?;
+    let resolved = restricted_condition(&t_inf) <= RESOLVED;
+    let infimum = if resolved { value } else { found.sigma2() };
+    Some(found.into_optimum(first, first_growth, infimum.max(0.0), on_edge || !resolved, f, settings))
+}
+
+/// `R^{-1}` for the thin QR factorisation `Z = U R` of a kernel basis, so
+/// that `Z R^{-1}` is orthonormal (the identity if `R` is singular).
+fn orthonormalising(z: &Matrix) -> DMatrix<f64> {
+    let k = z.ncols();
+    if k == 0 || z.nrows() < k {
+        return DMatrix::identity(k, k);
+    }
+    z.to_dmatrix().qr().r().try_inverse().unwrap_or_else(|| DMatrix::identity(k, k))
+}
+
+/// `R^T M R` (symmetrised).
+fn congruent(m: &DMatrix<f64>, r: &DMatrix<f64>) -> DMatrix<f64> {
+    let c = r.transpose() * m * r;
+    (&c + c.transpose()) * 0.5
+}
+
+/// What the construction of `K` gives at fixed rational multipliers.
+struct AtMultipliers {
+    /// The restricted `lambda_max` at these multipliers (the infimum over
+    /// `K`); `-inf` when `ker G^T` is trivial.
+    restricted_max: f64,
+    /// A certified lower bound on `lambda_max` for every `K` at these
+    /// multipliers, with its witness in the algebra's coordinates.
+    witness: Option<(Rational, Vec<Rational>)>,
+    /// The best exact choice built, if any.
+    best: Option<(CasimirChoice, GrowthConstant)>,
+    /// Whether `best` has `cond(P)` within the limit.
+    conditioned: bool,
+}
+
+impl AtMultipliers {
+    fn sigma2(&self) -> f64 {
+        self.best.as_ref().map_or(f64::INFINITY, |b| b.1.sigma2)
+    }
+
+    /// The optimum over the family, given the infimum estimate over the
+    /// multipliers (`on_edge`: the search ran to the edge of its region, so
+    /// the infimum may be lower still).
+    fn into_optimum(
+        self,
+        first: &CasimirChoice,
+        first_growth: &GrowthConstant,
+        infimum: f64,
+        on_edge: bool,
+        f: usize,
+        settings: &OptimiseSettings,
+    ) -> Optimum {
+        let (choice, growth) = match self.best {
+            Some(b) if b.1.sigma2 <= first_growth.sigma2 => b,
+            _ => (first.clone(), first_growth.clone()),
+        };
+        // The bound is certified only without free multipliers (it holds
+        // for every K at the given multipliers, and then that is the family).
+        let (infimum_lower_bound, infimum_witness) = match self.witness {
+            Some((bound, x)) if f == 0 => (Some(bound), Some(x)),
+            _ => (None, None),
+        };
+        let scale = if infimum > 0.0 { infimum } else { first_growth.sigma2 };
+        let attained = !on_edge && growth.sigma2 <= infimum + 1e-10 * scale;
+        let within_tolerance = !on_edge && growth.sigma2 <= infimum + settings.tolerance * scale;
+        let method = if f == 0 {
+            "Schur complement on the conserved directions (no free multipliers)"
+        } else if on_edge {
+            "restricted to ker G^T, ellipsoid over t (ran to the edge of its region: the infimum may be lower), then the Schur complement on the conserved directions"
+        } else {
+            "restricted to ker G^T, ellipsoid over t, then the Schur complement on the conserved directions"
+        };
+        Optimum {
+            choice,
+            growth,
+            infimum,
+            infimum_lower_bound,
+            infimum_witness,
+            attained,
+            within_tolerance,
+            q_depends_on_m: false,
+            method,
+        }
+    }
+}
+
+/// At fixed rational multipliers `t`: the frame blocks, the restricted
+/// `lambda_max`, and `K` constructed for targets `S` = infimum + delta,
+/// first delta = 0 (sharp when the infimum is attained by a finite `K`),
+/// then 1e-12 of the scale, then a gap predicted from the condition number
+/// seen (it grows like 1/delta when `K` must grow), then half the
+/// tolerance, then larger gaps until `cond(P)` is within the limit.
+fn at_multipliers(
+    variation: &SecondVariation,
+    lq: &dyn Fn(&Matrix) -> Matrix,
+    first: &CasimirChoice,
+    first_growth: &GrowthConstant,
+    t_rational: &[Rational],
+    cond_limit: f64,
+    settings: &OptimiseSettings,
+) -> Option<AtMultipliers> {
+    let sign = first.sign;
+    let k = variation.kernel.ncols();
+    let multipliers = variation.family.at(t_rational);
     let base = variation.base(&multipliers);
     let q_base = lq(&base);
     let w = variation.complement();
     let (bzz, bzw, bww) = variation.frame_blocks(&base, &w);
     let (qzz, qzw, qww) = variation.frame_blocks(&q_base, &w);
     let s = sign as f64;
-    let pz = bzz.to_dmatrix() * s;
-    let pzw = bzw.to_dmatrix() * s;
-    let qz = qzz.to_dmatrix() * s;
+    // Orthonormal coordinates of ker G^T (Z R^{-1}): K1 below is invariant
+    // under a change of basis of ker G^T, its rounding is not.
+    let r_inv = orthonormalising(&variation.kernel);
+    let pz = congruent(&(bzz.to_dmatrix() * s), &r_inv);
+    let pzw = r_inv.transpose() * bzw.to_dmatrix() * s;
     let k0 = if k == 0 {
         -bww.to_dmatrix() * s
     } else {
@@ -533,8 +753,8 @@ fn optimise_restricted(
         pz,
         pzw,
         pw: bww.to_dmatrix() * s,
-        qz,
-        qzw: qzw.to_dmatrix() * s,
+        qz: congruent(&(qzz.to_dmatrix() * s), &r_inv),
+        qzw: r_inv.transpose() * qzw.to_dmatrix() * s,
         qw: qww.to_dmatrix() * s,
         k0,
         margin,
@@ -544,150 +764,155 @@ fn optimise_restricted(
     let (restricted_max, top) = if k == 0 {
         (f64::NEG_INFINITY, None)
     } else {
-        match top_generalized(&frame.pz, &frame.qz) {
-            Ok((l, v)) => (l, Some(v)),
-            Err(_) => return None,
-        }
+        let (l, v) = top_generalized(&frame.pz, &frame.qz).ok()?;
+        (l, Some(v))
     };
+    // A certified lower bound for every K at these multipliers: the exact
+    // Rayleigh quotient of a rational vector of ker G^T.
+    let witness = top
+        .as_ref()
+        .filter(|_| variation.family.directions.is_empty())
+        .and_then(|v| rayleigh_lower_bound(&bzz, &qzz, sign, &(&r_inv * v)))
+        .map(|(bound, a)| (bound, variation.kernel.mul_vec(&a)));
     let infimum = restricted_max.max(0.0);
-    // A certified lower bound on every choice's Sigma^2 (no free
-    // multipliers: the bound holds for every K): the exact Rayleigh
-    // quotient of a rational vector of ker G^T.
-    let witness = if f == 0 { top.as_ref().and_then(|v| rayleigh_lower_bound(&bzz, &qzz, sign, v)) } else { None };
-    let (infimum_lower_bound, infimum_witness) = match witness {
-        Some((bound, a)) => (Some(bound), Some(z.mul_vec(&a))),
-        None => (None, None),
-    };
-    let scale = infimum.max(first_growth.sigma2);
-    if scale <= 0.0 {
+    if infimum.max(first_growth.sigma2) <= 0.0 {
         // The first choice already has Sigma^2 = 0, the floor.
-        return Some(Optimum {
-            choice: first.clone(),
-            growth: first_growth.clone(),
-            infimum: 0.0,
-            infimum_lower_bound: None,
-            infimum_witness: None,
-            attained: true,
-            within_tolerance: true,
-            q_depends_on_m: false,
-            method: "the first choice attains Sigma^2 = 0",
+        return Some(AtMultipliers {
+            restricted_max,
+            witness,
+            best: Some((first.clone(), first_growth.clone())),
+            conditioned: true,
         });
     }
-    // 3. K for a target S = infimum + delta: first delta = 1e-12 scale (the
-    // infimum attained by a finite K keeps P well conditioned), then half
-    // the tolerance, then larger gaps until cond(P) is acceptable.
-    let cond_limit = 1e8f64.max(10.0 * first_growth.condition_number.min(1e300));
-    // K rounded to the fewest digits (3, 6, 9, then 15) that keep P
-    // definite and Sigma^2 at the target: short numbers in the certificate.
-    let build = |delta: f64| -> Option<(CasimirChoice, GrowthConstant)> {
-        let target = restricted_max.max(0.0) + delta;
-        let kf = frame.k_for(target)? * s;
-        let mut last = None;
+    let scale = if infimum > 0.0 { infimum } else { first_growth.sigma2 };
+    // Everything below is screened in floating point first (sP = sB + Y K' Y^T,
+    // and sQ = sQ(B) since Q does not depend on K); only a K that passes the
+    // screen is made exact, so the search costs a few small dense
+    // eigenproblems per step instead of exact congruences.
+    let b_f = base.to_dmatrix() * s;
+    let q_f = q_base.to_dmatrix() * s;
+    let y_f = variation.independent_gradients().to_dmatrix();
+    let screen = |kp: &DMatrix<f64>| -> Option<(f64, f64)> {
+        let p = &b_f + &y_f * kp * y_f.transpose();
+        let p = (&p + p.transpose()) * 0.5;
+        let (l, _) = top_generalized(&p, &q_f).ok()?;
+        Some((l.max(0.0), condition_number(&p)))
+    };
+    // Passes the screen: conditioned and within `allowed` of the infimum, up
+    // to the round-off a condition number `c` allows.
+    let passes = |(sigma2, c): (f64, f64), allowed: f64| -> bool {
+        c <= 1.1 * cond_limit && sigma2 <= infimum + allowed + c * 1e-15 * scale
+    };
+    // K' for a target, rounded to the fewest digits (3, 6, 9, then 15) that
+    // pass the screen (short numbers in the certificate), made exact; the
+    // exact P must be definite, conditioned and within `allowed`.
+    let build = |delta: f64, allowed: f64| -> Option<(CasimirChoice, GrowthConstant)> {
+        let kp = frame.k_for(infimum + delta, delta == 0.0)?;
+        if !screen(&kp).is_some_and(|v| passes(v, allowed)) {
+            return None;
+        }
         for digits in [3u32, 6, 9, 15] {
-            let Some(k_short) = (0..kf.nrows())
-                .flat_map(|i| (0..kf.ncols()).map(move |j| (i, j)))
-                .map(|(i, j)| exact::decimal_near(kf[(i, j)], digits))
-                .collect::<Option<Vec<Rational>>>()
-                .map(|entries| Matrix::from_fn(kf.nrows(), kf.ncols(), |i, j| entries[i * kf.ncols() + j].clone()))
+            let Some(entries) =
+                kp.iter().map(|&x| exact::decimal_near(x * s, digits)).collect::<Option<Vec<Rational>>>()
             else {
                 continue;
             };
-            let Some(choice) = exact_choice(variation, sign, t_rational.clone(), &k_short, first.relative_margin)
+            // Column-major, as nalgebra stores kp.
+            let k_short = Matrix::from_fn(kp.nrows(), kp.ncols(), |i, j| entries[j * kp.nrows() + i].clone());
+            let k_float = k_short.to_dmatrix() * s;
+            if digits < 15 && !screen(&k_float).is_some_and(|v| passes(v, allowed)) {
+                continue;
+            }
+            let Some(choice) = exact_choice(variation, sign, t_rational.to_vec(), &k_short, first.relative_margin)
             else {
                 continue;
             };
             let Ok(growth) = growth_constant(&choice.p, &lq(&choice.p), sign) else { continue };
-            let on_target = growth.sigma2 <= target + 1e-13 * scale;
-            last = Some((choice, growth));
-            if on_target {
-                break;
+            if growth.condition_number <= cond_limit && growth.sigma2 <= infimum + allowed + 1e-13 * scale {
+                return Some((choice, growth));
             }
         }
-        last
+        None
     };
-    let mut best: Option<(CasimirChoice, GrowthConstant)> = None;
     // delta = 0 first: when the infimum is attained, S = lambda_max itself
     // (exactly singular S P - Q: a sharp certificate).
-    if restricted_max > 0.0 {
-        if let Some((choice, growth)) = build(0.0) {
-            if growth.condition_number <= cond_limit && growth.sigma2 <= infimum + 1e-12 * scale {
-                best = Some((choice, growth));
-            }
-        }
-    }
-    let mut delta = if best.is_some() { f64::INFINITY } else { 1e-12 * scale };
-    let mut tried_half = false;
-    while delta <= 1e3 * scale {
-        if let Some((choice, growth)) = build(delta) {
-            let conditioned = growth.condition_number <= cond_limit;
-            let better = best.as_ref().is_none_or(|(_, b)| growth.sigma2 < b.sigma2);
-            if conditioned {
-                if better {
-                    best = Some((choice, growth));
+    let mut best = if restricted_max > 0.0 { build(0.0, 1e-12 * scale) } else { None };
+    let half = 0.5 * settings.tolerance * scale;
+    let mut delta = 1e-12 * scale;
+    let mut failed = 0.0;
+    let mut predicted = false;
+    // Accepted when conditioned and at its target (a K1 spoiled by
+    // round-off in X^{-1} misses the target: a larger gap then).
+    let attempt = |delta: f64| build(delta, 2.0 * delta + 1e-12 * scale);
+    while best.is_none() && infimum + delta < first_growth.sigma2.max(infimum + 1e3 * scale) {
+        let mut next = delta * 4.0;
+        best = attempt(delta);
+        if best.is_some() && failed > 0.0 {
+            // Geometric bisection between the last gap that failed and this.
+            let (mut lo, mut hi) = (failed, delta);
+            for _ in 0..3 {
+                let mid = (lo * hi).sqrt();
+                match attempt(mid) {
+                    Some(b) => {
+                        best = Some(b);
+                        hi = mid;
+                    }
+                    None => lo = mid,
                 }
-                break;
+            }
+            break;
+        }
+        failed = delta;
+        if best.is_none() && !predicted {
+            if let Some((_, c)) = frame.k_for(infimum + delta, false).and_then(|kp| screen(&kp)) {
+                if c.is_finite() && c > cond_limit {
+                    // cond(P) ~ 1/delta while K must grow: aim just inside the limit.
+                    next = next.max(2.0 * delta * c / cond_limit);
+                    predicted = true;
+                }
             }
         }
-        if !tried_half && delta < 0.5 * settings.tolerance * scale {
-            delta = 0.5 * settings.tolerance * scale;
-            tried_half = true;
-        } else {
-            delta *= 4.0;
+        if delta < half && next > half {
+            next = half;
         }
+        delta = next;
     }
-    let (choice, growth) = match best {
-        Some(b) if b.1.sigma2 <= first_growth.sigma2 => b,
-        _ => (first.clone(), first_growth.clone()),
-    };
-    let attained = growth.sigma2 <= infimum + 1e-10 * scale;
-    let within_tolerance = growth.sigma2 <= infimum + settings.tolerance * scale;
-    let method = if f == 0 {
-        "Schur complement on the conserved directions (no free multipliers)"
-    } else {
-        "restricted to ker G^T, ellipsoid over t, then the Schur complement on the conserved directions"
-    };
-    Some(Optimum {
-        choice,
-        growth,
-        infimum,
-        infimum_lower_bound,
-        infimum_witness,
-        attained,
-        within_tolerance,
-        q_depends_on_m: false,
-        method,
-    })
+    Some(AtMultipliers { restricted_max, witness, conditioned: best.is_some(), best })
 }
 
-/// `max(0, v^T sQ v / v^T sP v)` exactly, for `v` the floating-point top
-/// eigenvector rounded to 15 digits: a lower bound on `lambda_max(sQ, sP)`,
-/// with the rounded vector.
+/// `max(0, n^T sQ n / n^T sP n)` exactly, for `n` the floating-point top
+/// eigenvector `v` scaled to integers (`round(10^d v / |v|_inf)`): a lower
+/// bound on `lambda_max(sQ, sP)`, with the integer vector.
+///
+/// The number of digits `d` is the fewest of 2, 4, 6, 9, 12, 15 whose
+/// quotient, evaluated in floating point, is within 1e-15 of the 15-digit
+/// one (an eigenvector with simple entries gives the sharp value as a short
+/// rational); only that vector is evaluated exactly. The exact quotient is
+/// the claim, whichever vector the floating-point screen picked: a poor
+/// pick gives a lower, still valid, bound. Integers keep the exact quadratic
+/// forms cheap: the common denominator `10^d` cancels in the quotient.
 fn rayleigh_lower_bound(p: &Matrix, q: &Matrix, sign: i8, v: &DVector<f64>) -> Option<(Rational, Vec<Rational>)> {
     let top = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     if top.is_nan() || top <= 0.0 || !top.is_finite() {
         return None;
     }
-    let bound = |v: Vec<Rational>| -> Option<(Rational, Vec<Rational>)> {
-        let quad = |m: &Matrix| v.iter().zip(m.mul_vec(&v)).fold(Rational::zero(), |acc, (a, b)| acc + a * b);
-        let (pv, qv) = (quad(p), quad(q));
-        let (pv, qv) = if sign < 0 { (-pv, -qv) } else { (pv, qv) };
-        if !pv.is_positive() {
-            return None;
-        }
-        let rho = qv / pv;
-        Some((if rho.is_positive() { rho } else { Rational::zero() }, v))
-    };
-    // Short digits first (an eigenvector with simple entries gives the
-    // sharp value as a short rational); 15 digits as the fallback.
-    let rounded = |digits: u32| v.iter().map(|x| exact::decimal_near(x / top, digits)).collect::<Option<Vec<_>>>();
-    let fifteen = bound(rounded(15)?)?;
-    let target = exact::rational_to_f64(&fifteen.0);
-    for digits in [2u32, 4, 6, 9, 12] {
-        if let Some(b) = rounded(digits).and_then(bound) {
-            if exact::rational_to_f64(&b.0) >= target * (1.0 - 1e-15) {
-                return Some(b);
-            }
-        }
+    let (pf, qf) = (signed(p, sign), signed(q, sign));
+    // 10^15 < 2^53: the rounded entries are exact integers in f64.
+    let integers = |digits: i32| v.map(|x| (x / top * 10f64.powi(digits)).round());
+    let quotient = |n: &DVector<f64>| n.dot(&(&qf * n)) / n.dot(&(&pf * n));
+    let target = quotient(&integers(15));
+    let digits =
+        [2, 4, 6, 9, 12, 15].into_iter().find(|&d| quotient(&integers(d)) >= target * (1.0 - 1e-15)).unwrap_or(15);
+    // Divided by their gcd: the shortest integer vector on that line.
+    let ints: Vec<i64> = integers(digits).iter().map(|&x| x as i64).collect();
+    let g = ints.iter().fold(0i64, |g, &x| num_integer::Integer::gcd(&g, &x)).max(1);
+    let n: Vec<Rational> = ints.iter().map(|&x| Rational::from(x / g)).collect();
+    let quad = |m: &Matrix| n.iter().zip(m.mul_vec(&n)).fold(Rational::zero(), |acc, (a, b)| acc + a * b);
+    let (pv, qv) = (quad(p), quad(q));
+    let (pv, qv) = if sign < 0 { (-pv, -qv) } else { (pv, qv) };
+    if !pv.is_positive() {
+        return None;
     }
-    Some(fifteen)
+    let rho = qv / pv;
+    Some((if rho.is_positive() { rho } else { Rational::zero() }, n))
 }
