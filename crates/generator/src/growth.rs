@@ -255,3 +255,43 @@ pub fn condition_number(m: &DMatrix<f64>) -> f64 {
         f64::INFINITY
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn diagonal(d: &[i64]) -> Matrix {
+        let n = d.len();
+        Matrix::from_fn(n, n, |i, j| if i == j { Rational::from(d[i]) } else { Rational::zero() })
+    }
+
+    /// Both paths (floating-point Cholesky for cond(P) <= 1e4, the exact
+    /// congruence above) on diagonal pencils, whose generalized eigenvalues
+    /// are q_i / p_i by hand, with a congruence by an integer matrix of
+    /// determinant 1 so that neither path sees a diagonal matrix.
+    #[test]
+    fn both_paths_give_the_diagonal_quotients() {
+        let t = Matrix::from_rows(&[
+            vec![Rational::from(1), Rational::from(2), Rational::from(0)],
+            vec![Rational::from(0), Rational::from(1), Rational::from(-3)],
+            vec![Rational::from(0), Rational::from(0), Rational::from(1)],
+        ]);
+        let congruent = |m: &Matrix| t.transpose().mul(m).mul(&t);
+        // (P, Q, expected eigenvalues ascending)
+        for (p, q, expected) in [
+            (diagonal(&[1, 4, 2]), diagonal(&[3, -4, 1]), [-1.0, 0.5, 3.0]),
+            (diagonal(&[1, 100_000_000, 2]), diagonal(&[3, -400_000_000, 1]), [-4.0, 0.5, 3.0]),
+        ] {
+            let g = growth_constant(&congruent(&p), &congruent(&q), 1).unwrap();
+            for (got, want) in g.eigenvalues.iter().zip(expected) {
+                assert!((got - want).abs() <= 1e-9 * 4.0, "{:?} vs {expected:?}", g.eigenvalues);
+            }
+            assert!((g.sigma2 - 3.0).abs() <= 1e-12 * 3.0);
+            // v^T P v = 1 and Q v = 3 P v for the fastest direction.
+            let (pf, qf) = (congruent(&p).to_dmatrix(), congruent(&q).to_dmatrix());
+            let v = DVector::from_vec(g.direction.clone());
+            assert!(((v.transpose() * &pf * &v)[(0, 0)] - 1.0).abs() <= 1e-9);
+            assert!((&qf * &v - &pf * &v * 3.0).norm() <= 1e-6 * (qf.norm() + 3.0 * pf.norm()) * v.norm());
+        }
+    }
+}
