@@ -448,21 +448,28 @@ impl Matrix {
                 return active.iter().all(|&i| active.iter().all(|&j| m[(i, j)].is_zero()));
             };
             let p = active.swap_remove(pos);
-            let pivot = m[(p, p)].clone();
-            for &i in &active {
-                if m[(i, p)].is_zero() {
-                    continue;
-                }
-                let f = &m[(i, p)] / &pivot;
-                for &j in &active {
-                    if !m[(p, j)].is_zero() {
-                        let v = &f * &m[(p, j)];
-                        m[(i, j)] -= v;
-                    }
-                }
-            }
+            eliminate(&mut m, &active, p);
         }
         true
+    }
+}
+
+/// One step of symmetric Gaussian elimination on a nonzero diagonal pivot
+/// `p`: the rows and columns in `active` become the Schur complement of
+/// `m[(p, p)]` (only the entries within `active` are updated).
+fn eliminate(m: &mut Matrix, active: &[usize], p: usize) {
+    let pivot = m[(p, p)].clone();
+    for &i in active {
+        if m[(i, p)].is_zero() {
+            continue;
+        }
+        let f = &m[(i, p)] / &pivot;
+        for &j in active {
+            if !m[(p, j)].is_zero() {
+                let v = &f * &m[(p, j)];
+                m[(i, j)] -= v;
+            }
+        }
     }
 }
 
@@ -514,24 +521,12 @@ impl Matrix {
         while !active.is_empty() {
             if let Some(pos) = active.iter().position(|&i| !m[(i, i)].is_zero()) {
                 let p = active.swap_remove(pos);
-                let pivot = m[(p, p)].clone();
-                if pivot.is_positive() {
+                if m[(p, p)].is_positive() {
                     inertia.positive += 1;
                 } else {
                     inertia.negative += 1;
                 }
-                for &i in &active {
-                    if m[(i, p)].is_zero() {
-                        continue;
-                    }
-                    let f = &m[(i, p)] / &pivot;
-                    for &j in &active {
-                        if !m[(p, j)].is_zero() {
-                            let v = &f * &m[(p, j)];
-                            m[(i, j)] -= v;
-                        }
-                    }
-                }
+                eliminate(&mut m, &active, p);
                 continue;
             }
             // Every remaining diagonal entry is zero.

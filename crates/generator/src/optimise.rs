@@ -583,7 +583,7 @@ fn optimise_restricted(
     };
     let mut found: Option<AtMultipliers> = None;
     let keep = |here: AtMultipliers, found: &mut Option<AtMultipliers>| -> bool {
-        let conditioned = here.conditioned;
+        let conditioned = here.best.is_some();
         if found.as_ref().is_none_or(|b| here.sigma2() < b.sigma2()) {
             *found = Some(here);
         }
@@ -615,7 +615,7 @@ fn optimise_restricted(
             }
             failed = limit;
         }
-        if found.as_ref().is_none_or(|b| !b.conditioned) {
+        if found.as_ref().is_none_or(|b| b.best.is_none()) {
             if let Some(here) = at(&first.family_parameters) {
                 keep(here, &mut found);
             }
@@ -656,10 +656,9 @@ struct AtMultipliers {
     /// A certified lower bound on `lambda_max` for every `K` at these
     /// multipliers, with its witness in the algebra's coordinates.
     witness: Option<(Rational, Vec<Rational>)>,
-    /// The best exact choice built, if any.
+    /// The exact choice built, if any: it has `cond(P)` within the limit
+    /// (only such a choice is kept).
     best: Option<(CasimirChoice, GrowthConstant)>,
-    /// Whether `best` has `cond(P)` within the limit.
-    conditioned: bool,
 }
 
 impl AtMultipliers {
@@ -777,12 +776,7 @@ fn at_multipliers(
     let infimum = restricted_max.max(0.0);
     if infimum.max(first_growth.sigma2) <= 0.0 {
         // The first choice already has Sigma^2 = 0, the floor.
-        return Some(AtMultipliers {
-            restricted_max,
-            witness,
-            best: Some((first.clone(), first_growth.clone())),
-            conditioned: true,
-        });
+        return Some(AtMultipliers { restricted_max, witness, best: Some((first.clone(), first_growth.clone())) });
     }
     let scale = if infimum > 0.0 { infimum } else { first_growth.sigma2 };
     // Everything below is screened in floating point first (sP = sB + Y K' Y^T,
@@ -877,7 +871,7 @@ fn at_multipliers(
         }
         delta = next;
     }
-    Some(AtMultipliers { restricted_max, witness, conditioned: best.is_some(), best })
+    Some(AtMultipliers { restricted_max, witness, best })
 }
 
 /// `max(0, n^T sQ n / n^T sP n)` exactly, for `n` the floating-point top
