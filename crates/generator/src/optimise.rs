@@ -20,7 +20,7 @@
 //! finite `K` attains it or approaches it within the tolerance, and the
 //! certificate says which.
 
-use crate::form::generator_form;
+use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{condition_number, growth_constant, GrowthConstant};
 use crate::linearise::Linearisation;
 use casimir::{CasimirChoice, Ellipsoid, SecondVariation};
@@ -53,7 +53,9 @@ impl Default for OptimiseSettings {
 pub struct Optimum {
     /// The choice (rational multipliers and `M`, exact `P`).
     pub choice: CasimirChoice,
-    /// `Q` etc. for this choice.
+    /// `Q`, the drift residual and the paper's formula for this choice.
+    pub form: GeneratorForm,
+    /// `lambda_max(Q, P)` etc. for this choice.
     pub growth: GrowthConstant,
     /// The floating-point infimum of `max(0, lambda_max)` over the freedom.
     pub infimum: f64,
@@ -402,10 +404,13 @@ impl FramePencil {
 /// with every noise potential (exactly, as computed by
 /// [`casimir::System::noise_commutation`]); then `Q` cannot depend on `M`
 /// (the drift conserves them too), and the check of that is skipped.
+///
+/// `first_form` is the generator form of the first choice's `P`.
 pub fn optimise_choice(
     variation: &SecondVariation,
     linearisation: &Linearisation,
     first: &CasimirChoice,
+    first_form: &GeneratorForm,
     first_growth: &GrowthConstant,
     noise_conserves_all: bool,
     settings: &OptimiseSettings,
@@ -426,26 +431,50 @@ pub fn optimise_choice(
         })
         .collect();
     let y = variation.independent_gradients();
-    let mut k_dirs: Vec<(usize, usize, Matrix)> = Vec::new();
-    for a in 0..rk {
-        for b in a..rk {
-            let mut e = Matrix::zeros(rk, rk);
-            e[(a, b)] = Rational::from(1);
-            e[(b, a)] = Rational::from(1);
-            k_dirs.push((a, b, y.mul(&e).mul(&y.transpose())));
+    let k_dirs = || -> Vec<(usize, usize, Matrix)> {
+        let mut k_dirs = Vec::new();
+        for a in 0..rk {
+            for b in a..rk {
+                let mut e = Matrix::zeros(rk, rk);
+                e[(a, b)] = Rational::from(1);
+                e[(b, a)] = Rational::from(1);
+                k_dirs.push((a, b, y.mul(&e).mul(&y.transpose())));
+            }
         }
-    }
+        k_dirs
+    };
     // L(Y K Y^T) = Y K Y^T A~ + A~^T Y K Y^T + sum B^T Y K Y^T B vanishes when
     // Y^T A = 0 (the drift conserves the quantities: always) and B^T Y = 0
     // (the noise conserves them).
-    let q_depends_on_m = !noise_conserves_all && k_dirs.iter().any(|(_, _, d)| !lq(d).is_zero());
+    let q_depends_on_m = !noise_conserves_all && k_dirs().iter().any(|(_, _, d)| !lq(d).is_zero());
     let t0: Vec<f64> = first.family_parameters.iter().map(exact::rational_to_f64).collect();
-    // K of the first choice, on the independent columns.
-    let k_first = Matrix::from_fn(rk, rk, |a, b| first.m[(cols[a], cols[b])].clone());
 
     if !q_depends_on_m {
-        return optimise_restricted(variation, &lq, first, first_growth, &t0, &t_dirs, settings);
+        // The whole generator form of P = B(t) + Y K Y^T is then that of
+        // B(t), affine in t: the first choice's form plus (t - t0) times the
+        // forms of the directions, exact, with no products per candidate.
+        // (Its drift part P A + A^T P does not depend on K when Y^T A = 0,
+        // which conservation implies; checked, else formed afresh.)
+        let t_forms: Vec<GeneratorForm> = t_dirs.iter().map(|d| generator_form(linearisation, d)).collect();
+        let drift_free = y.transpose().mul(&linearisation.a).is_zero();
+        let form_at = |t: &[Rational]| -> GeneratorForm {
+            let mut form = first_form.clone();
+            for ((ti, t0i), d) in t.iter().zip(&first.family_parameters).zip(&t_forms) {
+                let step = ti - t0i;
+                if !step.is_zero() {
+                    form.q.add_scaled_assign(&step, &d.q);
+                    form.drift_residual.add_scaled_assign(&step, &d.drift_residual);
+                    form.paper_formula.add_scaled_assign(&step, &d.paper_formula);
+                }
+            }
+            form
+        };
+        let forms = Forms { at: &form_at, first: first_form, t_dirs: &t_forms, drift_free, linearisation };
+        return optimise_restricted(variation, &forms, first, first_growth, &t0, &t_dirs, settings);
     }
+    let k_dirs = k_dirs();
+    // K of the first choice, on the independent columns.
+    let k_first = Matrix::from_fn(rk, rk, |a, b| first.m[(cols[a], cols[b])].clone());
 
     // General case: Q depends on K. Minimise over theta = (t, K entries),
     // the directions normalised in the metric of the first P.
@@ -478,12 +507,14 @@ pub fn optimise_choice(
         k[(*b, *a)] = r;
     }
     let choice = exact_choice(variation, sign, t, &k, first.relative_margin)?;
-    let growth = growth_constant(&choice.p, &lq(&choice.p), sign).ok()?;
+    let form = generator_form(linearisation, &choice.p);
+    let growth = growth_constant(&choice.p, &form.q, sign).ok()?;
     if growth.sigma2 > first_growth.sigma2 {
         return None;
     }
     Some(Optimum {
         choice,
+        form,
         attained: !on_boundary,
         within_tolerance: !on_boundary,
         growth,
@@ -493,6 +524,32 @@ pub fn optimise_choice(
         q_depends_on_m,
         method: "ellipsoid over (t, M)",
     })
+}
+
+/// The generator forms when `Q` does not depend on `M`: affine in the
+/// multipliers `t` alone.
+struct Forms<'a> {
+    /// The form of `B(t)`, exactly.
+    at: &'a dyn Fn(&[Rational]) -> GeneratorForm,
+    /// The first choice's form.
+    first: &'a GeneratorForm,
+    /// The forms of the multiplier directions.
+    t_dirs: &'a [GeneratorForm],
+    /// `Y^T A = 0`: the drift part does not depend on `K` either, so the
+    /// form of `B(t) + Y K Y^T` is the form of `B(t)`.
+    drift_free: bool,
+    linearisation: &'a Linearisation,
+}
+
+impl Forms<'_> {
+    /// The form of `P = B(t) + Y K Y^T` given the form of `B(t)`.
+    fn of(&self, base_form: &GeneratorForm, p: &Matrix) -> GeneratorForm {
+        if self.drift_free {
+            base_form.clone()
+        } else {
+            generator_form(self.linearisation, p)
+        }
+    }
 }
 
 /// The case where `Q` does not depend on `M`: minimise the restricted
@@ -507,7 +564,7 @@ pub fn optimise_choice(
 /// costs.
 fn optimise_restricted(
     variation: &SecondVariation,
-    lq: &dyn Fn(&Matrix) -> Matrix,
+    forms: &Forms,
     first: &CasimirChoice,
     first_growth: &GrowthConstant,
     t0: &[f64],
@@ -519,11 +576,11 @@ fn optimise_restricted(
     let z = &variation.kernel;
     let k = z.ncols();
     let cond_limit = 1e8f64.max(10.0 * first_growth.condition_number.min(1e300));
-    let at = |t: &[Rational]| at_multipliers(variation, lq, first, first_growth, t, cond_limit, settings);
+    let at = |t: &[Rational]| at_multipliers(variation, forms, first, first_growth, t, cond_limit, settings);
     if f == 0 || k == 0 {
         let found = at(&first.family_parameters)?;
         let infimum = found.restricted_max.max(0.0);
-        return Some(found.into_optimum(first, first_growth, infimum, false, f, settings));
+        return Some(found.into_optimum(first, forms.first, first_growth, infimum, false, f, settings));
     }
     // 1. The multipliers: the restricted infimum over t, in orthonormal
     // coordinates of ker G^T (`Z R^{-1}`; the exact kernel basis can be
@@ -531,12 +588,13 @@ fn optimise_restricted(
     let zt = z.transpose();
     let r_inv = orthonormalising(z);
     let restrict = |m: &Matrix| congruent(&signed(&zt.mul(m).mul(z), sign), &r_inv);
+    let zero_t = vec![Rational::zero(); f];
     let base0 = variation.base(&variation.family.particular);
     let pencil = AffinePencil {
         p0: restrict(&base0),
-        q0: restrict(&lq(&base0)),
+        q0: restrict(&(forms.at)(&zero_t).q),
         p_dirs: t_dirs.iter().map(&restrict).collect(),
-        q_dirs: t_dirs.iter().map(|d| restrict(&lq(d))).collect(),
+        q_dirs: forms.t_dirs.iter().map(|d| restrict(&d.q)).collect(),
         cond_limit: f64::INFINITY,
     };
     let (p_start, q_start) = pencil.at(t0);
@@ -548,7 +606,7 @@ fn optimise_restricted(
     let restricted_condition = |t: &[f64]| condition_number(&pencil.at(t).0);
     let restricted_max = |t: &[Rational]| -> Option<f64> {
         let b = variation.base(&variation.family.at(t));
-        top_generalized(&restrict(&b), &restrict(&lq(&b))).ok().map(|(l, _)| l)
+        top_generalized(&restrict(&b), &restrict(&(forms.at)(t).q)).ok().map(|(l, _)| l)
     };
     // The construction at rational multipliers near t (t itself if the
     // screen lets it through).
@@ -629,7 +687,7 @@ fn optimise_restricted(
     let found = found?;
     let resolved = restricted_condition(&t_inf) <= RESOLVED;
     let infimum = if resolved { value } else { found.sigma2() };
-    Some(found.into_optimum(first, first_growth, infimum.max(0.0), on_edge || !resolved, f, settings))
+    Some(found.into_optimum(first, forms.first, first_growth, infimum.max(0.0), on_edge || !resolved, f, settings))
 }
 
 /// `R^{-1}` for the thin QR factorisation `Z = U R` of a kernel basis, so
@@ -656,31 +714,33 @@ struct AtMultipliers {
     /// A certified lower bound on `lambda_max` for every `K` at these
     /// multipliers, with its witness in the algebra's coordinates.
     witness: Option<(Rational, Vec<Rational>)>,
-    /// The exact choice built, if any: it has `cond(P)` within the limit
-    /// (only such a choice is kept).
-    best: Option<(CasimirChoice, GrowthConstant)>,
+    /// The exact choice built, if any, with its form: it has `cond(P)`
+    /// within the limit (only such a choice is kept).
+    best: Option<(CasimirChoice, GeneratorForm, GrowthConstant)>,
 }
 
 impl AtMultipliers {
     fn sigma2(&self) -> f64 {
-        self.best.as_ref().map_or(f64::INFINITY, |b| b.1.sigma2)
+        self.best.as_ref().map_or(f64::INFINITY, |b| b.2.sigma2)
     }
 
     /// The optimum over the family, given the infimum estimate over the
     /// multipliers (`on_edge`: the search ran to the edge of its region, so
     /// the infimum may be lower still).
+    #[allow(clippy::too_many_arguments)]
     fn into_optimum(
         self,
         first: &CasimirChoice,
+        first_form: &GeneratorForm,
         first_growth: &GrowthConstant,
         infimum: f64,
         on_edge: bool,
         f: usize,
         settings: &OptimiseSettings,
     ) -> Optimum {
-        let (choice, growth) = match self.best {
-            Some(b) if b.1.sigma2 <= first_growth.sigma2 => b,
-            _ => (first.clone(), first_growth.clone()),
+        let (choice, form, growth) = match self.best {
+            Some(b) if b.2.sigma2 <= first_growth.sigma2 => b,
+            _ => (first.clone(), first_form.clone(), first_growth.clone()),
         };
         // The bound is certified only without free multipliers (it holds
         // for every K at the given multipliers, and then that is the family).
@@ -700,6 +760,7 @@ impl AtMultipliers {
         };
         Optimum {
             choice,
+            form,
             growth,
             infimum,
             infimum_lower_bound,
@@ -720,7 +781,7 @@ impl AtMultipliers {
 /// tolerance, then larger gaps until `cond(P)` is within the limit.
 fn at_multipliers(
     variation: &SecondVariation,
-    lq: &dyn Fn(&Matrix) -> Matrix,
+    forms: &Forms,
     first: &CasimirChoice,
     first_growth: &GrowthConstant,
     t_rational: &[Rational],
@@ -731,10 +792,11 @@ fn at_multipliers(
     let k = variation.kernel.ncols();
     let multipliers = variation.family.at(t_rational);
     let base = variation.base(&multipliers);
-    let q_base = lq(&base);
+    let base_form = (forms.at)(t_rational);
+    let q_base = &base_form.q;
     let w = variation.complement();
     let (bzz, bzw, bww) = variation.frame_blocks(&base, &w);
-    let (qzz, qzw, qww) = variation.frame_blocks(&q_base, &w);
+    let (qzz, qzw, qww) = variation.frame_blocks(q_base, &w);
     let s = sign as f64;
     // Orthonormal coordinates of ker G^T (Z R^{-1}): K1 below is invariant
     // under a change of basis of ker G^T, its rounding is not.
@@ -776,7 +838,8 @@ fn at_multipliers(
     let infimum = restricted_max.max(0.0);
     if infimum.max(first_growth.sigma2) <= 0.0 {
         // The first choice already has Sigma^2 = 0, the floor.
-        return Some(AtMultipliers { restricted_max, witness, best: Some((first.clone(), first_growth.clone())) });
+        let best = Some((first.clone(), forms.first.clone(), first_growth.clone()));
+        return Some(AtMultipliers { restricted_max, witness, best });
     }
     let scale = if infimum > 0.0 { infimum } else { first_growth.sigma2 };
     // Everything below is screened in floating point first (sP = sB + Y K' Y^T,
@@ -800,7 +863,7 @@ fn at_multipliers(
     // K' for a target, rounded to the fewest digits (3, 6, 9, then 15) that
     // pass the screen (short numbers in the certificate), made exact; the
     // exact P must be definite, conditioned and within `allowed`.
-    let build = |delta: f64, allowed: f64| -> Option<(CasimirChoice, GrowthConstant)> {
+    let build = |delta: f64, allowed: f64| -> Option<(CasimirChoice, GeneratorForm, GrowthConstant)> {
         let kp = frame.k_for(infimum + delta, delta == 0.0)?;
         if !screen(&kp).is_some_and(|v| passes(v, allowed)) {
             return None;
@@ -821,9 +884,11 @@ fn at_multipliers(
             else {
                 continue;
             };
-            let Ok(growth) = growth_constant(&choice.p, &lq(&choice.p), sign) else { continue };
+            // Q does not depend on K: the form of B(t) serves.
+            let Ok(growth) = growth_constant(&choice.p, q_base, sign) else { continue };
             if growth.condition_number <= cond_limit && growth.sigma2 <= infimum + allowed + 1e-13 * scale {
-                return Some((choice, growth));
+                let form = forms.of(&base_form, &choice.p);
+                return Some((choice, form, growth));
             }
         }
         None

@@ -316,13 +316,20 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     let variation = analysis.variation.as_ref().expect("set above");
     let optimum = if settings.optimise {
         let noise_conserves_all = analysis.noise_commutation.iter().flatten().all(|&c| c);
-        optimise_choice(variation, &linearisation, choice, &first_growth, noise_conserves_all, &settings.optimisation)
+        optimise_choice(
+            variation,
+            &linearisation,
+            choice,
+            &form,
+            &first_growth,
+            noise_conserves_all,
+            &settings.optimisation,
+        )
     } else {
         None
     };
     let (best_choice, best_form, best_growth, summary) = match optimum {
         Some(o) => {
-            let form = if o.choice.p == choice.p { form } else { generator_form(&linearisation, &o.choice.p) };
             let summary = OptimumSummary {
                 infimum: o.infimum,
                 infimum_lower_bound: o.infimum_lower_bound.clone(),
@@ -332,7 +339,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
                 q_depends_on_m: o.q_depends_on_m,
                 method: o.method,
             };
-            (o.choice, form, o.growth, Some(summary))
+            (o.choice, o.form, o.growth, Some(summary))
         }
         None => (choice.clone(), form, first_growth.clone(), None),
     };
