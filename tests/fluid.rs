@@ -4,7 +4,7 @@
 //! compressible model.
 
 use exact::{Matrix as ExactMatrix, Rational};
-use fluid::analysis::{analyse, FluidModel, FluidProblem, FluidSettings, FluidVerdict};
+use fluid::analysis::{analyse, FluidModel, FluidProblem, FluidSettings, Verdict};
 use fluid::expr::parse;
 use fluid::grid::{Boundary, YGrid};
 use fluid::modes::{Coefficients, Form, Mode};
@@ -99,7 +99,7 @@ fn energy_casimir_form_is_an_exact_invariant_of_the_discrete_drift_and_wrong_for
         let scale = mode.form_matrix(&form).norm();
         let right = mode.drift_residual(&form, &coef).norm() / scale;
         assert!(right < 1e-14, "ny = {ny}: {right}");
-        let energy_only = Form { energy: 1.0, w: vec![0.0; grid.n()], sign: 1.0 };
+        let energy_only = Form { energy: 1.0, w: vec![0.0; grid.n()], sign: fluid::Sign::Positive };
         let distorted = Form {
             w: form.w.iter().zip(grid.nodes()).map(|(w, y)| w * (1.0 + 0.2 * y.cos())).collect(),
             ..form.clone()
@@ -206,7 +206,7 @@ fn sigma2_matches_an_independent_sine_galerkin_computation_and_converges() {
     // engine's own table over ny = 64..512.
     let p = sin_channel(512, 3);
     let a = analyse(&p, &FluidSettings::default()).unwrap();
-    assert_eq!(a.verdict, FluidVerdict::Stable);
+    assert_eq!(a.verdict, Verdict::Stable);
     for m in &a.modes {
         let reference = galerkin_sigma2(m.k, 0.3, 400, false);
         assert!(
@@ -237,7 +237,7 @@ fn kolmogorov_flow_matches_the_fourier_galerkin_value() {
     // Periodic y: U = sin y on [0, 2 pi), x-period pi (k = 2, 4, ...), noise 0.3 cos y.
     let p = problem("sin(y)", &["0.3*cos(y)"], (0.0, 2.0 * PI), Boundary::Periodic, PI, 64, 3);
     let a = analyse(&p, &FluidSettings::default()).unwrap();
-    assert_eq!(a.verdict, FluidVerdict::Stable);
+    assert_eq!(a.verdict, Verdict::Stable);
     for m in &a.modes {
         let reference = galerkin_sigma2(m.k, 0.3, 200, true);
         assert!((m.sigma2 - reference).abs() < 1e-9 * reference, "k = {}: {} vs {reference}", m.k, m.sigma2);
@@ -252,9 +252,9 @@ fn pseudomomentum_gives_zero_and_the_paper_choice_and_shifts_do_not() {
     // decreases like 1/c (c Sigma^2(c) tends to a constant).
     let p = problem("-cos(y)", &["0.3*sin(y)", "0.1*y"], (-1.0, 1.0), Boundary::Walls, 2.0 * PI, 64, 4);
     let a = analyse(&p, &FluidSettings::default()).unwrap();
-    assert_eq!(a.verdict, FluidVerdict::Stable);
+    assert_eq!(a.verdict, Verdict::Stable);
     assert_eq!(a.sigma2, Some(0.0));
-    assert_eq!(a.verification, "exact_structure");
+    assert_eq!(a.verification, Some(fluid::VerificationLevel::ExactStructure));
     let paper = a.paper_choice_sigma2.unwrap();
     assert!(paper > 1e-4, "{paper}");
     let curve = &a.shift_curve;
@@ -310,13 +310,13 @@ fn pseudomomentum_is_conserved_along_every_simulated_path() {
     let p = problem("-cos(y)", &["0.3*sin(y)", "0.1*y"], (-1.0, 1.0), Boundary::Walls, 2.0 * PI, 16, 1);
     let grid = YGrid::new(Boundary::Walls, -1.0, 1.0, 16);
     let coef = p.profile.coefficients(&grid);
-    let form = Form { energy: 0.0, w: coef.upp.iter().map(|u| 1.0 / u).collect(), sign: 1.0 };
+    let form = Form { energy: 0.0, w: coef.upp.iter().map(|u| 1.0 / u).collect(), sign: fluid::Sign::Positive };
     let sde = ModeSde::new(&grid, &coef, &form, 2.0);
     let x0: Vec<f64> = grid.nodes().iter().map(|y| (3.0 * y).sin() + 0.5).collect();
     let rows = sde.ensemble(&x0, 0.02, 100, 50, 200, 3).unwrap();
     assert!(rows[0].max_path_drift < 1e-11, "{}", rows[0].max_path_drift);
     // whereas the energy alone is not conserved pathwise
-    let energy = Form { energy: 1.0, w: vec![0.0; grid.n()], sign: 1.0 };
+    let energy = Form { energy: 1.0, w: vec![0.0; grid.n()], sign: fluid::Sign::Positive };
     let rows = ModeSde::new(&grid, &coef, &energy, 2.0).ensemble(&x0, 0.02, 100, 50, 200, 3);
     assert!(rows.is_some_and(|r| r[0].max_path_drift > 1e-3));
 }
@@ -332,19 +332,19 @@ fn compressible_noise_residual_and_admissible_shifts_match_closed_forms() {
         ..problem("-cos(y)", &[noise], (-1.0, 1.0), Boundary::Walls, 2.0 * PI, 64, 4)
     };
     let a = analyse(&make("0.3*sin(y)", 2.0), &FluidSettings::default()).unwrap();
-    assert_eq!(a.verdict, FluidVerdict::NoiseIncompatible);
+    assert_eq!(a.verdict, Verdict::NoiseIncompatible);
     let cr = a.compressible.unwrap();
     assert!((cr.noise_residuals[0] - 0.3).abs() < 1e-12);
-    assert_eq!(cr.incompressible_verdict, FluidVerdict::Stable);
+    assert_eq!(cr.incompressible_verdict, Verdict::Stable);
     let range = 1.0 - 1f64.cos();
     for cs in [0.4, 0.5, 2.0, 20.0, 2000.0] {
         let a = analyse(&make("0.2", cs), &FluidSettings::default()).unwrap();
         let cr = a.compressible.as_ref().unwrap();
         if cs < range {
-            assert_eq!(a.verdict, FluidVerdict::Inconclusive, "c_s = {cs}");
+            assert_eq!(a.verdict, Verdict::Inconclusive, "c_s = {cs}");
             assert!(cr.shift_interval.is_none());
         } else {
-            assert_eq!(a.verdict, FluidVerdict::Stable, "c_s = {cs}");
+            assert_eq!(a.verdict, Verdict::Stable, "c_s = {cs}");
             let (lo, hi) = cr.shift_interval.unwrap();
             assert!((lo - 1.0).abs() < 1e-9 && (hi - (cs + 1f64.cos())).abs() < 1e-9, "({lo}, {hi})");
             // the incompressible answer for the same profile and noise

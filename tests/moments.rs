@@ -46,7 +46,7 @@ fn exact_second_moments_respect_the_certified_bound() {
         let s = cert.analysis.stable.as_ref().unwrap();
         let lin = cert.analysis.linearisation.as_ref().unwrap();
         let moments = SecondMoments::new(lin);
-        let sign = s.choice.sign as f64;
+        let sign = s.choice.sign.as_f64();
         let p: DMatrix<f64> = s.choice.p.to_dmatrix() * sign;
         let sigma2 = s.growth.sigma2;
         let n = p.nrows();
@@ -77,7 +77,7 @@ fn the_certified_constant_is_sharp_at_small_times() {
     for (name, cert) in stable_fixtures() {
         let s = cert.analysis.stable.as_ref().unwrap();
         let moments = SecondMoments::new(cert.analysis.linearisation.as_ref().unwrap());
-        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * (s.choice.sign as f64);
+        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * s.choice.sign.as_f64();
         let sigma2 = s.growth.sigma2;
         let v = &s.growth.direction; // |v|_P = 1
         let h = 1e-4;
@@ -111,7 +111,7 @@ fn paper_constants_are_violated_by_the_exact_moments() {
         let cert = spec::certify(&spec::parse_spec(&fixture(name)).unwrap());
         let s = cert.analysis.stable.as_ref().unwrap();
         let moments = SecondMoments::new(cert.analysis.linearisation.as_ref().unwrap());
-        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * (s.choice.sign as f64);
+        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * s.choice.sign.as_f64();
         let t = 0.1;
         let e = moments.expected_norm(&p, &s.growth.direction, t);
         println!(
@@ -135,7 +135,7 @@ fn worst_case_growth_and_lyapunov_exponent() {
     for (name, cert) in stable_fixtures() {
         let s = cert.analysis.stable.as_ref().unwrap();
         let m = SecondMoments::new(cert.analysis.linearisation.as_ref().unwrap());
-        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * (s.choice.sign as f64);
+        let p: DMatrix<f64> = s.choice.p.to_dmatrix() * s.choice.sign.as_f64();
         let n = p.nrows();
         for &t in &[0.1, 1.0, 5.0] {
             let worst = m.worst_case_growth(&p, t).unwrap();

@@ -149,7 +149,7 @@ fn spec_text(c: &Case) -> Option<String> {
 fn confirm_with_moments(cert: &spec::Certificate) -> Result<(), TestCaseError> {
     let s = cert.analysis.stable.as_ref().unwrap();
     let moments = SecondMoments::new(cert.analysis.linearisation.as_ref().unwrap());
-    let p: DMatrix<f64> = s.choice.p.to_dmatrix() * (s.choice.sign as f64);
+    let p: DMatrix<f64> = s.choice.p.to_dmatrix() * s.choice.sign.as_f64();
     let sigma2 = s.sigma2();
     let n = p.nrows();
     let mut starts = vec![s.growth.direction.clone()];

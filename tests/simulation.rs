@@ -159,7 +159,7 @@ fn linearised_ensembles_match_the_exact_moments() {
         let Some(stable) = cert.analysis.stable.as_ref() else { continue };
         let lin = cert.analysis.linearisation.as_ref().unwrap();
         let model = LinearModel::new(lin);
-        let p: DMatrix<f64> = stable.choice.p.to_dmatrix() * (stable.choice.sign as f64);
+        let p: DMatrix<f64> = stable.choice.p.to_dmatrix() * stable.choice.sign.as_f64();
         let x0 = stable.growth.direction.clone(); // |x0|_P = 1
         let s = EnsembleSettings { norm: Some((p.clone(), vec![0.0; x0.len()])), ..settings(20_000, 2e-3, 1.0, 5) };
         let stats = run_ensemble(&Target::Linear { model: &model, x0: x0.clone() }, &s, &|_| {}).unwrap();

@@ -164,7 +164,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     // The norm P (sign-adjusted) and the perturbation: sqrt(delta) along the
     // fastest-growing direction for a stable spec, else along the observable.
     let (p, direction) = match stable {
-        Some(s) => (s.choice.p.to_dmatrix() * (s.choice.sign as f64), s.growth.direction.clone()),
+        Some(s) => (s.choice.p.to_dmatrix() * s.choice.sign.as_f64(), s.growth.direction.clone()),
         None => {
             let mut v = vec![0.0; n];
             v[observable] = 1.0;

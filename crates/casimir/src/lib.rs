@@ -37,7 +37,7 @@
 //! assert_eq!(variation.family.particular, vec![Rational::new((-1).into(), 3.into())]);
 //! let outcome = find_definite_choice(&variation, &SearchSettings::default());
 //! let choice = outcome.definite().expect("the major axis is formally stable");
-//! assert_eq!(choice.sign, 1); // positive definite
+//! assert_eq!(choice.sign, casimir::Sign::Positive);
 //! // P = diag(mu, 1/I2 - 1/I1, 1/I3 - 1/I1) = diag(mu, 1/6, 2/3)
 //! assert_eq!(choice.p[(1, 1)], Rational::new(1.into(), 6.into()));
 //! assert_eq!(choice.p[(2, 2)], Rational::new(2.into(), 3.into()));
@@ -58,7 +58,7 @@ pub use ellipsoid::Ellipsoid;
 pub use error::SystemError;
 pub use search::{
     conserved_margin, find_definite_choice, level_scale, round_family_parameters, short_entries, CasimirChoice,
-    Objective, SearchOutcome, SearchSettings,
+    Objective, SearchOutcome, SearchSettings, Sign,
 };
 pub use system::{ConservedKind, System};
 pub use variation::{MultiplierFamily, SecondVariation};

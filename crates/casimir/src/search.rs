@@ -16,6 +16,7 @@ use crate::variation::SecondVariation;
 use exact::{best_rational_approximation, decimal_near, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use num_traits::{One, Zero};
+pub use outcome::Sign;
 
 /// Settings of the search, with documented defaults.
 #[derive(Clone, Debug, PartialEq)]
@@ -48,8 +49,8 @@ impl Default for SearchSettings {
 /// A choice of Casimir freedom that makes `P` definite.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CasimirChoice {
-    /// `+1` if `P` is positive definite, `-1` if negative definite.
-    pub sign: i8,
+    /// Whether `P` is positive or negative definite.
+    pub sign: Sign,
     /// The family parameters `t`.
     pub family_parameters: Vec<Rational>,
     /// The multipliers `lambda(t)`.
@@ -191,7 +192,7 @@ pub type Objective<'a> = dyn Fn(&[Rational]) -> Option<f64> + 'a;
 /// have denominators at most `max_denominator`.
 pub fn round_family_parameters(
     variation: &SecondVariation,
-    sign: i8,
+    sign: Sign,
     t: &[f64],
     units: &[f64],
     max_denominator: u64,
@@ -264,15 +265,15 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
     let base_radius = 4.0 * r0f.norm().max(1.0);
 
     let mut margins = [f64::NEG_INFINITY; 2];
-    let mut found: Option<(i8, Vec<f64>, f64)> = None;
-    for (slot, sign) in [(0usize, 1i8), (1, -1)] {
+    let mut found: Option<(Sign, Vec<f64>, f64)> = None;
+    for (slot, sign) in [(0usize, Sign::Positive), (1, Sign::Negative)] {
         if found.is_some() {
             break; // the positive sign is preferred when both are possible
         }
         let mut radius = base_radius;
         let mut best = (vec![0.0; f], f64::NEG_INFINITY, f64::NEG_INFINITY);
         for _ in 0..=settings.max_expansions {
-            let (u, value, rel) = pencil.maximise(sign as f64, radius, settings.max_iterations);
+            let (u, value, rel) = pencil.maximise(sign.as_f64(), radius, settings.max_iterations);
             if value > best.1 {
                 best = (u, value, rel);
             }
@@ -328,8 +329,8 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
 /// conserved quantities are scaled); `|B|_2` (or 1) when `ker G^T = 0`.
 /// The Casimir function adds this size along the conserved directions, so
 /// `P` is as well conditioned as the level-set block allows.
-pub fn level_scale(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> f64 {
-    let base = variation.base(multipliers).to_dmatrix() * (sign as f64);
+pub fn level_scale(variation: &SecondVariation, multipliers: &[Rational], sign: Sign) -> f64 {
+    let base = variation.base(multipliers).to_dmatrix() * sign.as_f64();
     let z = variation.kernel.to_dmatrix();
     let fallback = || {
         let norm = symmetric_eigen(base.clone())
@@ -361,7 +362,7 @@ pub fn level_scale(variation: &SecondVariation, multipliers: &[Rational], sign: 
 /// `D = c (Y^T Y)^{-1}` with `c` the [`level_scale`] rounded to three
 /// digits: adding `Y (s D) Y^T` to `P` adds `c |v|^2` along the conserved
 /// directions (the Euclidean norm of the part of `v` in the range of `G`).
-pub fn conserved_margin(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> Option<Matrix> {
+pub fn conserved_margin(variation: &SecondVariation, multipliers: &[Rational], sign: Sign) -> Option<Matrix> {
     let c = decimal_near(level_scale(variation, multipliers, sign), 3)?;
     let y = variation.independent_gradients();
     Some(y.transpose().mul(&y).inverse()?.scale(&c))
@@ -386,7 +387,7 @@ pub fn short_entries(k: &Matrix, digits: u32) -> Option<Matrix> {
 /// search over a scale `mu`: a definite form found in floating point is
 /// never lost here. The same `K` rounded to 3, 6, 9 and 15 digits is tried
 /// first and kept when it is still definite (short numbers).
-fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> Option<(Matrix, Matrix)> {
+fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: Sign) -> Option<(Matrix, Matrix)> {
     let r = variation.num_conserved();
     if variation.range_columns.is_empty() {
         let base = variation.base(multipliers);
@@ -395,7 +396,7 @@ fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: i8) -> 
     }
     let k0 = variation.schur_bound(multipliers)?;
     let d = conserved_margin(variation, multipliers, sign)?;
-    let k_exact = if sign > 0 { k0.add(&d) } else { k0.sub(&d) };
+    let k_exact = if sign.is_positive() { k0.add(&d) } else { k0.sub(&d) };
     let mut candidates: Vec<Matrix> =
         [3u32, 6, 9, 15].into_iter().filter_map(|digits| short_entries(&k_exact, digits)).collect();
     candidates.push(k_exact);

@@ -7,6 +7,7 @@
 
 use crate::number::{rational_to_f64, Rational};
 use num_traits::{One, Zero};
+use outcome::Sign;
 use std::fmt;
 
 /// A dense `rows × cols` matrix of rationals, row-major.
@@ -383,20 +384,20 @@ impl Matrix {
     /// use exact::{Matrix, Rational};
     /// let q = |n: i64| Rational::from_integer(n.into());
     /// let a = Matrix::from_rows(&[vec![q(2), q(1)], vec![q(1), q(2)]]);
-    /// assert_eq!(a.definiteness(), Some(1));
-    /// assert_eq!(a.scale(&q(-1)).definiteness(), Some(-1));
+    /// assert_eq!(a.definiteness(), Some(outcome::Sign::Positive));
+    /// assert_eq!(a.scale(&q(-1)).definiteness(), Some(outcome::Sign::Negative));
     /// let b = Matrix::from_rows(&[vec![q(1), q(2)], vec![q(2), q(1)]]);
     /// assert_eq!(b.definiteness(), None);
     /// ```
-    pub fn definiteness(&self) -> Option<i8> {
+    pub fn definiteness(&self) -> Option<Sign> {
         assert!(self.is_symmetric(), "definiteness of a non-symmetric matrix");
         if self.rows == 0 {
             return None;
         }
         if positive_definite_exact(self) {
-            Some(1)
+            Some(Sign::Positive)
         } else if positive_definite_exact(&self.scale(&-Rational::one())) {
-            Some(-1)
+            Some(Sign::Negative)
         } else {
             None
         }
@@ -404,14 +405,14 @@ impl Matrix {
 }
 
 impl Matrix {
-    /// Whether `self` (or `-self` for `sign = -1`) is positive definite,
+    /// Whether `self` (or `-self` for a negative sign) is positive definite,
     /// exactly. One LDLᵀ pass instead of the two [`Self::definiteness`] may take.
-    pub fn is_definite_with_sign(&self, sign: i8) -> bool {
+    pub fn is_definite_with_sign(&self, sign: Sign) -> bool {
         assert!(self.is_symmetric(), "definiteness of a non-symmetric matrix");
         if self.rows == 0 {
             return false;
         }
-        if sign > 0 {
+        if sign.is_positive() {
             positive_definite_exact(self)
         } else {
             positive_definite_exact(&self.scale(&-Rational::one()))

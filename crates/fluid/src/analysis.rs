@@ -65,31 +65,9 @@ impl Default for FluidSettings {
     }
 }
 
-/// The verdicts (as in the finite-dimensional pipeline; a shear flow is
-/// always an equilibrium, so `not_an_equilibrium` does not occur).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FluidVerdict {
-    /// A definite conserved form with a certified Sigma^2.
-    Stable,
-    /// An eigenvalue with positive real part, converged under refinement.
-    LinearlyUnstable,
-    /// Neither.
-    Inconclusive,
-    /// The noise moves the equilibrium.
-    NoiseIncompatible,
-}
-
-impl FluidVerdict {
-    /// Name in certificates.
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            FluidVerdict::Stable => "stable",
-            FluidVerdict::LinearlyUnstable => "linearly_unstable",
-            FluidVerdict::Inconclusive => "inconclusive",
-            FluidVerdict::NoiseIncompatible => "noise_incompatible",
-        }
-    }
-}
+/// The verdicts are the finite-dimensional pipeline's [`Verdict`] (a shear
+/// flow is always an equilibrium, so `NotAnEquilibrium` does not occur).
+pub use outcome::{Sign, Verdict, VerificationLevel};
 
 /// Sigma^2 of one x-mode at the finest grid.
 #[derive(Clone, Debug, PartialEq)]
@@ -128,8 +106,8 @@ pub struct FormSummary {
     pub energy: f64,
     /// The Galilean shift `c` (`None` for the pseudomomentum: the limit `|c| -> infinity`).
     pub galilean_shift: Option<f64>,
-    /// Sign making the form positive.
-    pub sign: f64,
+    /// Sign making the form positive (`None`: no form).
+    pub sign: Option<Sign>,
     /// The Casimir weight as a formula in words.
     pub casimir_weight: String,
 }
@@ -160,7 +138,7 @@ pub struct CompressibleReport {
     /// The admissible Galilean shifts `(c_lo, c_hi)` making the form definite, if any.
     pub shift_interval: Option<(f64, f64)>,
     /// The verdict of the same profile and noise in the incompressible model.
-    pub incompressible_verdict: FluidVerdict,
+    pub incompressible_verdict: Verdict,
     /// Its Sigma^2.
     pub incompressible_sigma2: Option<f64>,
 }
@@ -169,7 +147,7 @@ pub struct CompressibleReport {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FluidAnalysis {
     /// The verdict.
-    pub verdict: FluidVerdict,
+    pub verdict: Verdict,
     /// Why, in a sentence.
     pub reason: String,
     /// The functional.
@@ -179,7 +157,7 @@ pub struct FluidAnalysis {
     /// Verified upper bound of Sigma^2 (max over modes), if every mode verified.
     pub sigma2_upper: Option<f64>,
     /// How the bound was verified.
-    pub verification: &'static str,
+    pub verification: Option<VerificationLevel>,
     /// Per-mode values at the finest grid.
     pub modes: Vec<ModeResult>,
     /// Sigma^2 under refinement.
@@ -202,14 +180,14 @@ pub struct FluidAnalysis {
 
 impl FluidAnalysis {
     /// A result with no Sigma^2 and no evidence beyond the verdict and reason.
-    fn without_certificate(verdict: FluidVerdict, reason: String, form: FormSummary, paper_bound: f64) -> Self {
+    fn without_certificate(verdict: Verdict, reason: String, form: FormSummary, paper_bound: f64) -> Self {
         FluidAnalysis {
             verdict,
             reason,
             form,
             sigma2: None,
             sigma2_upper: None,
-            verification: "none",
+            verification: None,
             modes: vec![],
             convergence: vec![],
             paper_bound: Some(paper_bound),
@@ -253,7 +231,7 @@ fn form_for(choice: &Choice, profile: &Profile, coef: &Coefficients, grid: &YGri
         Choice::Pseudomomentum { sign } => {
             Some(Form { energy: 0.0, w: coef.upp.iter().map(|p| 1.0 / p).collect(), sign: *sign })
         }
-        Choice::Enstrophy => Some(Form { energy: 0.0, w: vec![1.0; grid.n()], sign: 1.0 }),
+        Choice::Enstrophy => Some(Form { energy: 0.0, w: vec![1.0; grid.n()], sign: Sign::Positive }),
         Choice::Forced { shift, zeros, sign } => Some(Form {
             energy: 1.0,
             w: grid.nodes().iter().map(|y| casimir_weight(profile, 1.0, *shift, zeros, *y)).collect(),
@@ -292,9 +270,9 @@ fn shifted_form(coef: &Coefficients, shift: f64) -> Option<Form> {
         return None;
     }
     if w.iter().all(|x| *x > 0.0) {
-        Some(Form { energy: 1.0, w, sign: 1.0 })
+        Some(Form { energy: 1.0, w, sign: Sign::Positive })
     } else if w.iter().all(|x| *x < 0.0) {
-        Some(Form { energy: 1.0, w, sign: -1.0 })
+        Some(Form { energy: 1.0, w, sign: Sign::Negative })
     } else {
         None
     }
@@ -396,7 +374,7 @@ fn rescale(a: FluidAnalysis, e: i32) -> FluidAnalysis {
         if let Some(reason) = not_representable {
             return FluidAnalysis {
                 paper_bound,
-                ..FluidAnalysis::without_certificate(FluidVerdict::Inconclusive, reason, a.form, 0.0)
+                ..FluidAnalysis::without_certificate(Verdict::Inconclusive, reason, a.form, 0.0)
             };
         }
     }
@@ -494,7 +472,7 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
             (0..8)
                 .filter_map(|j| {
                     let d = range * 4f64.powi(j - 2);
-                    let c = if *sign > 0.0 { -umin + d } else { -umax - d };
+                    let c = if sign.is_positive() { -umin + d } else { -umax - d };
                     let f = shifted_form(&coef, c)?;
                     Some((c, sigma2_all_modes(&fine, &coef, &f, &ks, tol)?))
                 })
@@ -552,7 +530,11 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
         let reason = format!(
             "{}; the second variation could not be shown definite for x-mode m = {m} (k = {k:.6}){}",
             summary.casimir_weight,
-            if summary.sign < 0.0 { ": Arnold's second criterion (K + M w negative definite) fails there" } else { "" }
+            if summary.sign == Some(Sign::Negative) {
+                ": Arnold's second criterion (K + M w negative definite) fails there"
+            } else {
+                ""
+            }
         );
         return inconclusive_or_unstable(
             problem,
@@ -567,13 +549,13 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
     let modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
     let sigma2 = modes.iter().map(|r| r.sigma2).fold(0.0, f64::max);
     let sigma2_upper = modes.iter().try_fold(0.0f64, |acc, r| r.sigma2_upper.map(|u| acc.max(u)));
-    let verification = if form.energy == 0.0 {
-        "exact_structure"
+    let verification = Some(if form.energy == 0.0 {
+        VerificationLevel::ExactStructure
     } else if sigma2_upper.is_some() {
-        "verified_float"
+        VerificationLevel::VerifiedFloat
     } else {
-        "float"
-    };
+        VerificationLevel::Float
+    });
 
     // Convergence table (Lanczos at each resolution).
     let mut convergence = vec![];
@@ -616,7 +598,7 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
         Choice::NoForm { .. } => unreachable!(),
     };
     FluidAnalysis {
-        verdict: FluidVerdict::Stable,
+        verdict: Verdict::Stable,
         reason,
         form: summary,
         sigma2: Some(sigma2),
@@ -639,27 +621,27 @@ fn form_summary(choice: &Choice) -> FormSummary {
             kind: "pseudomomentum",
             energy: 0.0,
             galilean_shift: None,
-            sign: *sign,
+            sign: Some(*sign),
             casimir_weight: "Phi''(omega_e) = 1/U'' (Casimir plus momentum, energy coefficient 0)".into(),
         },
         Choice::Enstrophy => FormSummary {
             kind: "enstrophy",
             energy: 0.0,
             galilean_shift: None,
-            sign: 1.0,
+            sign: Some(Sign::Positive),
             casimir_weight: "Phi''(omega_e) = 1 (enstrophy)".into(),
         },
         Choice::Forced { shift, zeros, sign } => FormSummary {
             kind: "energy_casimir",
             energy: 1.0,
             galilean_shift: Some(*shift),
-            sign: *sign,
+            sign: Some(*sign),
             casimir_weight: format!(
                 "U'' vanishes at y = {} so the Galilean shift c = {shift:.6} is forced and Phi''(omega_e) = (U + c)/U''",
                 zeros.iter().map(|z| format!("{z:.6}")).collect::<Vec<_>>().join(", ")
             ),
         },
-        Choice::NoForm { .. } => FormSummary { kind: "none", energy: 0.0, galilean_shift: None, sign: 0.0, casimir_weight: "none".into() },
+        Choice::NoForm { .. } => FormSummary { kind: "none", energy: 0.0, galilean_shift: None, sign: None, casimir_weight: "none".into() },
     }
 }
 
@@ -712,16 +694,16 @@ fn inconclusive_or_unstable(
     let instability = rates.into_iter().flatten().max_by(|a, b| a.growth_rate.total_cmp(&b.growth_rate));
     let (verdict, reason) = match &instability {
         Some(u) => (
-            FluidVerdict::LinearlyUnstable,
+            Verdict::LinearlyUnstable,
             format!(
                 "x-mode m = {} (k = {:.6}) grows at rate {:.6e} (ny = {}; {:.6e} at half the resolution); {reason}",
                 u.m, u.k, u.growth_rate, u.ny, u.growth_rate_coarse
             ),
         ),
-        None => (FluidVerdict::Inconclusive, reason),
+        None => (Verdict::Inconclusive, reason),
     };
     FluidAnalysis {
-        verification: if verdict == FluidVerdict::LinearlyUnstable { "float" } else { "none" },
+        verification: (verdict == Verdict::LinearlyUnstable).then_some(VerificationLevel::Float),
         paper_choice_sigma2,
         shift_curve,
         instability,
@@ -773,7 +755,7 @@ fn analyse_compressible(
         .collect();
     let incompressible = analyse(&FluidProblem { model: FluidModel::Incompressible, ..problem.clone() }, settings).ok();
     let (incompressible_verdict, incompressible_sigma2) =
-        incompressible.as_ref().map(|a| (a.verdict, a.sigma2)).unwrap_or((FluidVerdict::Inconclusive, None));
+        incompressible.as_ref().map(|a| (a.verdict, a.sigma2)).unwrap_or((Verdict::Inconclusive, None));
     let choice = choose(profile);
     // A rigorous enclosure of the range of U over the closed interval.
     let range = profile.u[0].range_on(a, b, 1024);
@@ -786,7 +768,7 @@ fn analyse_compressible(
         (None, false)
     } else {
         match &choice {
-            Choice::Pseudomomentum { sign } if *sign > 0.0 => {
+            Choice::Pseudomomentum { sign } if sign.is_positive() => {
                 // U + c > 0 (w = (U + c)/U'' >= 0) and U + c < c_s
                 let (lo, hi) = (above(range.lo), below_cs(range.hi));
                 ((lo < hi).then_some((lo, hi)), true)
@@ -802,7 +784,7 @@ fn analyse_compressible(
                 let w = Interval::point(c) + range;
                 ((w.hi < sound_speed && w.lo > -sound_speed).then_some((c, c)), true)
             }
-            Choice::Forced { shift, sign, .. } if *sign > 0.0 => {
+            Choice::Forced { shift, sign, .. } if sign.is_positive() => {
                 let worst = Interval::point(*shift) + range;
                 ((worst.hi < sound_speed && worst.lo > -sound_speed).then_some((*shift, *shift)), false)
             }
@@ -819,13 +801,13 @@ fn analyse_compressible(
     };
     let base = FluidAnalysis {
         compressible: Some(compressible),
-        ..FluidAnalysis::without_certificate(FluidVerdict::Inconclusive, String::new(), summary.clone(), paper_bound)
+        ..FluidAnalysis::without_certificate(Verdict::Inconclusive, String::new(), summary.clone(), paper_bound)
     };
     let scale = u_abs.max(f64::MIN_POSITIVE);
     if let Some(i) = (0..noise_residuals.len()).find(|&i| !constant_noise[i] && noise_residuals[i] > 1e-12 * scale) {
         return FluidAnalysis {
-            verdict: FluidVerdict::NoiseIncompatible,
-            verification: "float",
+            verdict: Verdict::NoiseIncompatible,
+            verification: Some(VerificationLevel::Float),
             reason: format!(
                 "the coadjoint action of noise[{i}] on the momentum rho u contains (grad sigma)^T m = (0, U eta'), which is not zero at the equilibrium (compressible.noise_residuals gives sup |U eta'|): in compressible flow no pressure absorbs it (in incompressible flow it is a gradient), so the noise moves the shear flow; compatible noise has U eta' = 0 (constant eta where U != 0)"
             ),
@@ -843,7 +825,7 @@ fn analyse_compressible(
     let Some((lo, hi)) = shift_interval else {
         let reason = match &choice {
             Choice::NoForm { reason } => reason.clone(),
-            Choice::Forced { sign, .. } if *sign < 0.0 => "the forced Casimir weight is negative, and a compressible form cannot be negative definite (the acoustic energy is positive)".into(),
+            Choice::Forced { sign, .. } if !sign.is_positive() => "the forced Casimir weight is negative, and a compressible form cannot be negative definite (the acoustic energy is positive)".into(),
             _ => format!(
                 "no Galilean shift c makes the form definite: it needs |U + c| < c_s = {sound_speed} and (U + c)/U'' >= 0 on the whole interval, but U ranges over [{:.6}, {:.6}] (a rigorous enclosure)",
                 range.lo, range.hi
@@ -854,7 +836,7 @@ fn analyse_compressible(
     let c = if lo == hi { lo } else { 0.5 * lo + 0.5 * hi };
     summary.energy = 1.0;
     summary.galilean_shift = Some(c);
-    summary.sign = 1.0;
+    summary.sign = Some(Sign::Positive);
     summary.kind = "energy_casimir_momentum";
     let worst = Interval::point(c) + range;
     let worst = worst.hi.abs().max(worst.lo.abs());
@@ -864,7 +846,7 @@ fn analyse_compressible(
         .map(|&(m, k)| ModeResult { m, k, sigma2: 0.0, sigma2_upper: Some(0.0), form_verified: true, iterations: 0 })
         .collect();
     FluidAnalysis {
-        verdict: FluidVerdict::Stable,
+        verdict: Verdict::Stable,
         reason: format!(
             "every noise field is constant (eta' = 0 proved), so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} (admissible c in [{lo:.6}, {hi:.6}]) is positive definite because |U + c| <= {worst:.6} < c_s = {sound_speed} on the whole interval (a rigorous enclosure of U){}",
             if proved_weight { "" } else { ", with the Casimir weight (U + c)/U'' non-negative on a fine sample (not proved: level float)" }
@@ -872,7 +854,7 @@ fn analyse_compressible(
         form: summary,
         sigma2: Some(0.0),
         sigma2_upper: Some(0.0),
-        verification: if proved_weight { "exact_structure" } else { "float" },
+        verification: Some(if proved_weight { VerificationLevel::ExactStructure } else { VerificationLevel::Float }),
         modes,
         ..base
     }

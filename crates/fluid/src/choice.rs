@@ -42,6 +42,7 @@
 
 use crate::expr::SignProof;
 use crate::profile::Profile;
+use outcome::Sign;
 
 /// Work allowed for the interval proof of the sign of `U''` (tape operations).
 pub const SIGN_PROOF_BUDGET: f64 = 2e7;
@@ -52,7 +53,7 @@ pub enum Choice {
     /// `U''` has one sign: pseudomomentum `int omega^2/U''` (times `sign`).
     Pseudomomentum {
         /// The sign of `U''`.
-        sign: f64,
+        sign: Sign,
     },
     /// `U'' = 0` identically: the enstrophy.
     Enstrophy,
@@ -64,7 +65,7 @@ pub enum Choice {
         /// The zeros of `U''`.
         zeros: Vec<f64>,
         /// `+1` if `w >= 0`, `-1` if `w <= 0` (then definiteness is per mode).
-        sign: f64,
+        sign: Sign,
     },
     /// No functional of this family has a definite second variation.
     NoForm {
@@ -89,8 +90,8 @@ pub fn choose(profile: &Profile) -> Choice {
     let length = b - a;
     let proof = profile.u[2].sign_on(a, b, SIGN_PROOF_BUDGET);
     match proof {
-        SignProof::Positive => return Choice::Pseudomomentum { sign: 1.0 },
-        SignProof::Negative => return Choice::Pseudomomentum { sign: -1.0 },
+        SignProof::Positive => return Choice::Pseudomomentum { sign: Sign::Positive },
+        SignProof::Negative => return Choice::Pseudomomentum { sign: Sign::Negative },
         SignProof::Zero => return Choice::Enstrophy,
         SignProof::Changes | SignProof::Unproved => {}
     }
@@ -170,9 +171,9 @@ pub fn choose(profile: &Profile) -> Choice {
     }
     let wscale = wmin.abs().max(wmax.abs());
     if wmin >= -1e-12 * wscale {
-        Choice::Forced { shift, zeros, sign: 1.0 }
+        Choice::Forced { shift, zeros, sign: Sign::Positive }
     } else if wmax <= 1e-12 * wscale {
-        Choice::Forced { shift, zeros, sign: -1.0 }
+        Choice::Forced { shift, zeros, sign: Sign::Negative }
     } else {
         let at = ys[w.iter().position(|v| *v < 0.0).unwrap_or(0)];
         Choice::NoForm {
@@ -209,32 +210,39 @@ mod tests {
     fn classification_of_classical_profiles() {
         let pi = std::f64::consts::PI;
         // U'' = 2 > 0: Rayleigh stable, pseudomomentum
-        assert_eq!(choose(&profile("y^2", -1.0, 1.0)), Choice::Pseudomomentum { sign: 1.0 });
+        assert_eq!(choose(&profile("y^2", -1.0, 1.0)), Choice::Pseudomomentum { sign: Sign::Positive });
         // Poiseuille U = 1 - y^2: U'' = -2
-        assert_eq!(choose(&profile("1 - y^2", -1.0, 1.0)), Choice::Pseudomomentum { sign: -1.0 });
+        assert_eq!(choose(&profile("1 - y^2", -1.0, 1.0)), Choice::Pseudomomentum { sign: Sign::Negative });
         // Couette: U'' = 0
         assert_eq!(choose(&profile("y", 0.0, 1.0)), Choice::Enstrophy);
         // sin y on [0, pi]: U'' = -sin y vanishes at both walls where U = 0: c = 0,
         // w = sin y / (-sin y) = -1 (Arnold's second theorem)
         match choose(&profile("sin(y)", 0.0, pi)) {
             Choice::Forced { shift, sign, zeros } => {
-                assert!(shift.abs() < 1e-12 && sign == -1.0 && zeros.len() == 2, "{shift} {sign} {zeros:?}");
+                assert!(
+                    shift.abs() < 1e-12 && sign == Sign::Negative && zeros.len() == 2,
+                    "{shift} {sign:?} {zeros:?}"
+                );
             }
             other => panic!("{other:?}"),
         }
         // tanh y on [-3, 3]: inflection at 0 with U = 0; w = -cosh^2(y)/2 < 0
         assert!(
-            matches!(choose(&profile("(exp(y) - exp(-y))/(exp(y) + exp(-y))", -3.0, 3.0)), Choice::Forced { sign, .. } if sign == -1.0)
+            matches!(choose(&profile("(exp(y) - exp(-y))/(exp(y) + exp(-y))", -3.0, 3.0)), Choice::Forced { sign, .. } if sign == Sign::Negative)
         );
         // sin y on [0, 2 pi) shifted: U = sin y + y/10 has U'' = -sin y vanishing at 0, pi, 2pi
         // with U = 0, pi/10, pi/5: no common shift
         assert!(matches!(choose(&profile("sin(y) + y/10", 0.0, 2.0 * pi)), Choice::NoForm { .. }));
         // y^3 on [-1, 2]: U'' = 6y, zero at 0 with U = 0, w = y^2/6 >= 0 (Fjørtoft)
-        assert!(matches!(choose(&profile("y^3", -1.0, 2.0)), Choice::Forced { sign, .. } if sign == 1.0));
+        assert!(matches!(choose(&profile("y^3", -1.0, 2.0)), Choice::Forced { sign, .. } if sign == Sign::Positive));
         // y^3 + y/2 on [-1, 1]: c = 0, w = (y^3 + y/2)/(6y) = (y^2 + 1/2)/6 > 0
-        assert!(matches!(choose(&profile("y^3 + y/2", -1.0, 1.0)), Choice::Forced { sign, .. } if sign == 1.0));
+        assert!(
+            matches!(choose(&profile("y^3 + y/2", -1.0, 1.0)), Choice::Forced { sign, .. } if sign == Sign::Positive)
+        );
         // y^3 - y on [-1, 1]: w = (y^2 - 1)/6 <= 0 -> negative branch
-        assert!(matches!(choose(&profile("y^3 - y", -1.0, 1.0)), Choice::Forced { sign, .. } if sign == -1.0));
+        assert!(
+            matches!(choose(&profile("y^3 - y", -1.0, 1.0)), Choice::Forced { sign, .. } if sign == Sign::Negative)
+        );
         // y^3 - y/4 on [-1,1]: w = (y^2 - 1/4)/6 changes sign
         assert!(matches!(choose(&profile("y^3 - y/4", -1.0, 1.0)), Choice::NoForm { .. }));
         // y^4 on [-1, 1]: U'' = 12 y^2 has a double zero at 0
@@ -271,7 +279,10 @@ mod tests {
         for a in ["1e-300", "1e-150", "3", "1e150", "1e300", "1e308"] {
             match choose(&profile(&format!("{a}*sin(y)"), 0.0, pi)) {
                 Choice::Forced { shift, sign, zeros } => {
-                    assert!(shift == 0.0 && sign == -1.0 && zeros.len() == 2, "A = {a}: {shift} {sign} {zeros:?}")
+                    assert!(
+                        shift == 0.0 && sign == Sign::Negative && zeros.len() == 2,
+                        "A = {a}: {shift} {sign:?} {zeros:?}"
+                    )
                 }
                 other => panic!("A = {a}: {other:?}"),
             }
@@ -280,7 +291,7 @@ mod tests {
         for a in ["1e-300", "1", "1e300"] {
             assert_eq!(
                 choose(&profile(&format!("{a}*(y^2 + sin(y)/10)"), -1.0, 1.0)),
-                Choice::Pseudomomentum { sign: 1.0 }
+                Choice::Pseudomomentum { sign: Sign::Positive }
             );
         }
     }

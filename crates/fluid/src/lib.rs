@@ -11,17 +11,19 @@
 //! and resolutions and handles the compressible model.
 //!
 //! ```
-//! use fluid::{analysis::{analyse, FluidModel, FluidProblem, FluidSettings, FluidVerdict}, expr::parse, grid::Boundary, profile::Profile};
+//! use fluid::{analysis::{analyse, FluidModel, FluidProblem, FluidSettings, Verdict}, expr::parse, grid::Boundary, profile::Profile};
 //! // U = sin y in a channel [0, pi] with noise eta = 0.3 cos y: U'' = -sin y
 //! // vanishes at the walls, so c = 0 is forced and w = -1 (Arnold's second theorem).
 //! let p = |s: &str| parse(s, &Default::default()).unwrap();
 //! let profile = Profile::new(p("sin(y)"), vec![p("0.3*cos(y)")], (0.0, std::f64::consts::PI), Boundary::Walls);
 //! let problem = FluidProblem { model: FluidModel::Incompressible, profile, x_period: 2.0 * std::f64::consts::PI, ny: 64, x_modes: 4 };
 //! let a = analyse(&problem, &FluidSettings::default()).unwrap();
-//! assert_eq!(a.verdict, FluidVerdict::Stable);
+//! assert_eq!(a.verdict, Verdict::Stable);
 //! assert!(a.sigma2.unwrap() > 0.0 && a.sigma2_upper.unwrap() >= a.sigma2.unwrap());
 //! ```
 #![warn(missing_docs)]
+
+pub use outcome::{Sign, Verdict, VerificationLevel};
 
 pub mod analysis;
 pub mod banded;

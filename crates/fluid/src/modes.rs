@@ -33,6 +33,7 @@ use crate::banded::{BandedCholesky, SymBanded};
 use crate::grid::{Boundary, YGrid};
 use crate::lanczos::{conjugate_gradients, largest_eigenvalue, largest_generalized_eigenvalue, Ritz};
 use nalgebra::DMatrix;
+use outcome::Sign;
 
 /// The profile and the noise at the grid nodes.
 #[derive(Clone, Debug)]
@@ -52,8 +53,8 @@ pub struct Form {
     pub energy: f64,
     /// The Casimir weight `Phi''(omega_e(y_a))`.
     pub w: Vec<f64>,
-    /// `+1` or `-1`: the sign that makes `V` positive.
-    pub sign: f64,
+    /// The sign that makes `V` positive.
+    pub sign: Sign,
 }
 
 /// Why a per-mode computation could not be done.
@@ -116,9 +117,9 @@ impl<'g> Mode<'g> {
 
     fn form_from_energy(&self, kmat: &DMatrix<f64>, form: &Form) -> DMatrix<f64> {
         let m = self.grid.weights();
-        let mut v = kmat * (form.sign * form.energy);
+        let mut v = kmat * (form.sign.as_f64() * form.energy);
         for a in 0..self.grid.n() {
-            v[(a, a)] += form.sign * m[a] * form.w[a];
+            v[(a, a)] += form.sign.as_f64() * m[a] * form.w[a];
         }
         v
     }
@@ -129,7 +130,7 @@ impl<'g> Mode<'g> {
     }
 
     fn generator_from_energy(&self, kmat: &DMatrix<f64>, form: &Form, coef: &Coefficients) -> DMatrix<f64> {
-        let c = -0.5 * self.k * self.k * form.sign * form.energy;
+        let c = -0.5 * self.k * self.k * form.sign.as_f64() * form.energy;
         DMatrix::from_fn(self.grid.n(), self.grid.n(), |a, b| {
             let d: f64 = coef.eta.iter().map(|e| (e[a] - e[b]).powi(2)).sum();
             c * d * kmat[(a, b)]
@@ -154,7 +155,9 @@ impl<'g> Mode<'g> {
         if form.energy == 0.0 {
             // Q = 0 identically (module docs); V must still be definite.
             let m = self.grid.weights();
-            if (0..n).any(|a| (form.sign * form.w[a] * m[a]).is_nan() || form.sign * form.w[a] * m[a] <= 0.0) {
+            if (0..n).any(|a| {
+                (form.sign.as_f64() * form.w[a] * m[a]).is_nan() || form.sign.as_f64() * form.w[a] * m[a] <= 0.0
+            }) {
                 return Err(ModeError::NotDefinite { k: self.k });
             }
             let ritz = Ritz { value: 0.0, residual: 0.0, iterations: 0, scale: 0.0 };
@@ -307,7 +310,7 @@ impl WallOps {
         let l_factor = l.cholesky().ok()?;
         let m = grid.weights().to_vec();
         let w_over_m: Vec<f64> = form.w.iter().zip(&m).map(|(w, m)| w / m).collect();
-        let v_psi = l.times(form.energy).plus(&l.sandwich(&w_over_m)).times(form.sign);
+        let v_psi = l.times(form.energy).plus(&l.sandwich(&w_over_m)).times(form.sign.as_f64());
         let v_factor = v_psi.cholesky().ok()?;
         let n = grid.n();
         // A constant noise field is a multiple of the identity and drops out
@@ -332,9 +335,9 @@ impl WallOps {
             wm,
             eta,
             eta2,
-            sign: form.sign,
+            sign: form.sign.as_f64(),
             energy: form.energy,
-            coef_q: -0.5 * k * k * form.sign * form.energy,
+            coef_q: -0.5 * k * k * form.sign.as_f64() * form.energy,
         })
     }
 
@@ -448,8 +451,11 @@ mod tests {
         for boundary in [Boundary::Walls, Boundary::Periodic] {
             let (g, coef) = setup(boundary, 16);
             let mode = Mode::new(&g, 2.0);
-            let form =
-                Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+            let form = Form {
+                energy: 1.0,
+                w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(),
+                sign: Sign::Positive,
+            };
             let n = g.n();
             let r = mode.drift_matrix(&coef);
             let a = embed_minus_ik(2.0, &r);
@@ -487,15 +493,18 @@ mod tests {
     fn a_wrong_casimir_weight_leaves_a_drift_residual() {
         let (g, coef) = setup(Boundary::Walls, 32);
         let mode = Mode::new(&g, 1.0);
-        let right =
-            Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+        let right = Form {
+            energy: 1.0,
+            w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(),
+            sign: Sign::Positive,
+        };
         // Two wrong second variations: the energy alone (no Casimir), and a
         // weight that is not Phi''(omega_e) for the equilibrium.
-        let energy_only = Form { energy: 1.0, w: vec![0.0; g.n()], sign: 1.0 };
+        let energy_only = Form { energy: 1.0, w: vec![0.0; g.n()], sign: Sign::Positive };
         let distorted = Form {
             energy: 1.0,
             w: right.w.iter().zip(g.nodes()).map(|(w, y)| w * (1.0 + 0.3 * (3.0 * y).sin())).collect(),
-            sign: 1.0,
+            sign: Sign::Positive,
         };
         let v = mode.form_matrix(&right).norm();
         let r_right = mode.drift_residual(&right, &coef).norm();
@@ -511,8 +520,11 @@ mod tests {
         for boundary in [Boundary::Walls, Boundary::Periodic] {
             let (g, coef) = setup(boundary, 48);
             let mode = Mode::new(&g, 1.5);
-            let form =
-                Form { energy: 1.0, w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(), sign: 1.0 };
+            let form = Form {
+                energy: 1.0,
+                w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(),
+                sign: Sign::Positive,
+            };
             let v = mode.form_matrix(&form);
             let q = mode.generator_matrix(&form, &coef);
             let l = nalgebra::Cholesky::new(v.clone()).unwrap().l();

@@ -9,6 +9,7 @@
 //! `lambda_max`: the constant is then certified *sharp*, not just an upper
 //! bound.
 
+use casimir::Sign;
 use exact::{best_rational_approximation, decimal_at_least, power_of_two, rational_from_f64, Matrix, Rational};
 use num_traits::Zero;
 
@@ -23,14 +24,14 @@ pub struct ExactSigma2 {
 }
 
 /// `S sP - sQ`.
-pub fn sigma2_gap(p: &Matrix, q: &Matrix, sign: i8, s: &Rational) -> Matrix {
-    let sp = if sign < 0 { p.scale(&Rational::from(-1)) } else { p.clone() };
-    let sq = if sign < 0 { q.scale(&Rational::from(-1)) } else { q.clone() };
+pub fn sigma2_gap(p: &Matrix, q: &Matrix, sign: Sign, s: &Rational) -> Matrix {
+    let sp = if !sign.is_positive() { p.scale(&Rational::from(-1)) } else { p.clone() };
+    let sq = if !sign.is_positive() { q.scale(&Rational::from(-1)) } else { q.clone() };
     sp.scale(s).sub(&sq)
 }
 
 /// Whether `S sP - sQ ⪰ 0` exactly (`S >= 0` required).
-pub fn sigma2_bound_holds(p: &Matrix, q: &Matrix, sign: i8, s: &Rational) -> bool {
+pub fn sigma2_bound_holds(p: &Matrix, q: &Matrix, sign: Sign, s: &Rational) -> bool {
     !s.is_negative() && sigma2_gap(p, q, sign, s).is_positive_semidefinite()
 }
 
@@ -57,16 +58,16 @@ pub fn sigma2_bound_holds(p: &Matrix, q: &Matrix, sign: i8, s: &Rational) -> boo
 /// // P = diag(1, 1/6, 2/3), Q = diag(0, 9/200, -9/200): lambda_max = 27/100 exactly.
 /// let p = Matrix::from_rows(&[vec![q(1, 1), q(0, 1), q(0, 1)], vec![q(0, 1), q(1, 6), q(0, 1)], vec![q(0, 1), q(0, 1), q(2, 3)]]);
 /// let qm = Matrix::from_rows(&[vec![q(0, 1), q(0, 1), q(0, 1)], vec![q(0, 1), q(9, 200), q(0, 1)], vec![q(0, 1), q(0, 1), q(-9, 200)]]);
-/// let s = certify_sigma2(&p, &qm, 1, 0.27000000000000002).unwrap();
+/// let s = certify_sigma2(&p, &qm, casimir::Sign::Positive, 0.27000000000000002).unwrap();
 /// assert_eq!(s.value, q(27, 100));
 /// assert!(s.sharp);
 /// // The same Q times 2^-1200: no double holds lambda_max, the estimate is 0,
 /// // and the exact search still finds 27/100 * 2^-1200.
 /// let tiny = exact::power_of_two(-1200);
-/// let s = certify_sigma2(&p, &qm.scale(&tiny), 1, 0.0).unwrap();
+/// let s = certify_sigma2(&p, &qm.scale(&tiny), casimir::Sign::Positive, 0.0).unwrap();
 /// assert_eq!(s.value, q(27, 100) * tiny);
 /// ```
-pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option<ExactSigma2> {
+pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: Sign, estimate: f64) -> Option<ExactSigma2> {
     let accept = |s: &Rational| -> Option<ExactSigma2> {
         let gap = sigma2_gap(p, q, sign, s);
         if s.is_negative() || !gap.is_positive_semidefinite() {
@@ -133,7 +134,7 @@ pub fn certify_sigma2(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option
 /// failing at `lo`, holding at `hi`, `hi - lo <= 1e-13 hi` (so `hi` is within
 /// `1e-13` of `lambda_max`) and `2^e <= lo < hi <= 2^(e+1)`, assuming the
 /// bound fails at 0.
-fn exact_search(p: &Matrix, q: &Matrix, sign: i8, estimate: f64) -> Option<(Rational, Rational, i64)> {
+fn exact_search(p: &Matrix, q: &Matrix, sign: Sign, estimate: f64) -> Option<(Rational, Rational, i64)> {
     const MAX_EXPONENT: i64 = 8000;
     let holds = |e: i64| sigma2_bound_holds(p, q, sign, &power_of_two(e));
     // Start at the estimate's exponent when it has one.

@@ -1,5 +1,6 @@
 //! The sharpest growth constant `Sigma^2` from the generalized eigenproblem.
 
+use casimir::Sign;
 use exact::{binary_exponent, power_of_two, Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use num_traits::Zero;
@@ -59,10 +60,10 @@ pub enum GrowthError {
 /// let q = |n: i64| Rational::from_integer(n.into());
 /// let p = Matrix::from_rows(&[vec![q(1), q(0)], vec![q(0), q(4)]]);
 /// let qm = Matrix::from_rows(&[vec![q(3), q(0)], vec![q(0), q(-4)]]);
-/// let g = growth_constant(&p, &qm, 1).unwrap();
+/// let g = growth_constant(&p, &qm, casimir::Sign::Positive).unwrap();
 /// assert!((g.sigma2 - 3.0).abs() < 1e-14);
 /// ```
-pub fn growth_constant(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstant, GrowthError> {
+pub fn growth_constant(p: &Matrix, q: &Matrix, sign: Sign) -> Result<GrowthConstant, GrowthError> {
     // Scale P by 2^-ep (ep even, so the direction rescales by 2^(ep/2)) and
     // Q by 2^-eq before rounding to doubles: the generalized eigenvalues
     // scale by 2^(eq - ep) exactly, and a Q of size 1e-321 (noise 1e-160) no
@@ -122,8 +123,8 @@ fn exponent_range(m: &Matrix) -> (i64, i64) {
     range.unwrap_or((0, 0))
 }
 
-fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: i8) -> Result<GrowthConstant, GrowthError> {
-    let s = if sign < 0 { -1.0 } else { 1.0 };
+fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: Sign) -> Result<GrowthConstant, GrowthError> {
+    let s = if !sign.is_positive() { -1.0 } else { 1.0 };
     let n = p.nrows();
     if n == 0 {
         return Ok(GrowthConstant {
@@ -153,8 +154,11 @@ fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: i8) -> Result<Growth
     // entries are each computed from exact rationals with one rounding, so
     // the eigenvalues are accurate to round-off in |l_max| whatever the
     // condition of P (a floating-point Cholesky of P loses cond(P) eps).
-    let (sp, sq) =
-        if sign < 0 { (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1))) } else { (p.clone(), q.clone()) };
+    let (sp, sq) = if !sign.is_positive() {
+        (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1)))
+    } else {
+        (p.clone(), q.clone())
+    };
     let congruence = sp.congruence(&sq).ok_or(GrowthError::NotPositiveDefinite)?;
     let root_d: Vec<f64> = congruence.d.iter().map(|d| exact::rational_to_f64(d).sqrt()).collect();
     let scaled = |i: usize, j: usize| -> f64 {
@@ -282,7 +286,7 @@ mod tests {
             (diagonal(&[1, 4, 2]), diagonal(&[3, -4, 1]), [-1.0, 0.5, 3.0]),
             (diagonal(&[1, 100_000_000, 2]), diagonal(&[3, -400_000_000, 1]), [-4.0, 0.5, 3.0]),
         ] {
-            let g = growth_constant(&congruent(&p), &congruent(&q), 1).unwrap();
+            let g = growth_constant(&congruent(&p), &congruent(&q), Sign::Positive).unwrap();
             for (got, want) in g.eigenvalues.iter().zip(expected) {
                 assert!((got - want).abs() <= 1e-9 * 4.0, "{:?} vs {expected:?}", g.eigenvalues);
             }

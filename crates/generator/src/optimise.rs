@@ -23,6 +23,7 @@
 use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{condition_number, growth_constant, GrowthConstant};
 use crate::linearise::Linearisation;
+use casimir::Sign;
 use casimir::{CasimirChoice, Ellipsoid, SecondVariation};
 use exact::{Matrix, Rational};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
@@ -223,15 +224,15 @@ impl AffinePencil {
 /// multipliers (the search's default `max_denominator`).
 const SIMPLE_DENOMINATOR: u64 = 1_000_000;
 
-fn signed(m: &Matrix, sign: i8) -> DMatrix<f64> {
-    m.to_dmatrix() * (sign as f64)
+fn signed(m: &Matrix, sign: Sign) -> DMatrix<f64> {
+    m.to_dmatrix() * sign.as_f64()
 }
 
 /// The exact choice at rational parameters `t` and rational `K` (on the
 /// independent conserved gradients), if `P` is exactly definite.
 fn exact_choice(
     variation: &SecondVariation,
-    sign: i8,
+    sign: Sign,
     t: Vec<Rational>,
     k: &Matrix,
     relative_margin: f64,
@@ -797,7 +798,7 @@ fn at_multipliers(
     let w = variation.complement();
     let (bzz, bzw, bww) = variation.frame_blocks(&base, &w);
     let (qzz, qzw, qww) = variation.frame_blocks(q_base, &w);
-    let s = sign as f64;
+    let s = sign.as_f64();
     // Orthonormal coordinates of ker G^T (Z R^{-1}): K1 below is invariant
     // under a change of basis of ker G^T, its rounding is not.
     let r_inv = orthonormalising(&variation.kernel);
@@ -950,7 +951,7 @@ fn at_multipliers(
 /// the claim, whichever vector the floating-point screen picked: a poor
 /// pick gives a lower, still valid, bound. Integers keep the exact quadratic
 /// forms cheap: the common denominator `10^d` cancels in the quotient.
-fn rayleigh_lower_bound(p: &Matrix, q: &Matrix, sign: i8, v: &DVector<f64>) -> Option<(Rational, Vec<Rational>)> {
+fn rayleigh_lower_bound(p: &Matrix, q: &Matrix, sign: Sign, v: &DVector<f64>) -> Option<(Rational, Vec<Rational>)> {
     let top = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     if top.is_nan() || top <= 0.0 || !top.is_finite() {
         return None;
@@ -968,7 +969,7 @@ fn rayleigh_lower_bound(p: &Matrix, q: &Matrix, sign: i8, v: &DVector<f64>) -> O
     let n: Vec<Rational> = ints.iter().map(|&x| Rational::from(x / g)).collect();
     let quad = |m: &Matrix| n.iter().zip(m.mul_vec(&n)).fold(Rational::zero(), |acc, (a, b)| acc + a * b);
     let (pv, qv) = (quad(p), quad(q));
-    let (pv, qv) = if sign < 0 { (-pv, -qv) } else { (pv, qv) };
+    let (pv, qv) = if !sign.is_positive() { (-pv, -qv) } else { (pv, qv) };
     if !pv.is_positive() {
         return None;
     }

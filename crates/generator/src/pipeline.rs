@@ -46,47 +46,7 @@ impl Default for Settings {
     }
 }
 
-/// The five verdicts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Verdict {
-    /// A definite energy–Casimir form exists: nonlinearly (formally) stable,
-    /// and stable in probability up to the stopping time set by `Sigma^2`.
-    Stable,
-    /// `A` has an eigenvalue with positive real part.
-    LinearlyUnstable,
-    /// Neither a definite form nor an unstable eigenvalue was found.
-    Inconclusive,
-    /// `ad*_{Dh(mu_e)} mu_e != 0`.
-    NotAnEquilibrium,
-    /// Some `ad*_{sigma_i} mu_e != 0`.
-    NoiseIncompatible,
-}
-
-impl Verdict {
-    /// The name used in certificates.
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            Verdict::Stable => "stable",
-            Verdict::LinearlyUnstable => "linearly_unstable",
-            Verdict::Inconclusive => "inconclusive",
-            Verdict::NotAnEquilibrium => "not_an_equilibrium",
-            Verdict::NoiseIncompatible => "noise_incompatible",
-        }
-    }
-
-    /// Parse a certificate's verdict name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        [
-            Verdict::Stable,
-            Verdict::LinearlyUnstable,
-            Verdict::Inconclusive,
-            Verdict::NotAnEquilibrium,
-            Verdict::NoiseIncompatible,
-        ]
-        .into_iter()
-        .find(|v| v.as_str() == name)
-    }
-}
+pub use outcome::Verdict;
 
 /// The evidence of a `stable` verdict.
 #[derive(Clone, Debug)]
@@ -365,7 +325,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     analysis.verdict = Verdict::Stable;
     analysis.reason = format!(
         "the second variation is {} definite: formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t)",
-        if best_choice.sign > 0 { "positive" } else { "negative" }
+        best_choice.sign
     );
     analysis.stable = Some(StableEvidence {
         choice: best_choice,

@@ -4,6 +4,7 @@ use crate::parse::Spec;
 use exact::{Matrix, Rational};
 use generator::{analyse, Analysis, StoppingTime, Verdict};
 use nalgebra::Complex;
+use outcome::VerificationLevel;
 use serde_json::{json, Map, Value};
 
 /// Version of the certificate format.
@@ -64,7 +65,7 @@ fn complex(z: &Complex<f64>) -> Value {
 }
 
 /// The verification level of a verdict and what each part rests on.
-fn level_and_checks(a: &Analysis) -> (&'static str, Value) {
+fn level_and_checks(a: &Analysis) -> (VerificationLevel, Value) {
     (verification_level(a), checks(a))
 }
 
@@ -72,7 +73,7 @@ fn level_and_checks(a: &Analysis) -> (&'static str, Value) {
 /// proved in rational arithmetic (the stable `Sigma^2` bound, the Sturm
 /// proof of instability, the residuals of the two early verdicts), else
 /// `numerical`.
-pub fn verification_level(a: &Analysis) -> &'static str {
+pub fn verification_level(a: &Analysis) -> VerificationLevel {
     let exact = match a.verdict {
         Verdict::Stable => a.stable.as_ref().is_some_and(|s| s.exact.is_some()),
         Verdict::LinearlyUnstable => matches!(a.spectral_proof, Some(generator::SpectralProof::Unstable { .. })),
@@ -80,9 +81,9 @@ pub fn verification_level(a: &Analysis) -> &'static str {
         Verdict::Inconclusive => false,
     };
     if exact {
-        "exact"
+        VerificationLevel::Exact
     } else {
-        "numerical"
+        VerificationLevel::Numerical
     }
 }
 
@@ -121,7 +122,7 @@ fn checks(a: &Analysis) -> Value {
 
 fn choice_json(ch: &casimir::CasimirChoice) -> Value {
     obj! {
-        "sign" => ch.sign as i64,
+        "sign" => ch.sign.as_i8() as i64,
         "family_parameters" => rationals(&ch.family_parameters),
         "multipliers" => rationals(&ch.multipliers),
         "M" => matrix(&ch.m),
@@ -159,7 +160,7 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
     put("name", Value::from(spec.name.as_str()));
     put("verdict", Value::from(a.verdict.as_str()));
     put("reason", Value::from(a.reason.as_str()));
-    put("level", Value::from(level));
+    put("level", Value::from(level.as_str()));
     put("checks", checks);
     if let Some(s2) = a.sigma2() {
         put("sigma2", float_json(s2));

@@ -263,7 +263,7 @@ fn check_direction(pair: (Option<Value>, Option<Value>), analysis: &generator::A
         .iter()
         .map(|x| x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| fail(path, "expected finite numbers".into())))
         .collect::<Result<_, _>>()?;
-    let s = stable.choice.sign as f64;
+    let s = stable.choice.sign.as_f64();
     let p = stable.choice.p.to_dmatrix() * s;
     let q = stable.form.q.to_dmatrix() * s;
     if v.len() != p.nrows() {

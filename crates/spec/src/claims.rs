@@ -34,6 +34,7 @@
 use crate::parse::Spec;
 use exact::{parse_certificate_rational, parse_number, Matrix, Poly, Rational};
 use num_traits::Zero;
+use outcome::{Sign, VerificationLevel};
 use serde_json::Value;
 
 /// A failed claim: the JSON path and why.
@@ -182,7 +183,7 @@ fn coadjoint(spec: &Spec, xi: &[Rational], mu: &[Rational]) -> Vec<Rational> {
 
 /// Verify the claims of a certificate against its (already parsed) spec.
 /// Returns the verification level actually established.
-pub fn verify_claims(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+pub fn verify_claims(spec: &Spec, cert: &Value) -> Claim<VerificationLevel> {
     let verdict = get(cert, &["verdict"])?.as_str().ok_or_else(|| failure("$.verdict", "expected a string"))?;
     let level = get(cert, &["level"])?.as_str().ok_or_else(|| failure("$.level", "expected a string"))?;
     let established = match verdict {
@@ -190,25 +191,23 @@ pub fn verify_claims(spec: &Spec, cert: &Value) -> Claim<&'static str> {
         "not_an_equilibrium" => verify_not_equilibrium(spec, cert)?,
         "noise_incompatible" => verify_noise_incompatible(spec, cert)?,
         "linearly_unstable" => verify_unstable(spec, cert)?,
-        "inconclusive" => "numerical",
+        "inconclusive" => VerificationLevel::Numerical,
         other => return Err(failure("$.verdict", format!("unknown verdict '{other}'"))),
     };
-    if level == "exact" && established != "exact" {
+    if level == VerificationLevel::Exact.as_str() && established != VerificationLevel::Exact {
         return Err(failure("$.level", format!("claims 'exact' but only '{established}' could be established")));
     }
     Ok(established)
 }
 
-fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<&'static str> {
+fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<VerificationLevel> {
     let r = rebuild(spec);
     let n = r.n;
     let mu = spec.system.equilibrium();
     let ks = conserved(spec);
     let choice = get(cert, &["casimir_choice"])?;
-    let sign = match choice.get("sign").and_then(Value::as_i64) {
-        Some(1) => 1i8,
-        Some(-1) => -1i8,
-        _ => return Err(failure("$.casimir_choice.sign", "expected 1 or -1")),
+    let Some(sign) = choice.get("sign").and_then(Value::as_i64).and_then(Sign::from_i64) else {
+        return Err(failure("$.casimir_choice.sign", "expected 1 or -1"));
     };
     let lambda = rational_vector(get(choice, &["multipliers"])?, "$.casimir_choice.multipliers")?;
     if lambda.len() != ks.len() {
@@ -266,17 +265,20 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<&'static str> 
     if !drift.add(&drift.transpose()).is_zero() {
         return Err(failure("$.residuals.drift", "P A + A^T P is not zero: P is not conserved by the linear flow"));
     }
-    let (sp, sq) =
-        if sign > 0 { (p.clone(), q.clone()) } else { (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1))) };
+    let (sp, sq) = if sign.is_positive() {
+        (p.clone(), q.clone())
+    } else {
+        (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1)))
+    };
     verify_generalized_eigenvalues(&sp, &sq, cert)?;
     verify_infimum_bound(&r, &g, &sp, &sq, cert)?;
     // Sigma^2.
     let sigma2_float = get(cert, &["sigma2"])?.as_f64().ok_or_else(|| failure("$.sigma2", "expected a number"))?;
     let Some(exact_value) = cert.get("sigma2_exact") else {
-        if level == "exact" {
+        if level == VerificationLevel::Exact.as_str() {
             return Err(failure("$.sigma2_exact", "missing for an exact certificate"));
         }
-        return Ok("numerical");
+        return Ok(VerificationLevel::Numerical);
     };
     let s = rational(exact_value, "$.sigma2_exact")?;
     // The double written is the nearest to the rational (or the one above).
@@ -343,10 +345,10 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<&'static str> 
             (None, _) => return Err(failure("$.stopping.T", "missing")),
         }
     }
-    Ok("exact")
+    Ok(VerificationLevel::Exact)
 }
 
-fn verify_not_equilibrium(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+fn verify_not_equilibrium(spec: &Spec, cert: &Value) -> Claim<VerificationLevel> {
     let mu = spec.system.equilibrium();
     let grad = spec.system.hamiltonian().gradient_at(mu);
     let residual = coadjoint(spec, &grad, mu);
@@ -356,10 +358,10 @@ fn verify_not_equilibrium(spec: &Spec, cert: &Value) -> Claim<&'static str> {
     if rational_vector(get(cert, &["equilibrium", "residual"])?, "$.equilibrium.residual")? != residual {
         return Err(failure("$.equilibrium.residual", "differs from the recomputed residual"));
     }
-    Ok("exact")
+    Ok(VerificationLevel::Exact)
 }
 
-fn verify_noise_incompatible(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+fn verify_noise_incompatible(spec: &Spec, cert: &Value) -> Claim<VerificationLevel> {
     let mu = spec.system.equilibrium();
     let residuals: Vec<Vec<Rational>> = spec.system.noise().iter().map(|s| coadjoint(spec, s, mu)).collect();
     if residuals.iter().all(|r| r.iter().all(Zero::is_zero)) {
@@ -385,15 +387,15 @@ fn verify_noise_incompatible(spec: &Spec, cert: &Value) -> Claim<&'static str> {
             return Err(failure(&path, "does not annihilate mu_e: not in the isotropy algebra"));
         }
     }
-    Ok("exact")
+    Ok(VerificationLevel::Exact)
 }
 
-fn verify_unstable(spec: &Spec, cert: &Value) -> Claim<&'static str> {
+fn verify_unstable(spec: &Spec, cert: &Value) -> Claim<VerificationLevel> {
     let r = rebuild(spec);
     let proved = matches!(generator::exact_spectrum_test(&r.a), generator::SpectralProof::Unstable { .. });
     let Some(inst) = cert.get("instability") else {
         return if proved {
-            Ok("exact")
+            Ok(VerificationLevel::Exact)
         } else {
             Err(failure("$.instability", "missing, and no exact proof of instability"))
         };
@@ -441,7 +443,7 @@ fn verify_unstable(spec: &Spec, cert: &Value) -> Claim<&'static str> {
             format!("|A v - l v| / |v| = {residual:e}: not an eigenpair of the rebuilt A"),
         ));
     }
-    Ok(if proved { "exact" } else { "numerical" })
+    Ok(if proved { VerificationLevel::Exact } else { VerificationLevel::Numerical })
 }
 
 /// Each stored generalized eigenvalue `e_k` (ascending) of `(sQ, sP)` is

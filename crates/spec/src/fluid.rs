@@ -30,6 +30,7 @@ use fluid::expr::{parse, Expr};
 use fluid::grid::{Boundary, ELEMENT_DEGREE};
 use fluid::profile::{Profile, ProfileError};
 use generator::StoppingTime;
+use outcome::{Sign, VerificationLevel};
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 
@@ -387,14 +388,14 @@ pub fn fluid_certificate_json(spec: &FluidSpec, a: &FluidAnalysis) -> Value {
     put("kind", Value::from("fluid"));
     put("verdict", Value::from(a.verdict.as_str()));
     put("reason", Value::from(a.reason.as_str()));
-    put("level", Value::from(a.verification));
+    put("level", Value::from(VerificationLevel::name_of(a.verification)));
     put(
         "checks",
         json!({
             "sigma2": match a.verification {
-                "exact_structure" => "exact: the form is diagonal (a Casimir-momentum or enstrophy form) or the noise is a multiple of the identity, so Q = 0 identically for the discretised operators",
-                "verified_float" => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite by a floating-point Cholesky with rounding accounted for (Rump-style), for the floating-point matrices as computed; sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
-                "float" => "floating point only: the dense verified check did not pass",
+                Some(VerificationLevel::ExactStructure) => "exact: the form is diagonal (a Casimir-momentum or enstrophy form) or the noise is a multiple of the identity, so Q = 0 identically for the discretised operators",
+                Some(VerificationLevel::VerifiedFloat) => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite by a floating-point Cholesky with rounding accounted for (Rump-style), for the floating-point matrices as computed; sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
+                Some(VerificationLevel::Float) => "floating point only: the dense verified check did not pass",
                 _ => "no claim is made",
             },
             "discretisation": "the claims are about the discretised linear SDE; the convergence table shows how they move under refinement",
@@ -452,7 +453,8 @@ pub fn fluid_certificate_json(spec: &FluidSpec, a: &FluidAnalysis) -> Value {
             "kind": a.form.kind,
             "energy_coefficient": a.form.energy,
             "galilean_shift": opt(a.form.galilean_shift),
-            "sign": a.form.sign,
+            // 0 when there is no form (the contract's number, kept).
+            "sign": a.form.sign.map_or(0.0, Sign::as_f64),
             "casimir_weight": a.form.casimir_weight,
         }),
     );
@@ -599,7 +601,9 @@ fn prove_stated_bounds(
             let rederived = analysis.modes.iter().find(|r| r.m == m).and_then(|r| r.sigma2_upper);
             match rederived {
                 Some(r) if stated >= r => {}
-                Some(r) if analysis.verification == "verified_float" => to_prove.push((i, m, stated, r)),
+                Some(r) if analysis.verification == Some(VerificationLevel::VerifiedFloat) => {
+                    to_prove.push((i, m, stated, r))
+                }
                 Some(r) => {
                     return Err(fail(&path, format!("{stated:e} is below the structural bound {r:e}")));
                 }

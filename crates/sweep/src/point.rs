@@ -2,6 +2,7 @@
 
 use exact::Rational;
 use generator::StoppingTime;
+pub use outcome::{Verdict, VerificationLevel};
 use serde_json::Value;
 use spec::{AnySpec, SpecError, Stopping};
 use std::collections::BTreeMap;
@@ -21,11 +22,11 @@ pub enum Level {
 /// What a sweep records about one point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outcome {
-    /// The verdict's certificate name, or `None` when the spec is invalid at
-    /// this point (`error` says why).
-    pub verdict: Option<&'static str>,
-    /// `exact`, `verified_float` or `numerical`.
-    pub level: &'static str,
+    /// The verdict, or `None` when the spec is invalid at this point
+    /// (`error` says why).
+    pub verdict: Option<Verdict>,
+    /// How firmly the verdict is established (`None`: no claim).
+    pub level: Option<VerificationLevel>,
     /// `Sigma^2` when stable.
     pub sigma2: Option<f64>,
     /// `T(eps, delta)` when stable and the spec asks the stopping question
@@ -41,7 +42,7 @@ impl Outcome {
     fn invalid(e: SpecError) -> Outcome {
         Outcome {
             verdict: None,
-            level: "none",
+            level: None,
             sigma2: None,
             stopping_time: None,
             growth_rate: None,
@@ -70,7 +71,7 @@ impl Evaluator {
     /// let two = exact::parse_number("5/2").unwrap();
     /// // I = (3, 5/2, 1): Sigma^2 = sigma^2 I1 (I2 - I3) / (I3 (I1 - I2)) = 0.09 * 9 = 0.81
     /// let out = ev.evaluate(&[two]);
-    /// assert_eq!(out.verdict, Some("stable"));
+    /// assert_eq!(out.verdict, Some(sweep::Verdict::Stable));
     /// assert!((out.sigma2.unwrap() - 0.81).abs() < 1e-12);
     /// assert!(sweep::Evaluator::new(spec::parse_any_spec(&text).unwrap(), vec!["J".into()], sweep::Level::Spec).is_err());
     /// ```
@@ -136,8 +137,8 @@ impl Evaluator {
                 let a = generator::analyse(&system, &settings);
                 let sigma2 = a.sigma2();
                 Outcome {
-                    verdict: Some(a.verdict.as_str()),
-                    level: spec::verification_level(&a),
+                    verdict: Some(a.verdict),
+                    level: Some(spec::verification_level(&a)),
                     sigma2,
                     // T from Sigma^2 rounded up, as in the certificate
                     stopping_time: stopping_time(s.stopping, a.sigma2_bound()),
@@ -167,12 +168,9 @@ fn stopping_time(stopping: Option<Stopping>, sigma2: Option<f64>) -> Option<Opti
 /// The record of a point read off a full certificate (fluids, and the
 /// cross-check of the short path).
 pub fn outcome_from_certificate(cert: &Value) -> Outcome {
-    let verdict = cert["verdict"].as_str().and_then(generator::Verdict::from_name).map(|v| v.as_str());
-    let level = match cert["level"].as_str() {
-        Some("exact") => "exact",
-        Some("verified_float") => "verified_float",
-        _ => "numerical",
-    };
+    let verdict = cert["verdict"].as_str().and_then(Verdict::from_name);
+    // Every level is kept as the certificate states it (`none`: no claim).
+    let level = cert["level"].as_str().and_then(VerificationLevel::from_name);
     let number = |v: &Value| v.as_f64().or_else(|| v.as_str().and_then(|s| s.parse().ok()));
     let sigma2 = cert.get("sigma2").and_then(number);
     let stopping_time = match (cert.get("stopping"), sigma2) {
@@ -208,7 +206,7 @@ fn string(out: &mut String, s: &str) {
 /// sweep, and the layout is fixed.
 ///
 /// ```
-/// let out = sweep::Outcome { verdict: Some("stable"), level: "exact", sigma2: Some(0.27),
+/// let out = sweep::Outcome { verdict: Some(sweep::Verdict::Stable), level: Some(sweep::VerificationLevel::Exact), sigma2: Some(0.27),
 ///     stopping_time: Some(Some(17.05)), growth_rate: None, error: None };
 /// let line = sweep::record_line("ab12", 3, &["I1".to_string()], &[exact::parse_number("3").unwrap()], &out);
 /// let v: serde_json::Value = serde_json::from_str(&line).unwrap();
@@ -238,7 +236,7 @@ pub fn record_line(id: &str, index: u64, names: &[String], values: &[Rational], 
     s.push('}');
     match (&o.verdict, &o.error) {
         (Some(v), _) => {
-            let _ = write!(s, ",\"verdict\":\"{v}\",\"level\":\"{}\"", o.level);
+            let _ = write!(s, ",\"verdict\":\"{v}\",\"level\":\"{}\"", VerificationLevel::name_of(o.level));
             if let Some(x) = o.sigma2 {
                 s.push_str(",\"sigma2\":");
                 number(&mut s, x);

@@ -3,7 +3,7 @@
 //! chunks in flight.
 
 use crate::plan::{Plan, Shard};
-use crate::point::{record_line, Evaluator};
+use crate::point::{record_line, Evaluator, Verdict};
 use rayon::prelude::*;
 use std::io::{self, Write};
 use std::sync::mpsc::sync_channel;
@@ -83,13 +83,11 @@ pub struct Summary {
     pub verdicts: [u64; 5],
 }
 
-const VERDICTS: [&str; 5] = ["stable", "linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"];
-
 impl Summary {
     /// `stable 1200, linearly_unstable 300, ...` (non-zero counts only).
     pub fn verdict_counts(&self) -> String {
         let parts: Vec<String> =
-            VERDICTS.iter().zip(self.verdicts).filter(|(_, c)| *c > 0).map(|(v, c)| format!("{v} {c}")).collect();
+            Verdict::ALL.iter().zip(self.verdicts).filter(|(_, c)| *c > 0).map(|(v, c)| format!("{v} {c}")).collect();
         if parts.is_empty() {
             "no verdicts".into()
         } else {
@@ -142,7 +140,7 @@ pub fn run(
         let outcome = evaluator.evaluate(&values);
         match outcome.verdict {
             Some(v) => {
-                if let Some(k) = VERDICTS.iter().position(|x| *x == v) {
+                if let Some(k) = Verdict::ALL.iter().position(|x| *x == v) {
                     chunk.summary.verdicts[k] += 1;
                 }
             }
