@@ -398,7 +398,7 @@ impl FramePencil {
 /// quantity and under a change of basis of the algebra: the multiplier
 /// directions are normalised in the metric of the starting `P`, and when
 /// `Q` does not depend on `M` the Casimir Hessian is not searched at all
-/// but constructed ([`FramePencil::k_for`]) for a target `S` just above the
+/// but constructed (as a Schur complement, `FramePencil::k_for`) for a target `S` just above the
 /// infimum, in the frame `[Z W]` where it is a Schur complement.
 ///
 /// `noise_conserves_all` says that every conserved quantity Poisson-commutes

@@ -86,8 +86,8 @@ impl EnsembleSettings {
     /// Most histogram cells, `outputs x bins` (80 MB of counts).
     pub const MAX_HISTOGRAM_CELLS: usize = 10_000_000;
     /// Most bytes of statistics held while running: every block of
-    /// [`BLOCK`] paths keeps its own statistics (histogram, means, norms at
-    /// each output time) until its wave of [`WAVE`] blocks is reduced in
+    /// 256 paths keeps its own statistics (histogram, means, norms at
+    /// each output time) until its wave of 64 blocks is reduced in
     /// order, which makes the numbers independent of the thread count.
     pub const MAX_STATISTICS_BYTES: u64 = 2 << 30;
 
