@@ -40,6 +40,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod bound;
 mod certify;
 pub mod closed_forms;
 mod form;
@@ -53,6 +54,7 @@ mod spectral;
 mod stopping;
 mod verified;
 
+pub use bound::{family_lower_bound, InfimumWitness};
 pub use certify::{certify_sigma2, sigma2_bound_holds, sigma2_gap, ExactSigma2};
 pub use form::{generator_form, GeneratorForm};
 pub use growth::{growth_constant, GrowthConstant, GrowthError};

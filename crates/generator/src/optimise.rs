@@ -20,6 +20,7 @@
 //! finite `K` attains it or approaches it within the tolerance, and the
 //! certificate says which.
 
+use crate::bound::InfimumWitness;
 use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{condition_number, growth_constant, GrowthConstant};
 use crate::linearise::Linearisation;
@@ -61,12 +62,15 @@ pub struct Optimum {
     /// The floating-point infimum of `max(0, lambda_max)` over the freedom.
     pub infimum: f64,
     /// A certified rational lower bound on `Sigma^2` for every choice in the
-    /// family (when it can be proved: no free multipliers and `Q`
-    /// independent of `M`).
+    /// family (when it can be proved, with `Q` independent of `M`; with free
+    /// multipliers the pipeline adds it at the exact level, see
+    /// [`crate::family_lower_bound`]).
     pub infimum_lower_bound: Option<Rational>,
-    /// The vector `x` of `ker G^T` proving it: the bound is
-    /// `max(0, x^T sQ x / x^T sP x)`, the same for every `M`.
-    pub infimum_witness: Option<Vec<Rational>>,
+    /// What proves it.
+    pub infimum_witness: Option<InfimumWitness>,
+    /// The free multipliers where the floating-point infimum was found (with
+    /// free multipliers and `Q` independent of `M`).
+    pub infimum_parameters: Option<Vec<f64>>,
     /// Whether the choice attains the infimum (to round-off) rather than
     /// approaching it within the tolerance.
     pub attained: bool,
@@ -522,6 +526,7 @@ pub fn optimise_choice(
         infimum,
         infimum_lower_bound: None,
         infimum_witness: None,
+        infimum_parameters: None,
         q_depends_on_m,
         method: "ellipsoid over (t, M)",
     })
@@ -688,7 +693,12 @@ fn optimise_restricted(
     let found = found?;
     let resolved = restricted_condition(&t_inf) <= RESOLVED;
     let infimum = if resolved { value } else { found.sigma2() };
-    Some(found.into_optimum(first, forms.first, first_growth, infimum.max(0.0), on_edge || !resolved, f, settings))
+    let mut optimum =
+        found.into_optimum(first, forms.first, first_growth, infimum.max(0.0), on_edge || !resolved, f, settings);
+    // Where the infimum was found, for a certified bound over the family
+    // (tried even where P is nearly singular: every claim is exact).
+    optimum.infimum_parameters = Some(t_inf);
+    Some(optimum)
 }
 
 /// `R^{-1}` for the thin QR factorisation `Z = U R` of a kernel basis, so
@@ -746,7 +756,7 @@ impl AtMultipliers {
         // The bound is certified only without free multipliers (it holds
         // for every K at the given multipliers, and then that is the family).
         let (infimum_lower_bound, infimum_witness) = match self.witness {
-            Some((bound, x)) if f == 0 => (Some(bound), Some(x)),
+            Some((bound, x)) if f == 0 => (Some(bound), Some(InfimumWitness::Vector(x))),
             _ => (None, None),
         };
         let scale = if infimum > 0.0 { infimum } else { first_growth.sigma2 };
@@ -766,6 +776,7 @@ impl AtMultipliers {
             infimum,
             infimum_lower_bound,
             infimum_witness,
+            infimum_parameters: None,
             attained,
             within_tolerance,
             q_depends_on_m: false,

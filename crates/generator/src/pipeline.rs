@@ -1,6 +1,7 @@
 //! The whole finite-dimensional pipeline: from a validated [`System`] to a
 //! verdict with its evidence.
 
+use crate::bound::{family_lower_bound, InfimumWitness};
 use crate::certify::{certify_sigma2, ExactSigma2};
 use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{growth_constant, GrowthConstant};
@@ -76,8 +77,8 @@ pub struct OptimumSummary {
     /// A certified lower bound on `Sigma^2` for every choice in the family,
     /// when one could be proved (see [`crate::Optimum::infimum_lower_bound`]).
     pub infimum_lower_bound: Option<Rational>,
-    /// Its witness in `ker G^T`.
-    pub infimum_witness: Option<Vec<Rational>>,
+    /// What proves it.
+    pub infimum_witness: Option<InfimumWitness>,
     /// Whether the chosen `P` attains it.
     pub attained: bool,
     /// Whether the chosen `P` is within the tolerance of it.
@@ -86,6 +87,8 @@ pub struct OptimumSummary {
     pub q_depends_on_m: bool,
     /// How it was found.
     pub method: &'static str,
+    /// Where the free multipliers' infimum was found (floating point).
+    pub infimum_parameters: Option<Vec<f64>>,
 }
 
 impl StableEvidence {
@@ -288,7 +291,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     } else {
         None
     };
-    let (best_choice, best_form, best_growth, summary) = match optimum {
+    let (best_choice, best_form, best_growth, mut summary) = match optimum {
         Some(o) => {
             let summary = OptimumSummary {
                 infimum: o.infimum,
@@ -298,6 +301,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
                 within_tolerance: o.within_tolerance,
                 q_depends_on_m: o.q_depends_on_m,
                 method: o.method,
+                infimum_parameters: o.infimum_parameters.clone(),
             };
             (o.choice, o.form, o.growth, Some(summary))
         }
@@ -308,6 +312,21 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     } else {
         None
     };
+    if let (Some(e), Some(o)) = (&exact, summary.as_mut()) {
+        // With free multipliers, a certified bound over the whole family
+        // (exact work, so at the exact level only), kept if consistent with
+        // the certified value.
+        if let (None, false, Some(t)) = (&o.infimum_lower_bound, o.q_depends_on_m, &o.infimum_parameters) {
+            let variation = analysis.variation.as_ref().expect("set above");
+            let lin = analysis.linearisation.as_ref().expect("set above");
+            if let Some((rho, x)) = family_lower_bound(variation, lin, best_choice.sign, t) {
+                if rho <= e.value {
+                    o.infimum_lower_bound = Some(rho);
+                    o.infimum_witness = Some(InfimumWitness::Matrix(x));
+                }
+            }
+        }
+    }
     if let Some(e) = &exact {
         // The certificate states Sigma^2 as a double beside the rational:
         // one that no double holds is not rounded to 0 (towards "stable").

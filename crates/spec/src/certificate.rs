@@ -275,12 +275,15 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
             Some(o) => {
                 opt.insert("optimised".into(), Value::Bool(true));
                 opt.insert("infimum".into(), float_json(o.infimum));
-                if let (Some(lb), Some(x)) = (&o.infimum_lower_bound, &o.infimum_witness) {
+                if let (Some(lb), Some(w)) = (&o.infimum_lower_bound, &o.infimum_witness) {
                     opt.insert("infimum_lower_bound".into(), Value::from(lb.to_string()));
-                    opt.insert(
-                        "infimum_witness".into(),
-                        Value::Array(x.iter().map(|r| Value::from(r.to_string())).collect()),
-                    );
+                    match w {
+                        generator::InfimumWitness::Vector(x) => opt.insert(
+                            "infimum_witness".into(),
+                            Value::Array(x.iter().map(|r| Value::from(r.to_string())).collect()),
+                        ),
+                        generator::InfimumWitness::Matrix(x) => opt.insert("infimum_witness_matrix".into(), matrix(x)),
+                    };
                 }
                 opt.insert("gap".into(), float_json((s.growth.sigma2 - o.infimum).max(0.0)));
                 opt.insert("attained".into(), Value::Bool(o.attained));

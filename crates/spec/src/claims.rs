@@ -253,11 +253,15 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<VerificationLe
     for b in &r.b {
         a_tilde.add_scaled_assign(&half, &b.mul(b));
     }
-    let pa = p.mul(&a_tilde);
-    let mut q = pa.add(&pa.transpose());
-    for b in &r.b {
-        q = q.add(&b.transpose().mul(&p).mul(b));
-    }
+    let form_of = |p: &Matrix| {
+        let pa = p.mul(&a_tilde);
+        let mut q = pa.add(&pa.transpose());
+        for b in &r.b {
+            q = q.add(&b.transpose().mul(p).mul(b));
+        }
+        q
+    };
+    let q = form_of(&p);
     if rational_matrix(get(cert, &["Q"])?, "$.Q")? != q {
         return Err(failure("$.Q", "differs from the Q rebuilt from the spec and the Casimir choice"));
     }
@@ -271,7 +275,9 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<VerificationLe
         (p.scale(&Rational::from(-1)), q.scale(&Rational::from(-1)))
     };
     verify_generalized_eigenvalues(&sp, &sq, cert)?;
+    let hessians: Vec<Matrix> = ks.iter().map(|k| Matrix::from_rows(&k.hessian_at(mu))).collect();
     verify_infimum_bound(&r, &g, &sp, &sq, cert)?;
+    verify_family_bound(&r, &g, &hessians, &form_of, &sp, &sq, cert)?;
     // Sigma^2.
     let sigma2_float = get(cert, &["sigma2"])?.as_f64().ok_or_else(|| failure("$.sigma2", "expected a number"))?;
     let Some(exact_value) = cert.get("sigma2_exact") else {
@@ -500,6 +506,78 @@ fn verify_generalized_eigenvalues(sp: &Matrix, sq: &Matrix, cert: &Value) -> Cla
 /// quantity is moved by the noise, checked here) and no free multipliers
 /// (`G` of full column rank), so every choice has
 /// `lambda_max >= x^T sQ x / x^T sP x`.
+/// The bound over a family with free multipliers: a witness `X ⪰ 0`
+/// (`optimisation.infimum_witness_matrix`) with `G^T X = 0` and
+/// `G^T B_i X B_i^T G = 0` (so `<X, P>` and `<X, Q>` do not see `M`),
+/// `<X, L(D)> = rho <X, D>` for every direction `D = sum_l v_l D^2K_l`,
+/// `v` in `ker G` (so they do not see the multipliers either), and
+/// `<X, sQ - rho sP> >= 0`: then every choice with `sP ≻ 0` has
+/// `lambda_max(sQ, sP) >= <X, sQ> / <X, sP> >= rho` (see
+/// `generator::family_lower_bound`).
+fn verify_family_bound(
+    r: &Rebuilt,
+    g: &Matrix,
+    hessians: &[Matrix],
+    form_of: &dyn Fn(&Matrix) -> Matrix,
+    sp: &Matrix,
+    sq: &Matrix,
+    cert: &Value,
+) -> Claim<()> {
+    let opt = cert.get("optimisation");
+    let Some(witness) = opt.and_then(|o| o.get("infimum_witness_matrix")) else {
+        return Ok(());
+    };
+    let wpath = "$.optimisation.infimum_witness_matrix";
+    let path = "$.optimisation.infimum_lower_bound";
+    let rho = rational(opt.and_then(|o| o.get("infimum_lower_bound")).ok_or_else(|| failure(path, "missing"))?, path)?;
+    let x = rational_matrix(witness, wpath)?;
+    if x.nrows() != r.n || x.ncols() != r.n || !x.is_symmetric() {
+        return Err(failure(wpath, format!("expected a symmetric {} x {} matrix", r.n, r.n)));
+    }
+    if x.is_zero() || !x.is_positive_semidefinite() {
+        return Err(failure(wpath, "not a non-zero positive semidefinite matrix"));
+    }
+    let gt = g.transpose();
+    if !gt.mul(&x).is_zero() {
+        return Err(failure(wpath, "its columns are not in ker G^T: <X, P> would depend on M"));
+    }
+    for b in &r.b {
+        if !gt.mul(b).mul(&x).mul(&b.transpose()).mul(g).is_zero() {
+            return Err(failure(wpath, "G^T B X B^T G is not zero: <X, Q> would depend on M"));
+        }
+    }
+    let inner = |a: &Matrix, b: &Matrix| {
+        let mut s = Rational::zero();
+        for i in 0..a.nrows() {
+            for j in 0..a.ncols() {
+                s += &a[(i, j)] * &b[(i, j)];
+            }
+        }
+        s
+    };
+    for (j, v) in g.null_space().iter().enumerate() {
+        let mut d = Matrix::zeros(r.n, r.n);
+        for (vl, h) in v.iter().zip(hessians) {
+            if !vl.is_zero() {
+                d.add_scaled_assign(vl, h);
+            }
+        }
+        if inner(&x, &form_of(&d)) != &rho * &inner(&x, &d) {
+            return Err(failure(
+                path,
+                format!("<X, L(D)> != rho <X, D> along free multiplier direction {j}: the bound would move with the multipliers"),
+            ));
+        }
+    }
+    if !inner(&x, sp).is_positive() {
+        return Err(failure(wpath, "<X, sP> is not positive"));
+    }
+    if (inner(&x, sq) - &rho * &inner(&x, sp)).is_negative() {
+        return Err(failure(path, "<X, sQ - rho sP> is negative: X does not prove the bound"));
+    }
+    Ok(())
+}
+
 fn verify_infimum_bound(r: &Rebuilt, g: &Matrix, sp: &Matrix, sq: &Matrix, cert: &Value) -> Claim<()> {
     let opt = cert.get("optimisation");
     let (Some(lb), witness) =
@@ -508,6 +586,9 @@ fn verify_infimum_bound(r: &Rebuilt, g: &Matrix, sp: &Matrix, sq: &Matrix, cert:
         return Ok(());
     };
     let path = "$.optimisation.infimum_lower_bound";
+    if witness.is_none() && opt.and_then(|o| o.get("infimum_witness_matrix")).is_some() {
+        return Ok(()); // the matrix witness: verify_family_bound
+    }
     let lb = rational(lb, path)?;
     let x = rational_vector(
         witness.ok_or_else(|| failure("$.optimisation.infimum_witness", "missing"))?,
