@@ -19,6 +19,7 @@ use crate::certificate::certify;
 use crate::json::{as_object, required, SpecError};
 use crate::parse::spec_from_value;
 use crate::settings::EngineSettings;
+use outcome::{Verdict, VerificationLevel};
 use serde_json::Value;
 
 /// Relative tolerance for floating-point fields.
@@ -55,7 +56,9 @@ pub struct CheckReport {
     /// The spec's name.
     pub name: String,
     /// The verdict confirmed.
-    pub verdict: String,
+    pub verdict: Verdict,
+    /// The verification level established (`None`: no claim is made).
+    pub level: Option<VerificationLevel>,
     /// `Sigma^2`, if stable.
     pub sigma2: Option<f64>,
 }
@@ -88,7 +91,7 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
     spec.settings = EngineSettings::from_json(settings, "$.settings")
         .map_err(|e| fail(&e.path, format!("the recorded settings are not valid: {}", e.message)))?;
     // 1. The claims, exactly, along the checker's own path.
-    crate::claims::verify_claims(&spec, cert)
+    let level = crate::claims::verify_claims(&spec, cert)
         .map_err(|f| fail(&f.path, format!("claim does not hold: {}", f.message)))?;
     // 2. Everything else, by re-deriving the certificate and comparing.
     let rederived = certify(&spec);
@@ -107,7 +110,8 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
     check_direction(direction, &rederived.analysis)?;
     Ok(CheckReport {
         name: spec.name.clone(),
-        verdict: rederived.analysis.verdict.as_str().to_string(),
+        verdict: rederived.analysis.verdict,
+        level: Some(level),
         sigma2: rederived.analysis.sigma2(),
     })
 }

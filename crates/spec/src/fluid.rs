@@ -568,7 +568,12 @@ pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport,
     // `compare_with` skips the top-level `engine`: a newer engine may re-check an older certificate.
     let expected = fluid_certificate_json(&spec, &analysis);
     compare_with(&expected, cert, "$", 0.0, FLUID_TOLERANCE)?;
-    Ok(CheckReport { name: spec.name.clone(), verdict: analysis.verdict.as_str().to_string(), sigma2: analysis.sigma2 })
+    Ok(CheckReport {
+        name: spec.name.clone(),
+        verdict: analysis.verdict,
+        level: analysis.verification,
+        sigma2: analysis.sigma2,
+    })
 }
 
 /// The claims of a fluid certificate that are proved rather than compared:

@@ -10,6 +10,9 @@
 //!   spec itself.
 //! * [`check_certificate`] re-derives everything from the embedded spec and
 //!   compares; any altered number fails with the path of the field.
+//! * From Rust without JSON: [`certify_system`] certifies a
+//!   [`casimir::System`] built in code, and [`Certificate::check`] re-checks
+//!   the result (a heavy top in twelve lines in the docs of [`certify_system`]).
 //!
 //! ```
 //! let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
@@ -17,7 +20,7 @@
 //! let cert = spec::certify(&spec);
 //! assert_eq!(cert.json["verdict"], "stable");
 //! let report = spec::check_certificate(&cert.json.to_string()).unwrap();
-//! assert_eq!(report.verdict, "stable");
+//! assert_eq!(report.verdict, spec::Verdict::Stable);
 //! // Tampering with Sigma^2 is caught.
 //! let mut bad = cert.json.clone();
 //! bad["sigma2"] = serde_json::json!(0.09);
@@ -30,6 +33,7 @@ mod check;
 mod claims;
 mod fluid;
 mod json;
+mod library;
 mod parse;
 mod pretty;
 mod settings;
@@ -45,6 +49,8 @@ pub use fluid::{
     parse_fluid_spec, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
 pub use json::{parse_json, SpecError, MAX_MESSAGE_BYTES};
+pub use library::{certify_system, spec_of_system};
+pub use outcome::{Sign, Verdict, VerificationLevel};
 pub use parse::{parse_spec, spec_from_value, CasimirSource, Spec, Stopping, MAX_NOISE_FIELDS};
 pub use pretty::to_pretty_json;
 pub use settings::EngineSettings;
