@@ -74,7 +74,7 @@ macro_rules! named {
 }
 
 /// What the engine concluded about an equilibrium and its noise.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// A definite energy–Casimir form exists: nonlinearly (formally)
@@ -104,8 +104,9 @@ named!(Verdict, "verdict", [
 /// Strongest first: [`VerificationLevel::Exact`] and
 /// [`VerificationLevel::ExactStructure`] are proofs in exact arithmetic,
 /// [`VerificationLevel::VerifiedFloat`] is a rigorous floating-point
-/// criterion, and the last two are floating point without proof.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// criterion, and the last two are floating point without proof. The
+/// derived order is this one: `Exact < ExactStructure < ... < Float`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum VerificationLevel {
     /// Rational data, exact claims: `P` definite and `Sigma^2 P - Q`
@@ -154,7 +155,7 @@ impl VerificationLevel {
 ///
 /// The discriminants are `+1` and `-1`, so even an `as` cast gives the
 /// number certificates write.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 #[repr(i8)]
 pub enum Sign {
