@@ -30,6 +30,7 @@
 
 use crate::form::generator_form;
 use crate::linearise::Linearisation;
+use crate::pencil::generalized_eigen;
 use casimir::{SecondVariation, Sign};
 use exact::{Matrix, Rational};
 use nalgebra::DMatrix;
@@ -105,14 +106,8 @@ pub fn family_lower_bound(
         }
         (&a + a.transpose()) * 0.5
     };
-    let (pf, qf) = (at(&p0, &pd), at(&q0, &qd));
-    let l = pf.clone().cholesky()?.l();
-    let l_inv = l.clone().try_inverse()?;
-    let c = &l_inv * &qf * l_inv.transpose();
-    let eig = nalgebra::SymmetricEigen::try_new((&c + c.transpose()) * 0.5, f64::EPSILON, 1000 * (k + 1))?;
-    let mut order: Vec<usize> = (0..k).collect();
-    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-    let rho_star = eig.eigenvalues[order[0]];
+    let eig = generalized_eigen(&at(&p0, &pd), &at(&q0, &qd))?;
+    let rho_star = *eig.values.last()?;
     if !rho_star.is_finite() || rho_star <= 0.0 {
         return None; // a bound of 0 holds trivially
     }
@@ -154,7 +149,8 @@ pub fn family_lower_bound(
     // them, and rho a little under the estimate (a relative margin of 1e-12
     // to 1e-4, less the rounding of rho itself) so that the inequality has
     // room for the rounding of the vectors.
-    let v = l_inv.transpose() * DMatrix::from_fn(k, k, |i, j| eig.eigenvectors[(i, order[j])]);
+    // Largest first.
+    let v = DMatrix::from_fn(k, k, |i, j| eig.vectors[(i, k - 1 - j)]);
     let vq = integer_columns(&v, 15)?;
     for margin in [1e-12, 1e-9, 1e-6, 1e-4] {
         // decimal_near rounds away from zero (up, here) by less than

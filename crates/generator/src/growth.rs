@@ -1,8 +1,9 @@
 //! The sharpest growth constant `Sigma^2` from the generalized eigenproblem.
 
+use crate::pencil::{generalized_eigen, symmetric_eigen};
 use casimir::Sign;
 use exact::{binary_exponent, power_of_two, Matrix, Rational};
-use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use nalgebra::{DMatrix, DVector};
 use num_traits::Zero;
 
 /// The result of the generalized symmetric eigenproblem `Q v = l P v`.
@@ -183,32 +184,32 @@ fn growth_constant_normalised(p: &Matrix, q: &Matrix, sign: Sign) -> Result<Grow
     if c.iter().any(|x| !x.is_finite()) {
         return Err(GrowthError::NonFinite);
     }
-    let eig = SymmetricEigen::try_new(c, f64::EPSILON, 1000 * (n + 1)).ok_or(GrowthError::NoConvergence)?;
+    let eig = symmetric_eigen(c).ok_or(GrowthError::NoConvergence)?;
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+    let values: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
+    let w = eig.eigenvectors.column(order[n - 1]).into_owned();
     // v = L^{-T} D^{-1/2} w has v^T sP v = w^T w = 1.
     let lt = congruence.l.to_dmatrix().transpose();
-    assemble(&eig, &pf, &qf, condition, |w| lt.solve_upper_triangular(&DVector::from_fn(n, |i, _| w[i] / root_d[i])))
+    let v = lt
+        .solve_upper_triangular(&DVector::from_fn(n, |i, _| w[i] / root_d[i]))
+        .ok_or(GrowthError::NotPositiveDefinite)?;
+    assemble(values, v, &pf, &qf, condition)
 }
 
-/// The growth constant from the eigen-decomposition of the reduced matrix
-/// and the map `w -> v` back to a unit-`P`-norm vector of the algebra.
+/// The growth constant from the generalized eigenvalues (ascending) and a
+/// unit-`P`-norm eigenvector `v` of the largest.
 fn assemble(
-    eig: &SymmetricEigen<f64, nalgebra::Dyn>,
+    eigenvalues: Vec<f64>,
+    v: DVector<f64>,
     pf: &DMatrix<f64>,
     qf: &DMatrix<f64>,
     condition: f64,
-    back: impl Fn(&DVector<f64>) -> Option<DVector<f64>>,
 ) -> Result<GrowthConstant, GrowthError> {
-    let n = eig.eigenvalues.len();
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
-    let eigenvalues: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
-    let imax = *order.last().ok_or(GrowthError::NonFinite)?;
-    let lmax = eig.eigenvalues[imax];
+    let lmax = *eigenvalues.last().ok_or(GrowthError::NonFinite)?;
     if !lmax.is_finite() {
         return Err(GrowthError::NonFinite);
     }
-    let w: DVector<f64> = eig.eigenvectors.column(imax).into_owned();
-    let v = back(&w).ok_or(GrowthError::NotPositiveDefinite)?;
     if v.iter().any(|x| !x.is_finite()) {
         return Err(GrowthError::NonFinite);
     }
@@ -231,14 +232,9 @@ fn assemble(
 /// The generalized eigenproblem by a floating-point Cholesky factor of
 /// `sP` (for a well-conditioned `sP`): `None` if anything fails.
 fn float_pencil(pf: &DMatrix<f64>, qf: &DMatrix<f64>, condition: f64) -> Option<GrowthConstant> {
-    let n = pf.nrows();
-    let l = pf.clone().cholesky()?.l();
-    let lq = l.solve_lower_triangular(qf)?;
-    let c = l.solve_lower_triangular(&lq.transpose())?;
-    let eig = SymmetricEigen::try_new((&c + c.transpose()) * 0.5, f64::EPSILON, 1000 * (n + 1))?;
-    // v = L^{-T} w has v^T sP v = 1.
-    let lt = l.transpose();
-    assemble(&eig, pf, qf, condition, |w| lt.solve_upper_triangular(w)).ok()
+    let g = generalized_eigen(pf, qf)?;
+    let v = g.vectors.column(g.values.len() - 1).into_owned();
+    assemble(g.values, v, pf, qf, condition).ok()
 }
 
 /// `lambda_max / lambda_min` of a positive definite matrix in floating
@@ -248,7 +244,7 @@ pub fn condition_number(m: &DMatrix<f64>) -> f64 {
     if m.nrows() == 0 {
         return 1.0;
     }
-    let Some(e) = SymmetricEigen::try_new(m.clone(), f64::EPSILON, 1000 * (m.nrows() + 1)) else {
+    let Some(e) = symmetric_eigen(m.clone()) else {
         return f64::INFINITY;
     };
     let lo = e.eigenvalues.iter().fold(f64::INFINITY, |a, &b| a.min(b));

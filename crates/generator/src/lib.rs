@@ -49,6 +49,7 @@ mod instability;
 mod linearise;
 mod moments;
 mod optimise;
+mod pencil;
 mod pipeline;
 mod spectral;
 mod stopping;

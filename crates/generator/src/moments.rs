@@ -72,12 +72,7 @@ impl SecondMoments {
     /// ```
     pub fn worst_case_growth(&self, p: &DMatrix<f64>, t: f64) -> Option<f64> {
         let m = self.form_at(p, t);
-        let l = p.clone().cholesky()?.l();
-        let a = l.solve_lower_triangular(&m)?;
-        let c = l.solve_lower_triangular(&a.transpose())?;
-        let c = (&c + c.transpose()) * 0.5;
-        let e = nalgebra::SymmetricEigen::try_new(c, f64::EPSILON, 1000 * (self.n + 1))?;
-        Some(e.eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)))
+        crate::pencil::generalized_eigen(p, &m)?.values.last().copied()
     }
 
     /// The moment Lyapunov exponent `lim (1/t) log E|x_t|^2` (for a generic

@@ -24,10 +24,11 @@ use crate::bound::InfimumWitness;
 use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{condition_number, growth_constant, GrowthConstant};
 use crate::linearise::Linearisation;
+use crate::pencil::{generalized_eigen, symmetric_eigen};
 use casimir::Sign;
 use casimir::{CasimirChoice, Ellipsoid, SecondVariation};
 use exact::{Matrix, Rational};
-use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use nalgebra::{DMatrix, DVector};
 use num_traits::Zero;
 
 /// Settings of the optimisation, with documented defaults.
@@ -84,35 +85,15 @@ pub struct Optimum {
     pub method: &'static str,
 }
 
-fn sym_eigen(m: DMatrix<f64>) -> Option<SymmetricEigen<f64, nalgebra::Dyn>> {
-    if m.iter().any(|x| !x.is_finite()) {
-        return None;
-    }
-    let n = m.nrows();
-    SymmetricEigen::try_new(m, f64::EPSILON, 1000 * (n + 1))
-}
-
 /// `lambda_max(Q, P)` with its `P`-normalised eigenvector, or `None` when
 /// `P` is not numerically positive definite (then the eigenvector of
 /// `lambda_min(P)` is returned as the second member for a feasibility cut).
 fn top_generalized(p: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<(f64, DVector<f64>), DVector<f64>> {
     let n = p.nrows();
-    if let Some(chol) = p.clone().cholesky() {
-        let l = chol.l();
-        if let Some(lq) = l.solve_lower_triangular(q) {
-            if let Some(ct) = l.solve_lower_triangular(&lq.transpose()) {
-                let c = (&ct + ct.transpose()) * 0.5;
-                if let Some(eig) = sym_eigen(c) {
-                    let imax = (0..n).max_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j])).unwrap_or(0);
-                    let w = eig.eigenvectors.column(imax).into_owned();
-                    if let Some(v) = l.transpose().solve_upper_triangular(&w) {
-                        return Ok((eig.eigenvalues[imax], v));
-                    }
-                }
-            }
-        }
+    if let Some(g) = generalized_eigen(p, q).filter(|g| !g.values.is_empty()) {
+        return Ok((g.values[n - 1], g.vectors.column(n - 1).into_owned()));
     }
-    let u = sym_eigen(p.clone())
+    let u = symmetric_eigen(p.clone())
         .map(|e| {
             let imin = (0..n).min_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j])).unwrap_or(0);
             e.eigenvectors.column(imin).into_owned()
@@ -160,7 +141,7 @@ impl AffinePencil {
         let (p, q) = self.at(theta);
         let quad = |m: &DMatrix<f64>, v: &DVector<f64>| (v.transpose() * m * v)[(0, 0)];
         if self.cond_limit.is_finite() {
-            if let Some(e) = sym_eigen(p.clone()) {
+            if let Some(e) = symmetric_eigen(p.clone()) {
                 let n = p.nrows();
                 let imin = (0..n).min_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j])).unwrap_or(0);
                 let imax = (0..n).max_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j])).unwrap_or(0);
@@ -326,7 +307,7 @@ fn positive_part(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     if m.nrows() == 0 {
         return Some(m.clone()); // nalgebra's eigen-solver panics on an empty matrix
     }
-    let e = sym_eigen((m + m.transpose()) * 0.5)?;
+    let e = symmetric_eigen((m + m.transpose()) * 0.5)?;
     let d = DMatrix::from_diagonal(&e.eigenvalues.map(|x| x.max(0.0)));
     Some(&e.eigenvectors * d * e.eigenvectors.transpose())
 }
@@ -370,7 +351,7 @@ impl FramePencil {
             // the conserved directions (C^T v = 0). A Cholesky factor of a
             // numerically singular X would give garbage along v.
             let pseudo = || -> Option<DMatrix<f64>> {
-                let e = sym_eigen((&x + x.transpose()) * 0.5)?;
+                let e = symmetric_eigen((&x + x.transpose()) * 0.5)?;
                 let top = e.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 if e.eigenvalues.iter().any(|&v| v < -1e-12 * top) {
                     return None;
