@@ -129,12 +129,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         Some(points) => Sampling::Random { points, seed: args.seed },
         None => Sampling::Grid,
     };
-    let plan = Plan::new(ranges, sampling)
-        .map_err(|m| bad(format!("{}: {}", args.spec.display(), names.iter().fold(m, |m, n| quoting(m, n)))))?;
+    let plan = Plan::new(ranges, sampling).map_err(|m| {
+        bad(format!("{}: {}", args.spec.display(), names.iter().fold(m.to_string(), |m, n| quoting(m, n))))
+    })?;
     let level = if args.numeric { Level::Numeric } else { Level::Spec };
     let id = sweep::sweep_id(&spec, &plan, level);
     let evaluator = Evaluator::new(spec, names.clone(), level)
-        .map_err(|m| bad(format!("--param: {}", names.iter().fold(m, |m, n| quoting(m, n)))))?;
+        .map_err(|m| bad(format!("--param: {}", names.iter().fold(m.to_string(), |m, n| quoting(m, n)))))?;
     let shard = match &args.shard {
         Some(s) => Shard::parse(s).map_err(|m| bad(format!("--shard '{}': {m}", excerpt(s))))?,
         None => Shard::ALL,

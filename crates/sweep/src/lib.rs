@@ -36,8 +36,10 @@ mod point;
 mod resume;
 mod run;
 
-pub use plan::{Plan, Sampling, Shard, MAX_POINTS};
-pub use point::{outcome_from_certificate, record_line, Evaluator, Level, Outcome, Verdict, VerificationLevel};
+pub use plan::{Plan, PlanError, Sampling, Shard, MAX_POINTS};
+pub use point::{
+    outcome_from_certificate, record_line, Evaluator, Level, Outcome, UnknownParameter, Verdict, VerificationLevel,
+};
 pub use resume::{scan, Existing, ResumeError};
 pub use run::{run, Done, Summary};
 

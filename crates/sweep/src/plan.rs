@@ -45,8 +45,8 @@ impl Shard {
     /// assert_eq!(sweep::Shard::parse("1/4").unwrap(), sweep::Shard { k: 1, n: 4 });
     /// assert!(sweep::Shard::parse("4/4").is_err());
     /// ```
-    pub fn parse(text: &str) -> Result<Shard, String> {
-        let bad = || "expected K/N with 0 <= K < N (for example 0/4)".to_string();
+    pub fn parse(text: &str) -> Result<Shard, PlanError> {
+        let bad = || PlanError::BadShard;
         let (k, n) = text.split_once('/').ok_or_else(bad)?;
         let k: u64 = k.trim().parse().map_err(|_| bad())?;
         let n: u64 = n.trim().parse().map_err(|_| bad())?;
@@ -60,6 +60,29 @@ impl Shard {
     pub fn contains(&self, index: u64) -> bool {
         index % self.n == self.k
     }
+}
+
+/// Why a plan or a shard could not be made.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlanError {
+    /// No ranges at all.
+    #[error(
+        "nothing to sweep: give at least one --param NAME=START:STOP:COUNT (or ranges in the spec's sweep section)"
+    )]
+    Empty,
+    /// The same parameter in two ranges.
+    #[error("parameter '{0}' is swept twice")]
+    SweptTwice(String),
+    /// `--random 0`.
+    #[error("--random needs at least one point")]
+    NoRandomPoints,
+    /// More than [`MAX_POINTS`].
+    #[error("the sweep has more than {MAX_POINTS} points")]
+    TooManyPoints,
+    /// A shard that is not `K/N` with `0 <= K < N`.
+    #[error("expected K/N with 0 <= K < N (for example 0/4)")]
+    BadShard,
 }
 
 /// The points of a sweep.
@@ -83,13 +106,13 @@ impl Plan {
     /// let last: Vec<String> = plan.point(14).iter().map(|r| r.to_string()).collect();
     /// assert_eq!(last, ["4", "1"]);
     /// ```
-    pub fn new(ranges: Vec<ParamRange>, sampling: Sampling) -> Result<Plan, String> {
+    pub fn new(ranges: Vec<ParamRange>, sampling: Sampling) -> Result<Plan, PlanError> {
         if ranges.is_empty() {
-            return Err("nothing to sweep: give at least one --param NAME=START:STOP:COUNT (or ranges in the spec's sweep section)".into());
+            return Err(PlanError::Empty);
         }
         for (i, r) in ranges.iter().enumerate() {
             if ranges[..i].iter().any(|q| q.name == r.name) {
-                return Err(format!("parameter '{}' is swept twice", r.name));
+                return Err(PlanError::SweptTwice(r.name.clone()));
             }
         }
         let len = match sampling {
@@ -97,9 +120,9 @@ impl Plan {
             Sampling::Random { points, .. } => Some(points),
         };
         let len = match len {
-            Some(0) => return Err("--random needs at least one point".into()),
+            Some(0) => return Err(PlanError::NoRandomPoints),
             Some(l) if l <= MAX_POINTS => l,
-            _ => return Err(format!("the sweep has more than {MAX_POINTS} points")),
+            _ => return Err(PlanError::TooManyPoints),
         };
         Ok(Plan { ranges, sampling, len })
     }
@@ -199,10 +222,14 @@ mod tests {
     fn oversized_and_empty_plans_are_refused() {
         let big = |n: &str| ParamRange::parse(&format!("{n}=0:1:1000000000")).unwrap();
         let err = Plan::new(vec![big("a"), big("b"), big("c")], Sampling::Grid).unwrap_err();
-        assert!(err.contains("more than"), "{err}");
-        assert!(Plan::new(vec![], Sampling::Grid).is_err());
+        assert_eq!(err, PlanError::TooManyPoints);
+        assert!(err.to_string().contains("more than"), "{err}");
+        assert_eq!(Plan::new(vec![], Sampling::Grid).unwrap_err(), PlanError::Empty);
         let a = ParamRange::parse("a=0:1:2").unwrap();
-        assert!(Plan::new(vec![a.clone(), a.clone()], Sampling::Grid).unwrap_err().contains("twice"));
-        assert!(Plan::new(vec![a], Sampling::Random { points: 0, seed: 1 }).is_err());
+        assert_eq!(
+            Plan::new(vec![a.clone(), a.clone()], Sampling::Grid).unwrap_err(),
+            PlanError::SweptTwice("a".into())
+        );
+        assert_eq!(Plan::new(vec![a], Sampling::Random { points: 0, seed: 1 }).unwrap_err(), PlanError::NoRandomPoints);
     }
 }

@@ -51,6 +51,16 @@ impl Outcome {
     }
 }
 
+/// A swept name that is not a parameter of the spec.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{message}")]
+pub struct UnknownParameter {
+    /// The name given.
+    pub name: String,
+    /// What to say, with the spec's parameters.
+    pub message: String,
+}
+
 /// Certifies a spec at swept parameter values.
 pub struct Evaluator {
     spec: AnySpec,
@@ -75,11 +85,11 @@ impl Evaluator {
     /// assert!((out.sigma2.unwrap() - 0.81).abs() < 1e-12);
     /// assert!(sweep::Evaluator::new(spec::parse_any_spec(&text).unwrap(), vec!["J".into()], sweep::Level::Spec).is_err());
     /// ```
-    pub fn new(spec: AnySpec, names: Vec<String>, level: Level) -> Result<Evaluator, String> {
+    pub fn new(spec: AnySpec, names: Vec<String>, level: Level) -> Result<Evaluator, UnknownParameter> {
         let known = spec.parameter_names();
         for n in &names {
             if !known.contains(n) {
-                return Err(spec::unknown_parameter(n, &known));
+                return Err(UnknownParameter { message: spec::unknown_parameter(n, &known), name: n.clone() });
             }
         }
         let fixed = spec.parameters();
