@@ -121,7 +121,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     } else {
         args.params
             .iter()
-            .map(|p| ParamRange::parse(p).map_err(|m| bad(format!("--param {}", quoting(m, p)))))
+            .map(|p| ParamRange::parse(p).map_err(|m| bad(format!("--param {}", quoting(m.0, p)))))
             .collect::<Result<_, _>>()?
     };
     let names: Vec<String> = ranges.iter().map(|r| r.name.clone()).collect();

@@ -54,7 +54,7 @@ pub use outcome::{Sign, Verdict, VerificationLevel};
 pub use parse::{parse_spec, spec_from_value, CasimirSource, Spec, Stopping, MAX_NOISE_FIELDS};
 pub use pretty::to_pretty_json;
 pub use settings::EngineSettings;
-pub use sweep::{to_f64, unknown_parameter, Annotation, ParamRange, SweepSection, MAX_RANGE_COUNT};
+pub use sweep::{to_f64, unknown_parameter, Annotation, ParamRange, RangeError, SweepSection, MAX_RANGE_COUNT};
 
 /// A spec of either kind: a Lie–Poisson system (finite-dimensional) or a
 /// shear flow (`"fluid": {...}`).

@@ -37,6 +37,12 @@ pub struct ParamRange {
     pub count: u64,
 }
 
+/// Why a range `NAME=START:STOP:COUNT` was refused (the message says what
+/// is wrong, without a path: callers add the option or the JSON path).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct RangeError(pub String);
+
 impl ParamRange {
     /// Parse `NAME=START:STOP:COUNT` (`START` and `STOP` are numbers or
     /// rationals such as `3/10`). The error says what is wrong, without a
@@ -46,46 +52,48 @@ impl ParamRange {
     /// let r = spec::ParamRange::parse("p=0:4:41").unwrap();
     /// assert_eq!((r.name.as_str(), r.count), ("p", 41));
     /// assert_eq!(r.value(10).to_string(), "1");
-    /// assert!(spec::ParamRange::parse("p=0:4:0").unwrap_err().contains("COUNT"));
-    /// assert!(spec::ParamRange::parse("p=4:0:5").unwrap_err().contains("START"));
+    /// assert!(spec::ParamRange::parse("p=0:4:0").unwrap_err().to_string().contains("COUNT"));
+    /// assert!(spec::ParamRange::parse("p=4:0:5").unwrap_err().to_string().contains("START"));
     /// ```
-    pub fn parse(text: &str) -> std::result::Result<ParamRange, String> {
+    pub fn parse(text: &str) -> std::result::Result<ParamRange, RangeError> {
         let Some((name, range)) = text.split_once('=') else {
-            return Err(format!("'{text}': expected NAME=START:STOP:COUNT"));
+            return Err(RangeError(format!("'{text}': expected NAME=START:STOP:COUNT")));
         };
         let name = name.trim();
         if !crate::parse::is_identifier(name) {
-            return Err(format!("'{name}' is not a parameter name (letters, digits, '_')"));
+            return Err(RangeError(format!("'{name}' is not a parameter name (letters, digits, '_')")));
         }
         let parts: Vec<&str> = range.split(':').collect();
         if parts.len() != 3 {
-            return Err(format!("'{text}': expected NAME=START:STOP:COUNT with three ':'-separated fields"));
+            return Err(RangeError(format!(
+                "'{text}': expected NAME=START:STOP:COUNT with three ':'-separated fields"
+            )));
         }
         let number = |s: &str, what: &str| {
-            parse_number(s).map_err(|e| format!("'{text}': {what} '{}' is not a number: {e}", s.trim()))
+            parse_number(s).map_err(|e| RangeError(format!("'{text}': {what} '{}' is not a number: {e}", s.trim())))
         };
         let start = number(parts[0], "START")?;
         let stop = number(parts[1], "STOP")?;
         let count: u64 = parts[2]
             .trim()
             .parse()
-            .map_err(|_| format!("'{text}': COUNT '{}' is not a positive integer", parts[2].trim()))?;
+            .map_err(|_| RangeError(format!("'{text}': COUNT '{}' is not a positive integer", parts[2].trim())))?;
         if count == 0 {
-            return Err(format!("'{text}': COUNT must be at least 1, got 0"));
+            return Err(RangeError(format!("'{text}': COUNT must be at least 1, got 0")));
         }
         if count > MAX_RANGE_COUNT {
-            return Err(format!("'{text}': COUNT must be at most {MAX_RANGE_COUNT}, got {count}"));
+            return Err(RangeError(format!("'{text}': COUNT must be at most {MAX_RANGE_COUNT}, got {count}")));
         }
         if start > stop {
-            return Err(format!(
+            return Err(RangeError(format!(
                 "'{text}': START ({start}) exceeds STOP ({stop}); ranges run upwards (swap them: {name}={stop}:{start}:{count})"
-            ));
+            )));
         }
         if start == stop && count != 1 {
-            return Err(format!("'{text}': START equals STOP, so COUNT must be 1, got {count}"));
+            return Err(RangeError(format!("'{text}': START equals STOP, so COUNT must be 1, got {count}")));
         }
         if start != stop && count == 1 {
-            return Err(format!("'{text}': COUNT 1 needs START equal to STOP (a single value)"));
+            return Err(RangeError(format!("'{text}': COUNT 1 needs START equal to STOP (a single value)")));
         }
         Ok(ParamRange { name: name.to_string(), start, stop, count })
     }
@@ -175,7 +183,7 @@ pub(crate) fn read_sweep_section(v: Option<&Value>, path: &str, names: &[String]
         let rpath = child(path, "ranges");
         for (i, e) in as_array(r, &rpath)?.iter().enumerate() {
             let p = index(&rpath, i);
-            let range = ParamRange::parse(as_str(e, &p)?).map_err(|m| SpecError::new(&p, m))?;
+            let range = ParamRange::parse(as_str(e, &p)?).map_err(|m| SpecError::new(&p, m.0))?;
             if !names.contains(&range.name) {
                 return Err(SpecError::new(&p, unknown_parameter(&range.name, names)));
             }
