@@ -6,9 +6,8 @@ use crate::messages::excerpt;
 use crate::paths::{ensure_output_dir, file_stem_noted, write_atomic, write_failure};
 use crate::plots::{write_density, write_growth, DensityChart, GrowthChart};
 use crate::Failure;
-use nalgebra::DMatrix;
 use serde_json::{json, Value};
-use simulate::{run_ensemble, EnsembleSettings, EnsembleStats, LinearModel, Model, Observable, Scheme, Target};
+use simulate::{EnsembleSettings, EnsembleStats, Scheme, Study, StudyError, StudySettings};
 use std::path::PathBuf;
 
 /// Options of `verify simulate`.
@@ -114,13 +113,18 @@ fn check_histogram_limits(args: &SimulateArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Rough cost per path-step in seconds, from the benchmarks: closed-form
-/// exponentials (so3, se3) versus a matrix exponential per step.
-fn cost_per_step(model: &Model) -> f64 {
-    if model.closed_form_exponential() {
-        4e-8
-    } else {
-        3e-6
+/// A study error as a failure naming the flag.
+fn study_failure(e: StudyError, coords: &[String]) -> Failure {
+    match e {
+        StudyError::EpsilonDelta { delta, epsilon } => {
+            bad(format!("--delta/--epsilon: need 0 < delta < epsilon, got delta = {delta}, epsilon = {epsilon}"))
+        }
+        StudyError::Escaped { index, extent } => bad(format!(
+            "--dt: the pilot run's paths left every bounded range ({} reached {:?}); lower --dt",
+            coords[index], extent
+        )),
+        StudyError::Ensemble(e) => ensemble_failure(e),
+        other => Failure::Failed(format!("internal: {other}")),
     }
 }
 
@@ -139,63 +143,39 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let scheme = Scheme::from_name(&args.scheme)
         .ok_or_else(|| bad(format!("--scheme: '{}' is not 'lie' or 'heun'", excerpt(&args.scheme))))?;
     let cert = spec::certify(&spec);
-    let analysis = &cert.analysis;
     let system = &spec.system;
     let coords = system.algebra().coordinates();
-    let n = coords.len();
-    let mu_e: Vec<f64> = system.equilibrium().iter().map(exact::rational_to_f64).collect();
     let observable = match &args.observable {
-        Some(name) => coords.iter().position(|c| c == name).ok_or_else(|| {
+        Some(name) => Some(coords.iter().position(|c| c == name).ok_or_else(|| {
             bad(format!("--observable: unknown coordinate '{}' (coordinates: {})", excerpt(name), coords.join(", ")))
-        })?,
-        None => mu_e.iter().position(|x| *x != 0.0).unwrap_or(0),
+        })?),
+        None => None,
     };
-    let delta = args.delta.or(spec.stopping.map(|s| s.delta)).unwrap_or(1e-3);
-    let epsilon = args.epsilon.or(spec.stopping.map(|s| s.epsilon)).unwrap_or(0.1);
-    if !(delta.is_finite() && delta > 0.0 && epsilon.is_finite() && epsilon > delta) {
-        return Err(bad(format!(
-            "--delta/--epsilon: need 0 < delta < epsilon, got delta = {delta}, epsilon = {epsilon}"
-        )));
-    }
-    let stable = analysis.stable.as_ref();
-    let sigma2 = stable.map(|s| s.sigma2());
-    let stopping_time = sigma2.filter(|s| *s > 0.0).map(|s| (epsilon / delta).ln() / s);
-    let t_end = args.t_end.unwrap_or_else(|| stopping_time.map_or(20.0, |t| (8.0 * t).clamp(1.0, 200.0)));
-    // The norm P (sign-adjusted) and the perturbation: sqrt(delta) along the
-    // fastest-growing direction for a stable spec, else along the observable.
-    let (p, direction) = match stable {
-        Some(s) => (s.choice.p.to_dmatrix() * s.choice.sign.as_f64(), s.growth.direction.clone()),
-        None => {
-            let mut v = vec![0.0; n];
-            v[observable] = 1.0;
-            (DMatrix::identity(n, n), v)
-        }
-    };
-    let x0: Vec<f64> = direction.iter().map(|v| v * delta.sqrt()).collect();
-    let mu0: Vec<f64> = mu_e.iter().zip(&x0).map(|(m, x)| m + x).collect();
-    let model = Model::new(system);
-    let radius = mu0.iter().map(|x| x * x).sum::<f64>().sqrt().max(1.0); // before the pilot run
-    let settings = EnsembleSettings {
+    let settings = StudySettings {
         paths: args.paths,
         dt: args.dt,
-        t_end,
+        t_end: args.t_end,
         outputs: args.outputs,
         seed: args.seed,
-        observable: Observable { index: observable, lo: -1.05 * radius, hi: 1.05 * radius, bins: args.bins },
-        norm: Some((p.clone(), mu_e.clone())),
-        epsilon: Some(epsilon),
+        bins: args.bins,
+        scheme,
+        observable,
+        epsilon: args.epsilon.or(spec.stopping.map(|s| s.epsilon)).unwrap_or(0.1),
+        delta: args.delta.or(spec.stopping.map(|s| s.delta)).unwrap_or(1e-3),
     };
-    settings.validate(n).map_err(ensemble_failure)?;
+    let prepared = simulate::prepare(system, &cert.analysis, &settings).map_err(|e| study_failure(e, coords))?;
+    let (epsilon, delta, sigma2, stopping_time) =
+        (prepared.epsilon, prepared.delta, prepared.sigma2, prepared.stopping_time);
+    let observable = prepared.observable;
     let threads = rayon::current_num_threads() as f64;
     // More threads than cores (RAYON_NUM_THREADS up to 4 per core) do not
     // run faster: the estimate counts the cores that work.
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get) as f64;
-    let runs = if stable.is_some() { 2.0 } else { 1.0 };
-    let estimate = settings.path_steps() * cost_per_step(&model) * runs / threads.min(cores);
+    let estimate = prepared.estimated_seconds(threads.min(cores));
     if estimate > 900.0 && !args.force {
         return Err(bad(format!(
             "--paths/--dt/--t-end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass --force",
-            settings.path_steps(),
+            prepared.ensemble.path_steps(),
             estimate / 60.0
         )));
     }
@@ -203,77 +183,33 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         eprintln!(
             "note: about {:.0} s of computation ({:.2e} path-steps on {} threads)",
             estimate,
-            settings.path_steps(),
+            prepared.ensemble.path_steps(),
             threads
         );
     }
-    // A pilot run (1% of the paths, at most 200) finds the range the
-    // observable actually explores, for the histogram.
-    let pilot = EnsembleSettings { paths: (args.paths / 100).clamp(1, 200), ..settings.clone() };
-    let extent = run_ensemble(&Target::Nonlinear { model: &model, scheme, mu0: mu0.clone() }, &pilot, &|_| {})
-        .map_err(ensemble_failure)?
-        .observable_extent;
-    if !(extent.0.is_finite() && extent.1.is_finite()) {
-        return Err(bad(format!(
-            "--dt: the pilot run's paths left every bounded range ({} reached {:?}); lower --dt",
-            coords[observable], extent
-        )));
-    }
-    let half = 0.5 * (extent.1 - extent.0).max(1e-9);
-    let centre = 0.5 * (extent.0 + extent.1);
-    let settings = EnsembleSettings {
-        observable: Observable { lo: centre - 1.2 * half, hi: centre + 1.2 * half, ..settings.observable },
-        ..settings
-    };
-    let bar = crate::progress_bar(args.paths as u64 * runs as u64, "{bar:40} {pos}/{len} paths ({eta} left)");
+    let bar = crate::progress_bar(args.paths as u64 * prepared.ensembles(), "{bar:40} {pos}/{len} paths ({eta} left)");
     let tick = |k: u64| {
         if let Some(b) = &bar {
             b.inc(k)
         }
     };
-    let nonlinear = run_ensemble(&Target::Nonlinear { model: &model, scheme, mu0: mu0.clone() }, &settings, &tick)
-        .map_err(ensemble_failure)?;
-    let linear = match (stable, &analysis.linearisation) {
-        (Some(_), Some(lin)) => {
-            let lm = LinearModel::new(lin);
-            let s = EnsembleSettings { norm: Some((p.clone(), vec![0.0; n])), ..settings.clone() };
-            Some(run_ensemble(&Target::Linear { model: &lm, x0: x0.clone() }, &s, &tick).map_err(ensemble_failure)?)
-        }
-        _ => None,
-    };
+    let study = simulate::run(&prepared, &tick).map_err(|e| study_failure(e, coords))?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    // Exact moments of the linearised SDE from x0, the worst case, the exponent.
-    let moments = analysis.linearisation.as_ref().map(generator::SecondMoments::new);
+    let Study { nonlinear, linear, exact_over_delta: exact, worst_over_delta: worst, bound_over_delta: bound, .. } =
+        &study;
+    let (exact, worst, bound) = (exact.clone(), worst.clone(), bound.clone());
+    let lyapunov = study.lyapunov;
     let times = &nonlinear.times;
-    let exact: Option<Vec<f64>> = moments
-        .as_ref()
-        .filter(|_| stable.is_some())
-        .map(|m| times.iter().map(|t| m.expected_norm(&p, &x0, *t) / delta).collect());
-    let worst: Option<Vec<f64>> = moments
-        .as_ref()
-        .filter(|_| stable.is_some())
-        .map(|m| times.iter().map(|t| m.worst_case_growth(&p, *t).unwrap_or(f64::NAN)).collect());
-    let lyapunov = moments.as_ref().and_then(|m| m.lyapunov_exponent());
-    let bound: Option<Vec<f64>> = sigma2.map(|s| times.iter().map(|t| (s * t).exp()).collect());
-    // Exceedance: certified guarantee P <= (delta/eps) e^{Sigma^2 t} <= alpha for
-    // t <= ln(alpha eps / delta)/Sigma^2; empirical first time P > alpha.
-    let exceedance: Vec<Value> = [0.01, 0.1, 0.5]
+    let t_end = prepared.ensemble.t_end;
+    let mu0 = &prepared.mu0;
+    let exceedance: Vec<Value> = study
+        .exceedance
         .iter()
-        .map(|&alpha| {
-            let certified = sigma2.map(|s| {
-                let t = (alpha * epsilon / delta).ln();
-                if t < 0.0 {
-                    Value::from(0.0)
-                } else if s > 0.0 {
-                    Value::from(t / s)
-                } else {
-                    Value::from("infinity")
-                }
-            });
-            let empirical = times.iter().zip(&nonlinear.exceedance).find(|(_, p)| **p > alpha).map(|(t, _)| *t);
-            json!({ "level": alpha, "certified_until": certified, "empirical_first_exceeded": empirical })
+        .map(|e| {
+            let certified = e.certified_until.map(|t| if t.is_infinite() { Value::from("infinity") } else { Value::from(t) });
+            json!({ "level": e.level, "certified_until": certified, "empirical_first_exceeded": e.empirical_first_exceeded })
         })
         .collect();
     // Outputs.
@@ -304,20 +240,20 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             "scheme": scheme.as_str(), "observable": observable_name, "bins": args.bins,
             "mu0": mu0, "threads": threads as u64,
         },
-        "nonlinear": series(&nonlinear),
+        "nonlinear": series(nonlinear),
         "linearised": linear.as_ref().map(series),
         "exact_moments_over_delta": exact,
         "worst_case_over_delta": worst,
         "bound_over_delta": bound,
         "moment_lyapunov_exponent": lyapunov,
-        "histogram": { "range": [settings.observable.lo, settings.observable.hi], "counts": nonlinear.histogram },
+        "histogram": { "range": [study.histogram_range.0, study.histogram_range.1], "counts": nonlinear.histogram },
         "exceedance": exceedance,
     });
     let json_path = dir.join(format!("{file_stem}.json"));
     write_atomic(&json_path, spec::to_pretty_json(&report).as_bytes()).map_err(|e| write_failure(&json_path, &e))?;
     write_csv(
         &dir.join(format!("{file_stem}.csv")),
-        &nonlinear,
+        nonlinear,
         linear.as_ref(),
         exact.as_deref(),
         bound.as_deref(),
@@ -332,7 +268,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             observable: observable_name,
             times,
             histogram: &nonlinear.histogram,
-            range: (settings.observable.lo, settings.observable.hi),
+            range: study.histogram_range,
             mean: mean_obs,
             stopping_time,
         },

@@ -24,14 +24,18 @@
 //! stream per path ([`path_rng`]: xoshiro256++ seeded from the seed and the
 //! path index) and fixed-size blocks
 //! reduced in order, so the numbers do not depend on the thread count; it
-//! keeps only statistics at the output times.
+//! keeps only statistics at the output times. [`prepare`] and [`run`] make
+//! a whole study of an analysed system from them (pilot run, both
+//! ensembles, exact moments, exceedance against the certificate).
 #![warn(missing_docs)]
 
 mod ensemble;
 mod kernel;
 mod model;
 mod scheme;
+mod study;
 
 pub use ensemble::{path_rng, run_ensemble, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
 pub use model::Model;
 pub use scheme::{LinearModel, Scheme, Stepper};
+pub use study::{prepare, run, Exceedance, Prepared, Study, StudyError, StudySettings};
