@@ -1,12 +1,30 @@
 //! The largest eigenvalue of a symmetric operator given only by its action,
 //! by the Lanczos process with full reorthogonalisation.
 //!
-//! Written here because the operators are products of banded solves and
-//! diagonal scalings that are never formed (so a dense eigensolver does not
-//! apply), the sizes are at most a few thousand, and full
-//! reorthogonalisation against at most a few hundred vectors is the simplest
-//! variant that is robust without restarts. The Ritz values of the small
-//! tridiagonal matrix come from nalgebra's symmetric eigensolver.
+//! Why not a library solver. faer 0.24 has a matrix-free one,
+//! `faer::matrix_free::eigen::partial_self_adjoint_eigen` over a `LinOp`
+//! (thick-restart Lanczos), and it was considered (faer-0.24.4,
+//! `src/operator/eigen/mod.rs` and `src/linalg/evd/self_adjoint_eigen`):
+//!
+//! * it returns the eigenvalues of largest *magnitude*; `Sigma^2` is the
+//!   largest *algebraic* eigenvalue, often beside a larger negative one (a
+//!   shift `A + sI` would need a first solve for `s` and a second one);
+//! * it solves standard problems only; the walls' pencil `(Q, V)` is worked
+//!   in the `V` inner product with a banded solve (`largest_generalized_eigenvalue`);
+//! * it panics for `n <= 64` (its Krylov space is at least 64), and the
+//!   convergence tables start at `ny = 64`;
+//! * its stopping test is absolute and it reports no residual, while the
+//!   certificates state the Ritz residual relative to the spectrum's scale;
+//! * its operator must be `Sync`, and the walls' operator reuses scratch in
+//!   a `RefCell`.
+//!
+//! So this is the plain Lanczos process with full reorthogonalisation (at
+//! most a few hundred vectors for sizes of a few thousand, robust without
+//! restarts). Where the operator *is* formed (the periodic modes build `V`
+//! and `Q` densely, `modes.rs`) a dense eigensolver would also serve; Lanczos
+//! keeps one code path and the same stopping rule for both boundaries. The
+//! Ritz values of the small tridiagonal matrix come from nalgebra's
+//! symmetric eigensolver.
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
