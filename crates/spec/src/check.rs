@@ -72,8 +72,14 @@ pub fn check_certificate(text: &str) -> Result<CheckReport, CheckError> {
 /// Check a certificate given as a JSON value.
 pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
-    if map.get("spec").is_some_and(crate::fluid::is_fluid_spec) {
+    if map.get("spec").is_some_and(crate::is_fluid_spec) {
+        #[cfg(feature = "fluid")]
         return crate::fluid::check_fluid_certificate(cert);
+        #[cfg(not(feature = "fluid"))]
+        return Err(CheckError::BadInput(SpecError::new(
+            "$.spec.fluid",
+            "fluid certificates need the `fluid` feature of the spec crate (on by default)",
+        )));
     }
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     check_engine(map)?;

@@ -82,11 +82,6 @@ const TOP_KEYS: &[&str] = &["name", "description", "parameters", "fluid", "stopp
 const FLUID_KEYS: &[&str] =
     &["model", "x_period", "y_interval", "boundary", "shear_flow", "sound_speed", "noise", "ny", "x_modes"];
 
-/// Whether a spec value is a fluid spec (has a `fluid` object at the top).
-pub fn is_fluid_spec(v: &Value) -> bool {
-    v.get("fluid").is_some()
-}
-
 /// Parse a fluid spec from text.
 pub fn parse_fluid_spec(text: &str) -> Result<FluidSpec> {
     let value: Value = crate::json::parse_json(text)?;

@@ -26,11 +26,17 @@
 //! bad["sigma2"] = serde_json::json!(0.09);
 //! assert!(spec::check_certificate(&bad.to_string()).is_err());
 //! ```
+//!
+//! The fluid contract (shear flows, [`AnySpec::Fluid`]) is behind the
+//! default feature `fluid`; without it the crate does not build the fluid
+//! stack (the `fluid` crate and rayon), and a fluid spec or certificate is
+//! refused with a message naming the feature.
 #![warn(missing_docs)]
 
 mod certificate;
 mod check;
 mod claims;
+#[cfg(feature = "fluid")]
 mod fluid;
 mod json;
 mod library;
@@ -44,10 +50,22 @@ pub use certificate::{
 };
 pub use check::{check_certificate, check_certificate_value, CheckError, CheckReport, FLOAT_TOLERANCE};
 pub use claims::{verify_claims, ClaimFailure};
+#[cfg(feature = "fluid")]
 pub use fluid::{
-    certify_fluid, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value, is_fluid_spec,
-    parse_fluid_spec, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
+    certify_fluid, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value, parse_fluid_spec, FluidSpec,
+    FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
+
+/// Whether a spec value is a fluid spec (has a `fluid` object at the top).
+pub fn is_fluid_spec(v: &serde_json::Value) -> bool {
+    v.get("fluid").is_some()
+}
+
+/// The error for a fluid spec in a build without the `fluid` feature.
+#[cfg(not(feature = "fluid"))]
+fn fluid_unavailable() -> SpecError {
+    SpecError::new("$.fluid", "fluid specs need the `fluid` feature of the spec crate (on by default)")
+}
 pub use json::{parse_json, SpecError, MAX_MESSAGE_BYTES};
 pub use library::{certify_system, spec_of_system};
 pub use outcome::{Sign, Verdict, VerificationLevel};
@@ -63,6 +81,7 @@ pub enum AnySpec {
     /// A finite-dimensional system.
     Lie(Box<Spec>),
     /// A fluid.
+    #[cfg(feature = "fluid")]
     Fluid(Box<FluidSpec>),
 }
 
@@ -71,6 +90,7 @@ impl AnySpec {
     pub fn name(&self) -> &str {
         match self {
             AnySpec::Lie(s) => &s.name,
+            #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => &s.name,
         }
     }
@@ -79,6 +99,7 @@ impl AnySpec {
     pub fn sweep(&self) -> &SweepSection {
         match self {
             AnySpec::Lie(s) => &s.sweep,
+            #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => &s.sweep,
         }
     }
@@ -88,6 +109,7 @@ impl AnySpec {
     pub fn parameters(&self) -> std::collections::BTreeMap<String, exact::Rational> {
         match self {
             AnySpec::Lie(s) => s.parameters.clone(),
+            #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => s
                 .raw
                 .get("parameters")
@@ -116,6 +138,7 @@ impl AnySpec {
     pub fn raw(&self) -> &serde_json::Value {
         match self {
             AnySpec::Lie(s) => &s.raw,
+            #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => &s.raw,
         }
     }
@@ -124,6 +147,7 @@ impl AnySpec {
     pub fn certify(&self) -> serde_json::Value {
         match self {
             AnySpec::Lie(s) => certify(s).json,
+            #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => certify_fluid(s),
         }
     }
@@ -140,8 +164,32 @@ impl AnySpec {
 pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
     let value: serde_json::Value = json::parse_json(text)?;
     if is_fluid_spec(&value) {
-        fluid_spec_from_value(value).map(|s| AnySpec::Fluid(Box::new(s)))
+        #[cfg(feature = "fluid")]
+        return fluid_spec_from_value(value).map(|s| AnySpec::Fluid(Box::new(s)));
+        #[cfg(not(feature = "fluid"))]
+        return Err(fluid_unavailable());
     } else {
         spec_from_value(value).map(|s| AnySpec::Lie(Box::new(s)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Without the `fluid` feature a fluid spec or certificate is refused
+    /// with a path and the reason; with it, it parses.
+    #[test]
+    fn fluid_specs_follow_the_feature() {
+        let text = r#"{"name": "f", "fluid": {"model": "incompressible", "x_period": 6.283185307179586,
+            "y_interval": [-1, 1], "boundary": "walls", "shear_flow": "y^2", "noise": ["y"], "ny": 16, "x_modes": 2}}"#;
+        let parsed = super::parse_any_spec(text);
+        if cfg!(feature = "fluid") {
+            assert!(parsed.is_ok(), "{parsed:?}");
+        } else {
+            let e = parsed.unwrap_err();
+            assert_eq!(e.path, "$.fluid");
+            assert!(e.message.contains("`fluid` feature"), "{e}");
+            let cert = format!(r#"{{"spec": {text}}}"#);
+            assert!(super::check_certificate(&cert).unwrap_err().to_string().contains("`fluid` feature"));
+        }
     }
 }
