@@ -12,9 +12,12 @@
 //! * `<X, L(D_j)> = rho <X, D_j>` for every family direction `D_j`, and
 //! * `<X, sQ - rho sP> >= 0` at one choice (then at all of them),
 //!
-//! the quotient is at least `rho` for every `t` and `M`: `rho` is a lower
-//! bound on what any choice in the family can give (the dual of the
-//! quasi-convex minimisation over `t`).
+//! the quotient is at least `rho` for every `t` and `M` with `sP ≻ 0`:
+//! `rho` is a lower bound on what any choice of the family *with the same
+//! sign* can give (the dual of the quasi-convex minimisation over `t`, which
+//! is also over one sign). Choices where `P` is definite with the other
+//! sign, when the family has any, are not covered: there `<X, -sP>` is
+//! positive and the inequality can fail.
 //!
 //! The witness is `X = Z (sum_i c_i v_i v_i^T) Z^T` with weights `c >= 0`
 //! (positive semidefinite by construction) on rational vectors `v_i` of

@@ -63,7 +63,8 @@ pub struct Optimum {
     /// The floating-point infimum of `max(0, lambda_max)` over the freedom.
     pub infimum: f64,
     /// A certified rational lower bound on `Sigma^2` for every choice in the
-    /// family (when it can be proved, with `Q` independent of `M`; with free
+    /// family with `P` definite of the choice's sign (when it can be proved,
+    /// with `Q` independent of `M`; with free
     /// multipliers the pipeline adds it at the exact level, see
     /// [`crate::family_lower_bound`]).
     pub infimum_lower_bound: Option<Rational>,

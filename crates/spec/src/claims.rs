@@ -21,8 +21,9 @@
 //!   `(1 - 1e-9) S` (tightness, also exact);
 //!   the stored `P`, `Q` equal the rebuilt ones; every stored generalized
 //!   eigenvalue of `(Q, P)` to `1e-9` of the largest (exact inertia counts);
-//!   the certified lower bound on every choice's `Sigma^2`, from its
-//!   witness in `ker G^T`;
+//!   the certified lower bound on the `Sigma^2` of every choice with `P`
+//!   definite of the certificate's sign, from its witness in `ker G^T` (a
+//!   vector, or a matrix when the multipliers are free);
 //! * `not_an_equilibrium`: `ad*_{Dh(mu_e)} mu_e` recomputed, nonzero, equal to
 //!   the stored residual;
 //! * `noise_incompatible`: the residuals `ad*_{sigma_i} mu_e` recomputed, one of
@@ -500,18 +501,13 @@ fn verify_generalized_eigenvalues(sp: &Matrix, sq: &Matrix, cert: &Value) -> Cla
     Ok(())
 }
 
-/// The certified lower bound on `Sigma^2` for every Casimir choice: a
-/// vector `x` with `G^T x = 0` (so `x^T P x` and `x^T Q x` do not depend
-/// on `M`: `G M G^T x = 0`, and `x^T L(G M G^T) x = 0` when no conserved
-/// quantity is moved by the noise, checked here) and no free multipliers
-/// (`G` of full column rank), so every choice has
-/// `lambda_max >= x^T sQ x / x^T sP x`.
 /// The bound over a family with free multipliers: a witness `X ⪰ 0`
 /// (`optimisation.infimum_witness_matrix`) with `G^T X = 0` and
 /// `G^T B_i X B_i^T G = 0` (so `<X, P>` and `<X, Q>` do not see `M`),
 /// `<X, L(D)> = rho <X, D>` for every direction `D = sum_l v_l D^2K_l`,
 /// `v` in `ker G` (so they do not see the multipliers either), and
-/// `<X, sQ - rho sP> >= 0`: then every choice with `sP ≻ 0` has
+/// `<X, sQ - rho sP> >= 0`: then every choice with `sP ≻ 0` (the
+/// certificate's sign `s`; the other sign is not covered) has
 /// `lambda_max(sQ, sP) >= <X, sQ> / <X, sP> >= rho` (see
 /// `generator::family_lower_bound`).
 fn verify_family_bound(
@@ -578,6 +574,12 @@ fn verify_family_bound(
     Ok(())
 }
 
+/// The certified lower bound on `Sigma^2` for every Casimir choice: a
+/// vector `x` with `G^T x = 0` (so `x^T P x` and `x^T Q x` do not depend
+/// on `M`: `G M G^T x = 0`, and `x^T L(G M G^T) x = 0` when no conserved
+/// quantity is moved by the noise, checked here) and no free multipliers
+/// (`G` of full column rank), so every choice has
+/// `lambda_max >= x^T sQ x / x^T sP x`.
 fn verify_infimum_bound(r: &Rebuilt, g: &Matrix, sp: &Matrix, sq: &Matrix, cert: &Value) -> Claim<()> {
     let opt = cert.get("optimisation");
     let (Some(lb), witness) =
