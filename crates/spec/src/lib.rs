@@ -52,8 +52,8 @@ pub use check::{check_certificate, check_certificate_value, CheckError, CheckRep
 pub use claims::{verify_claims, ClaimFailure};
 #[cfg(feature = "fluid")]
 pub use fluid::{
-    certify_fluid, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value, parse_fluid_spec, FluidSpec,
-    FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
+    certify_fluid, certify_fluid_spec, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value,
+    parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
 
 /// Whether a spec value is a fluid spec (has a `fluid` object at the top).
