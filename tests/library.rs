@@ -75,3 +75,23 @@ fn unstable_and_off_equilibrium_systems_from_rust() {
     let err = spec::spec_of_system("", &build(["1", "0", "0"]), &settings, None).unwrap_err();
     assert_eq!(err.path, "$.name", "{err}");
 }
+
+/// Fluids through the library: the Rayleigh-stable channel `U = -cos y`
+/// (`U'' > 0`: the pseudomomentum is conserved by the drift and by every
+/// noise field, so `Sigma^2 = 0` by structure). The certificate records the
+/// pipeline's fixed constants; editing one fails the check.
+#[test]
+fn fluid_certificates_from_rust_record_their_constants() {
+    let text = r#"{"name": "rayleigh", "fluid": {"model": "incompressible", "x_period": "2*pi",
+        "y_interval": [-1, 1], "boundary": "walls", "shear_flow": "-cos(y)",
+        "noise": ["0.3*sin(y)", "0.1*y"], "ny": 32, "x_modes": 2}}"#;
+    let cert = spec::certify_fluid_spec(&spec::parse_fluid_spec(text).unwrap());
+    assert_eq!((cert.verdict(), cert.level()), (spec::Verdict::Stable, Some(spec::VerificationLevel::ExactStructure)));
+    assert_eq!(cert.sigma2(), Some(0.0));
+    let report = cert.check().unwrap();
+    assert_eq!(report.level, Some(spec::VerificationLevel::ExactStructure));
+    assert_eq!(cert.json["constants"]["verify_margin_growth"], 30.0);
+    let mut edited = cert.json.clone();
+    edited["constants"]["verify_margin_growth"] = 10.0.into();
+    assert!(spec::check_fluid_certificate(&edited).is_err());
+}

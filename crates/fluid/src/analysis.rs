@@ -325,7 +325,7 @@ fn pow2(e: i32) -> f64 {
 /// The exponent `e` with `max |eta_k| / 2^e` in `[1/2, 1)` over the samples
 /// and the nodes (0 for no noise).
 fn noise_exponent(profile: &Profile, nodes: &[f64]) -> i32 {
-    let ys = profile.samples(4096);
+    let ys = profile.samples(crate::constants::PROFILE_SAMPLES);
     let max = profile
         .eta
         .iter()
@@ -464,7 +464,7 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
     let paper_choice_sigma2 = paper_form_at(&fine, &coef).and_then(|f| sigma2_all_modes(&fine, &coef, &f, &ks, tol));
     let shift_curve = match &choice {
         Choice::Pseudomomentum { sign } => {
-            let samples = profile.samples(4096);
+            let samples = profile.samples(crate::constants::PROFILE_SAMPLES);
             let us: Vec<f64> = samples.iter().map(|y| profile.u[0].eval(*y)).collect();
             let (umin, umax) = us.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
             let range = (umax - umin).max(1e-12 * umax.abs().max(1.0));
@@ -508,9 +508,10 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
             let sigma2 = s.lambda_max.max(0.0);
             let mut upper = None;
             let mut form_verified = false;
-            let mut margin = 1e-8;
-            for _ in 0..5 {
-                let bar = sigma2 * (1.0 + margin) + margin * 1e-3 * s.ritz.scale + s.ritz.residual;
+            use crate::constants::{VERIFY_ATTEMPTS, VERIFY_MARGIN_GROWTH, VERIFY_MARGIN_START, VERIFY_RITZ_WEIGHT};
+            let mut margin = VERIFY_MARGIN_START;
+            for _ in 0..VERIFY_ATTEMPTS {
+                let bar = sigma2 * (1.0 + margin) + margin * VERIFY_RITZ_WEIGHT * s.ritz.scale + s.ritz.residual;
                 let (def, ineq) = mode.verify(&form, &coef, bar);
                 form_verified = def;
                 if !def {
@@ -520,7 +521,7 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
                     upper = Some(bar);
                     break;
                 }
-                margin *= 30.0;
+                margin *= VERIFY_MARGIN_GROWTH;
             }
             Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
         })
@@ -677,20 +678,26 @@ fn inconclusive_or_unstable(
     }
     let coarse = ny / 2 - (ny / 2) % if profile.boundary == Boundary::Walls { crate::grid::ELEMENT_DEGREE } else { 1 };
     let ks = wavenumbers(problem);
-    let u_scale =
-        profile.samples(1024).iter().map(|y| profile.u[0].eval(*y).abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
-    let rates: Vec<Option<UnstableMode>> =
-        ks.par_iter()
-            .map(|&(m, k)| {
-                let fine = growth_rate(profile, ny, k)?;
-                let coarse_rate = growth_rate(profile, coarse.max(16), k)?;
-                // A growth rate is evidence when it is far above rounding
-                // (relative to k max|U|) and converged between the two grids.
-                let floor = 1e-6 * k * u_scale;
-                (fine > floor && coarse_rate > floor && (fine - coarse_rate).abs() <= 1e-3 * fine)
-                    .then_some(UnstableMode { m, k, growth_rate: fine, growth_rate_coarse: coarse_rate, ny })
-            })
-            .collect();
+    let u_scale = profile
+        .samples(crate::constants::SCALE_SAMPLES)
+        .iter()
+        .map(|y| profile.u[0].eval(*y).abs())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let rates: Vec<Option<UnstableMode>> = ks
+        .par_iter()
+        .map(|&(m, k)| {
+            let fine = growth_rate(profile, ny, k)?;
+            let coarse_rate = growth_rate(profile, coarse.max(16), k)?;
+            // A growth rate is evidence when it is far above rounding
+            // (relative to k max|U|) and converged between the two grids.
+            let floor = crate::constants::INSTABILITY_FLOOR * k * u_scale;
+            (fine > floor
+                && coarse_rate > floor
+                && (fine - coarse_rate).abs() <= crate::constants::INSTABILITY_AGREEMENT * fine)
+                .then_some(UnstableMode { m, k, growth_rate: fine, growth_rate_coarse: coarse_rate, ny })
+        })
+        .collect();
     let instability = rates.into_iter().flatten().max_by(|a, b| a.growth_rate.total_cmp(&b.growth_rate));
     let (verdict, reason) = match &instability {
         Some(u) => (
@@ -738,7 +745,7 @@ fn analyse_compressible(
 ) -> FluidAnalysis {
     let profile = &problem.profile;
     let (a, b) = profile.interval;
-    let ys = profile.samples(8192);
+    let ys = profile.samples(crate::constants::FINE_SAMPLES);
     let us: Vec<f64> = ys.iter().map(|y| profile.u[0].eval(*y)).collect();
     let u_abs = us.iter().fold(0.0f64, |m, u| m.max(u.abs()));
     let noise_residuals: Vec<f64> = profile

@@ -95,7 +95,7 @@ pub fn choose(profile: &Profile) -> Choice {
         SignProof::Zero => return Choice::Enstrophy,
         SignProof::Changes | SignProof::Unproved => {}
     }
-    let ys = profile.samples(8192);
+    let ys = profile.samples(crate::constants::FINE_SAMPLES);
     let upp: Vec<f64> = ys.iter().map(|y| profile.u[2].eval(*y)).collect();
     let u: Vec<f64> = ys.iter().map(|y| profile.u[0].eval(*y)).collect();
     let du_max = ys.iter().map(|y| profile.u[1].eval(*y).abs()).fold(0.0, f64::max);
@@ -154,7 +154,7 @@ pub fn choose(profile: &Profile) -> Choice {
     // simple zeros only: l'Hôpital needs U''' != 0 where U' != 0
     for z in &zeros {
         let (d1, d3) = (profile.u[1].eval(*z), profile.u[3].eval(*z));
-        if d3.abs() <= 1e-8 * upp_scale / length {
+        if d3.abs() <= crate::constants::MULTIPLE_ZERO * upp_scale / length {
             return Choice::NoForm {
                 reason: format!(
                     "U'' has a multiple zero at y = {z:.6} (U''' = {d3:.3e}, U' = {d1:.3e}): the Casimir weight (U + c)/U'' is unbounded or not determined there"

@@ -28,6 +28,7 @@ pub use outcome::{Sign, Verdict, VerificationLevel};
 pub mod analysis;
 pub mod banded;
 pub mod choice;
+pub mod constants;
 pub mod expr;
 pub mod grid;
 pub mod interval;

@@ -74,7 +74,7 @@ impl Profile {
     /// on a fine sample and at the grid nodes, and non-periodic data on a
     /// periodic interval. The field names are those of the spec.
     pub fn check(&self, extra_points: &[f64]) -> Result<(), ProfileError> {
-        let mut points = self.samples(4096);
+        let mut points = self.samples(crate::constants::PROFILE_SAMPLES);
         points.extend_from_slice(extra_points);
         let names = ["shear_flow", "shear_flow'", "shear_flow''", "shear_flow'''"];
         for y in &points {
@@ -124,7 +124,7 @@ impl Profile {
     /// The paper's constant `sup_y sum_k eta_k'(y)^2` (its eq. (eta-bound)),
     /// on a fine sample of the closed interval.
     pub fn paper_bound(&self) -> f64 {
-        self.samples(8192)
+        self.samples(crate::constants::FINE_SAMPLES)
             .iter()
             .map(|y| self.eta.iter().map(|[_, d]| d.eval(*y).powi(2)).sum::<f64>())
             .fold(0.0, f64::max)

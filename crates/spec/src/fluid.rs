@@ -339,6 +339,12 @@ fn read_settings(v: Option<&Value>, path: &str) -> Result<FluidSettings> {
     Ok(s)
 }
 
+/// The pipeline's fixed constants (`fluid::constants`), recorded so a
+/// certificate states every number its claims depended on.
+fn constants_json() -> Value {
+    Value::Object(fluid::constants::all().into_iter().map(|(k, v)| (k.to_string(), float_json(v))).collect())
+}
+
 fn settings_json(s: &FluidSettings) -> Value {
     json!({ "lanczos_tolerance": s.lanczos_tolerance, "convergence_from": s.convergence_from, "instability_ny": s.instability_ny })
 }
@@ -419,6 +425,7 @@ pub fn certify_fluid_spec(spec: &FluidSpec) -> FluidCertificate {
             c.insert("level".into(), Value::from("none"));
             c.insert("spec_sha256".into(), Value::from(spec_digest(&spec.raw)));
             c.insert("settings".into(), settings_json(&spec.settings));
+            c.insert("constants".into(), constants_json());
             c.insert("spec".into(), spec.raw.clone());
             Value::Object(c)
         }
@@ -576,6 +583,7 @@ pub fn fluid_certificate_json(spec: &FluidSpec, a: &FluidAnalysis) -> Value {
         );
     }
     put("settings", settings_json(&spec.settings));
+    put("constants", constants_json());
     put("spec", spec.raw.clone());
     Value::Object(c)
 }
