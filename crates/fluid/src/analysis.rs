@@ -241,6 +241,25 @@ fn form_for(choice: &Choice, profile: &Profile, coef: &Coefficients, grid: &YGri
     }
 }
 
+/// The form of a choice and the sentence saying why it gives stability, or
+/// why there is no form (`Err`, with the choice's own reason).
+fn form_and_reason(
+    choice: &Choice,
+    profile: &Profile,
+    coef: &Coefficients,
+    grid: &YGrid,
+    summary: &FormSummary,
+) -> Result<(Form, String), String> {
+    let reason = match choice {
+        Choice::Pseudomomentum { .. } => "U'' has one sign (Rayleigh): the pseudomomentum int omega^2/U'' (Casimir plus x-momentum, the limit |c| -> infinity of energy + Casimir + c momentum) is conserved by the drift and by every noise field (eta(y), 0), so Sigma^2 = 0".to_string(),
+        Choice::Enstrophy => "U'' = 0: the enstrophy int omega^2 is conserved by the drift and the noise, so Sigma^2 = 0".to_string(),
+        Choice::Forced { .. } => format!("{}; the form is definite for every x-mode and Sigma^2 is the largest generalised eigenvalue of (Q, V) over the modes", summary.casimir_weight),
+        Choice::NoForm { reason } => return Err(reason.clone()),
+    };
+    let form = form_for(choice, profile, coef, grid).ok_or("no form could be built for the chosen functional")?;
+    Ok((form, reason))
+}
+
 /// The grid at the problem's `ny`, the coefficients, and the form the
 /// pipeline uses (`None` when the profile admits none): for benchmarks and
 /// for users who want the per-mode operators themselves.
@@ -481,20 +500,19 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
         _ => vec![],
     };
 
-    let Some(form) = form_for(&choice, profile, &coef, &fine) else {
-        let reason = match &choice {
-            Choice::NoForm { reason } => reason.clone(),
-            _ => unreachable!(),
-        };
-        return inconclusive_or_unstable(
-            problem,
-            settings,
-            reason,
-            summary,
-            paper_bound,
-            paper_choice_sigma2,
-            shift_curve,
-        );
+    let (form, stable_reason) = match form_and_reason(&choice, profile, &coef, &fine, &summary) {
+        Ok(x) => x,
+        Err(reason) => {
+            return inconclusive_or_unstable(
+                problem,
+                settings,
+                reason,
+                summary,
+                paper_bound,
+                paper_choice_sigma2,
+                shift_curve,
+            )
+        }
     };
 
     // Per mode at the finest grid: Lanczos, then the dense verified check.
@@ -592,12 +610,7 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
         convergence.push(ConvergenceRow { ny, sigma2: s, sigma2_paper_choice: p });
     }
 
-    let reason = match &choice {
-        Choice::Pseudomomentum { .. } => "U'' has one sign (Rayleigh): the pseudomomentum int omega^2/U'' (Casimir plus x-momentum, the limit |c| -> infinity of energy + Casimir + c momentum) is conserved by the drift and by every noise field (eta(y), 0), so Sigma^2 = 0".to_string(),
-        Choice::Enstrophy => "U'' = 0: the enstrophy int omega^2 is conserved by the drift and the noise, so Sigma^2 = 0".to_string(),
-        Choice::Forced { .. } => format!("{}; the form is definite for every x-mode and Sigma^2 is the largest generalised eigenvalue of (Q, V) over the modes", summary.casimir_weight),
-        Choice::NoForm { .. } => unreachable!(),
-    };
+    let reason = stable_reason;
     FluidAnalysis {
         verdict: Verdict::Stable,
         reason,
