@@ -133,8 +133,20 @@ pub fn family_lower_bound(
         .chain([9u32, 15].into_iter().filter_map(|d| t_star.iter().map(|&x| exact::decimal_near(x, d)).collect()))
         .collect();
     for t_q in &candidates_t {
-        for digits in [6u32, 9, 12, 15] {
-            let Some(rho) = exact::decimal_near(rho_star, digits) else { continue };
+        // decimal_near rounds away from zero: a value a few ulps above a
+        // short decimal (0.0720000000000001) would give 0.0720001, so the
+        // estimate lowered by one unit of the last digit is rounded too.
+        let short = [6i32, 9, 12, 15].into_iter().flat_map(|d| {
+            [rho_star, rho_star * (1.0 - 10f64.powi(-d))]
+                .into_iter()
+                .filter_map(move |x| exact::decimal_near(x, d as u32))
+        });
+        let mut tried: Vec<Rational> = Vec::new();
+        for rho in short {
+            if tried.contains(&rho) {
+                continue;
+            }
+            tried.push(rho.clone());
             let fz = restricted_at(t_q, &q0, &qd).sub(&restricted_at(t_q, &p0, &pd).scale(&rho));
             let null = fz.null_space();
             if null.is_empty() {
