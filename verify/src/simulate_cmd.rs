@@ -199,7 +199,6 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     }
     let Study { nonlinear, linear, exact_over_delta: exact, worst_over_delta: worst, bound_over_delta: bound, .. } =
         &study;
-    let (exact, worst, bound) = (exact.clone(), worst.clone(), bound.clone());
     let lyapunov = study.lyapunov;
     let times = &nonlinear.times;
     let t_end = prepared.ensemble.t_end;
@@ -279,13 +278,13 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         let lin_mean = over(&lin.norm_mean);
         let se = over(&lin.norm_std_error);
         let mut curves = vec![("linearised ensemble (mean)".to_string(), lin_mean.clone(), 2, false)];
-        if let Some(e) = &exact {
+        if let Some(e) = exact {
             curves.push(("exact second moments".into(), e.clone(), 0, false));
         }
-        if let Some(w) = &worst {
+        if let Some(w) = worst {
             curves.push(("worst start (exact)".into(), w.clone(), 4, true));
         }
-        if let Some(b) = &bound {
+        if let Some(b) = bound {
             curves.push((
                 format!("certified bound exp(Sigma^2 t), Sigma^2 = {:.4}", sigma2.unwrap_or(0.0)),
                 b.clone(),

@@ -4,6 +4,7 @@
 //! linear-instability test, and the compressible noise-compatibility test.
 
 use crate::choice::{casimir_weight, choose, Choice};
+use crate::constants::{VERIFY_ATTEMPTS, VERIFY_MARGIN_GROWTH, VERIFY_MARGIN_START, VERIFY_RITZ_WEIGHT};
 use crate::expr::SignProof;
 use crate::grid::{Boundary, YGrid};
 use crate::interval::Interval;
@@ -526,7 +527,6 @@ fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &Y
             let sigma2 = s.lambda_max.max(0.0);
             let mut upper = None;
             let mut form_verified = false;
-            use crate::constants::{VERIFY_ATTEMPTS, VERIFY_MARGIN_GROWTH, VERIFY_MARGIN_START, VERIFY_RITZ_WEIGHT};
             let mut margin = VERIFY_MARGIN_START;
             for _ in 0..VERIFY_ATTEMPTS {
                 let bar = sigma2 * (1.0 + margin) + margin * VERIFY_RITZ_WEIGHT * s.ritz.scale + s.ritz.residual;
