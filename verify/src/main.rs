@@ -71,6 +71,12 @@ enum Command {
     PlotSweep(sweep_plots::PlotSweepArgs),
     /// Charts from fluid certificates (Sigma^2 per x-mode, convergence, Galilean shift).
     PlotFluid(fluid_plots::PlotFluidArgs),
+    /// Print the JSON Schema of specs (for editors: validation and completion).
+    Schema {
+        /// Which schema: `spec` (finite-dimensional systems), `fluid-spec`, or `certificate` (of a finite-dimensional spec).
+        #[arg(value_parser = ["spec", "fluid-spec", "certificate"], default_value = "spec")]
+        which: String,
+    },
     /// Re-check certificates.
     Check {
         /// Certificates (JSON).
@@ -207,6 +213,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Some(Command::Certify { spec, output }) => certify_command(&spec, output.as_deref()),
         Some(Command::Check { certificates }) => check_command(&certificates),
+        Some(Command::Schema { which }) => {
+            let schema = match which.as_str() {
+                "spec" => spec::document::spec_schema(),
+                "fluid-spec" => spec::document::fluid_spec_schema(),
+                _ => spec::record::certificate_schema(),
+            };
+            println!("{}", serde_json::to_string_pretty(&schema).unwrap_or_default());
+            Ok(())
+        }
         Some(Command::Simulate(args)) => simulate_cmd::run(&args),
         Some(Command::PlotFluid(args)) => fluid_plots::run(&args),
         Some(Command::Sweep(args)) => sweep_cmd::run(&args),

@@ -32,6 +32,7 @@ mod number;
 mod parse;
 mod poly;
 mod rational;
+pub mod syntax;
 mod text;
 mod upoly;
 

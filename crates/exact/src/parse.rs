@@ -1,16 +1,7 @@
 //! The spec's expression language, parsed straight into exact polynomials.
 //!
-//! Grammar (usual precedence, `^` binds tightest and is right-associative,
-//! unary minus binds looser than `^`, so `-x^2 = -(x^2)`):
-//!
-//! ```text
-//! expr   := term (('+' | '-') term)*
-//! term   := unary (('*' | '/') unary)*
-//! unary  := ('+' | '-') unary | power
-//! power  := atom ('^' unary)?
-//! atom   := number | identifier | '(' expr ')'
-//! ```
-//!
+//! The grammar is the one front end's, [`crate::syntax`] (shared with the
+//! fluid expressions in `y`); this module gives it its polynomial meaning.
 //! Identifiers are coordinates (the polynomial's variables) or parameters
 //! (substituted by their exact rational values). Division is allowed only by
 //! a nonzero constant and powers only with constant integer exponents (a
@@ -20,6 +11,7 @@
 
 use crate::number::{parse_number, Rational};
 use crate::poly::Poly;
+use crate::syntax::{Op, Semantics, SyntaxError, SyntaxErrorKind};
 use num_traits::{ToPrimitive, Zero};
 use std::collections::BTreeMap;
 
@@ -189,70 +181,16 @@ pub struct ParseError {
     pub position: usize,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Token<'t> {
-    Number(&'t str),
-    Ident(&'t str),
-    Op(char),
-}
-
-/// Split into tokens borrowing from the text (no allocation per token).
-/// Positions are byte offsets; the grammar is ASCII, so they equal character
-/// offsets up to the first non-ASCII character, which is itself an error.
-fn tokenize(text: &str) -> Result<Vec<(Token<'_>, usize)>, ParseError> {
-    let bytes = text.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len() / 2 + 1);
-    let mut i = 0;
-    while i < bytes.len() {
-        let c = bytes[i];
-        if c.is_ascii_whitespace() {
-            i += 1;
-        } else if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(|d| d.is_ascii_digit())) {
-            let start = i;
-            while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
-                i += 1;
-            }
-            if i < bytes.len() && (bytes[i] == b'e' || bytes[i] == b'E') {
-                let mut j = i + 1;
-                if j < bytes.len() && (bytes[j] == b'+' || bytes[j] == b'-') {
-                    j += 1;
-                }
-                if j < bytes.len() && bytes[j].is_ascii_digit() {
-                    while j < bytes.len() && bytes[j].is_ascii_digit() {
-                        j += 1;
-                    }
-                    i = j;
-                }
-            }
-            out.push((Token::Number(&text[start..i]), start));
-        } else if c.is_ascii_alphabetic() || c == b'_' {
-            let start = i;
-            while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
-                i += 1;
-            }
-            out.push((Token::Ident(&text[start..i]), start));
-        } else if b"+-*/^()".contains(&c) {
-            out.push((Token::Op(c as char), i));
-            i += 1;
-        } else {
-            let position = text[..i].chars().count();
-            let ch = text[i..].chars().next().unwrap_or('?');
-            return Err(ParseError { kind: ParseErrorKind::UnexpectedChar(ch), position });
-        }
-    }
-    Ok(out)
-}
-
-struct Parser<'a> {
-    tokens: Vec<(Token<'a>, usize)>,
-    pos: usize,
-    end: usize,
+/// The polynomial language: numbers are exact, symbols are coordinates or
+/// parameters, no function calls, division only by nonzero constants,
+/// constant integer exponents; every step is checked against the size
+/// limits before the polynomial it would make is formed.
+struct Polynomials<'a> {
     symbols: &'a Symbols,
-    depth: usize,
 }
 
 /// Parse an expression into an exact polynomial in the coordinates, with
-/// parameters substituted.
+/// parameters substituted (the grammar is [`crate::syntax`]'s).
 ///
 /// ```
 /// use exact::{parse_expression, Rational, Symbols, ParseErrorKind};
@@ -263,19 +201,8 @@ struct Parser<'a> {
 /// assert_eq!(e.kind, ParseErrorKind::DivisionByPolynomial);
 /// ```
 pub fn parse_expression(text: &str, symbols: &Symbols) -> Result<Poly, ParseError> {
-    if text.len() > symbols.limits.max_length {
-        return Err(ParseError { kind: ParseErrorKind::TooLong(symbols.limits.max_length), position: 0 });
-    }
-    let tokens = tokenize(text)?;
-    if tokens.is_empty() {
-        return Err(ParseError { kind: ParseErrorKind::Empty, position: 0 });
-    }
-    let mut p = Parser { tokens, pos: 0, end: text.len(), symbols, depth: 0 };
-    let value = p.expr()?;
-    if let Some((tok, at)) = p.tokens.get(p.pos) {
-        return Err(ParseError { kind: ParseErrorKind::UnexpectedToken(token_text(tok)), position: *at });
-    }
-    Ok(value)
+    let l = &symbols.limits;
+    crate::syntax::parse(text, &mut Polynomials { symbols }, l.max_depth, l.max_length)
 }
 
 /// The largest coefficient size in bits.
@@ -287,39 +214,24 @@ fn saturating_pow(b: usize, e: u32) -> usize {
     (0..e).fold(1usize, |acc, _| acc.saturating_mul(b))
 }
 
-fn token_text(t: &Token) -> String {
-    match t {
-        Token::Number(s) | Token::Ident(s) => s.to_string(),
-        Token::Op(c) => c.to_string(),
-    }
+fn fail<T>(kind: ParseErrorKind, position: usize) -> Result<T, ParseError> {
+    Err(ParseError { kind, position })
 }
 
-impl<'a> Parser<'a> {
+impl Polynomials<'_> {
     fn nvars(&self) -> usize {
         self.symbols.coordinates.len()
-    }
-
-    fn peek(&self) -> Option<&Token<'a>> {
-        self.tokens.get(self.pos).map(|(t, _)| t)
-    }
-
-    fn here(&self) -> usize {
-        self.tokens.get(self.pos).map_or(self.end, |(_, p)| *p)
-    }
-
-    fn err<T>(&self, kind: ParseErrorKind, position: usize) -> Result<T, ParseError> {
-        Err(ParseError { kind, position })
     }
 
     fn check_size(&self, p: Poly, position: usize) -> Result<Poly, ParseError> {
         let l = &self.symbols.limits;
         let bits = max_bits(&p);
         if bits > l.max_coefficient_bits {
-            return self.err(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, position);
+            return fail(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, position);
         }
         let degree = p.total_degree();
         if degree > l.max_degree || p.num_terms() > l.max_terms {
-            return self.err(
+            return fail(
                 ParseErrorKind::TooLarge {
                     degree,
                     max_degree: l.max_degree,
@@ -340,47 +252,65 @@ impl<'a> Parser<'a> {
         let per_factor = max_bits(base) + (usize::BITS - base.num_terms().leading_zeros()) as u64;
         let bits = per_factor.saturating_mul(m as u64);
         if bits > 2 * l.max_coefficient_bits {
-            return self.err(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
+            return fail(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
         }
         Ok(())
     }
+}
 
-    fn enter(&mut self) -> Result<(), ParseError> {
-        self.depth += 1;
-        if self.depth > self.symbols.limits.max_depth {
-            return self.err(ParseErrorKind::TooDeep(self.symbols.limits.max_depth), self.here());
-        }
-        Ok(())
+impl Semantics for Polynomials<'_> {
+    type Value = Poly;
+    type Function = std::convert::Infallible;
+    type Error = ParseError;
+
+    fn syntax(&self, e: SyntaxError) -> ParseError {
+        let kind = match e.kind {
+            SyntaxErrorKind::UnexpectedChar(c) => ParseErrorKind::UnexpectedChar(c),
+            SyntaxErrorKind::UnexpectedEnd => ParseErrorKind::UnexpectedEnd,
+            SyntaxErrorKind::UnexpectedToken(t) => ParseErrorKind::UnexpectedToken(t),
+            SyntaxErrorKind::TooDeep(d) => ParseErrorKind::TooDeep(d),
+            SyntaxErrorKind::TooLong(n) => ParseErrorKind::TooLong(n),
+            _ => ParseErrorKind::Empty,
+        };
+        ParseError { kind, position: e.position }
     }
 
-    fn expr(&mut self) -> Result<Poly, ParseError> {
-        self.enter()?;
-        let mut acc = self.term()?;
-        while let Some(Token::Op(c @ ('+' | '-'))) = self.peek().cloned() {
-            let at = self.here();
-            self.pos += 1;
-            let rhs = self.term()?;
-            acc = if c == '+' { acc.add(&rhs) } else { acc.sub(&rhs) };
-            acc = self.check_size(acc, at)?;
+    fn number(&mut self, text: &str, at: usize) -> Result<Poly, ParseError> {
+        match parse_number(text) {
+            Ok(v) => Ok(Poly::constant(self.nvars(), v)),
+            Err(e) => fail(ParseErrorKind::BadNumber(e.to_string()), at),
         }
-        self.depth -= 1;
-        Ok(acc)
     }
 
-    fn term(&mut self) -> Result<Poly, ParseError> {
-        let mut acc = self.unary()?;
-        while let Some(Token::Op(c @ ('*' | '/'))) = self.peek().cloned() {
-            let at = self.here();
-            self.pos += 1;
-            let rhs_at = self.here();
-            let rhs = self.unary()?;
-            if c == '*' {
+    fn symbol(&mut self, name: &str, at: usize) -> Result<Poly, ParseError> {
+        if let Some(i) = self.symbols.coordinates.iter().position(|c| c == name) {
+            return Ok(Poly::var(self.nvars(), i));
+        }
+        if let Some(v) = self.symbols.parameters.get(name) {
+            return Ok(Poly::constant(self.nvars(), v.clone()));
+        }
+        fail(ParseErrorKind::UnknownSymbol { name: name.to_string(), known: self.symbols.known_names() }, at)
+    }
+
+    fn function(&mut self, name: &str, at: usize) -> Result<Self::Function, ParseError> {
+        fail(ParseErrorKind::FunctionCall(name.to_string()), at)
+    }
+
+    fn call(&mut self, f: Self::Function, _: Poly, _: usize) -> Result<Poly, ParseError> {
+        match f {}
+    }
+
+    fn binary(&mut self, op: Op, acc: Poly, rhs: Poly, at: usize, rhs_at: usize) -> Result<Poly, ParseError> {
+        match op {
+            Op::Add => self.check_size(acc.add(&rhs), at),
+            Op::Sub => self.check_size(acc.sub(&rhs), at),
+            Op::Mul => {
                 // Bound the product before forming it.
                 let l = &self.symbols.limits;
                 let degree = acc.total_degree() + rhs.total_degree();
                 let terms = acc.num_terms().saturating_mul(rhs.num_terms());
                 if degree > l.max_degree || terms > l.max_terms.saturating_mul(4) {
-                    return self.err(
+                    return fail(
                         ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms, max_terms: l.max_terms },
                         at,
                     );
@@ -389,147 +319,77 @@ impl<'a> Parser<'a> {
                 // `terms` products: its size is bounded before it is formed.
                 let bits = 2 * (max_bits(&acc) + max_bits(&rhs)) + 64;
                 if bits > 4 * l.max_coefficient_bits {
-                    return self.err(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
+                    return fail(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
                 }
-                acc = self.check_size(acc.mul(&rhs), at)?;
-            } else {
+                self.check_size(acc.mul(&rhs), at)
+            }
+            Op::Div => {
                 let Some(d) = rhs.constant_value() else {
-                    return self.err(ParseErrorKind::DivisionByPolynomial, rhs_at);
+                    return fail(ParseErrorKind::DivisionByPolynomial, rhs_at);
                 };
                 if d.is_zero() {
-                    return self.err(ParseErrorKind::DivisionByZero, rhs_at);
+                    return fail(ParseErrorKind::DivisionByZero, rhs_at);
                 }
-                acc = self.check_size(acc.scale(&d.recip()), at)?;
+                self.check_size(acc.scale(&d.recip()), at)
             }
-        }
-        Ok(acc)
-    }
-
-    fn unary(&mut self) -> Result<Poly, ParseError> {
-        match self.peek() {
-            Some(Token::Op('-')) => {
-                self.pos += 1;
-                self.enter()?;
-                let v = self.unary()?.neg();
-                self.depth -= 1;
-                Ok(v)
-            }
-            Some(Token::Op('+')) => {
-                self.pos += 1;
-                self.enter()?;
-                let v = self.unary()?;
-                self.depth -= 1;
-                Ok(v)
-            }
-            _ => self.power(),
         }
     }
 
-    fn power(&mut self) -> Result<Poly, ParseError> {
-        let base = self.atom()?;
-        if let Some(Token::Op('^')) = self.peek() {
-            let at = self.here();
-            self.pos += 1;
-            let exp_at = self.here();
-            self.enter()?;
-            let exponent = self.unary()?;
-            self.depth -= 1;
-            let Some(e) = exponent.constant_value() else {
-                return self.err(ParseErrorKind::NonIntegerExponent, exp_at);
+    fn negate(&mut self, a: Poly, _: usize) -> Result<Poly, ParseError> {
+        Ok(a.neg())
+    }
+
+    fn power(&mut self, base: Poly, exponent: Poly, at: usize, exp_at: usize) -> Result<Poly, ParseError> {
+        let Some(e) = exponent.constant_value() else {
+            return fail(ParseErrorKind::NonIntegerExponent, exp_at);
+        };
+        if !e.is_integer() {
+            return fail(ParseErrorKind::NonIntegerExponent, exp_at);
+        }
+        let max = self.symbols.limits.max_exponent;
+        let magnitude = e.abs().to_integer().to_u32().filter(|&m| m <= max);
+        let Some(m) = magnitude else {
+            return fail(ParseErrorKind::ExponentTooLarge(e.to_string(), max), exp_at);
+        };
+        if e.is_negative() {
+            let Some(b) = base.constant_value() else {
+                return fail(ParseErrorKind::NegativePowerOfPolynomial, at);
             };
-            if !e.is_integer() {
-                return self.err(ParseErrorKind::NonIntegerExponent, exp_at);
-            }
-            let max = self.symbols.limits.max_exponent;
-            let magnitude = e.abs().to_integer().to_u32().filter(|&m| m <= max);
-            let Some(m) = magnitude else {
-                return self.err(ParseErrorKind::ExponentTooLarge(e.to_string(), max), exp_at);
-            };
-            if e.is_negative() {
-                let Some(b) = base.constant_value() else {
-                    return self.err(ParseErrorKind::NegativePowerOfPolynomial, at);
-                };
-                if b.is_zero() {
-                    return self.err(ParseErrorKind::ZeroToNegativePower, at);
-                }
-                self.bound_power_bits(&base, m, at)?;
-                return self.check_size(Poly::constant(self.nvars(), b.recip().pow(m)), at);
-            }
-            let l = &self.symbols.limits;
-            let degree = base.total_degree().saturating_mul(m);
-            if degree > l.max_degree {
-                return self.err(
-                    ParseErrorKind::TooLarge {
-                        degree,
-                        max_degree: l.max_degree,
-                        terms: base.num_terms(),
-                        max_terms: l.max_terms,
-                    },
-                    at,
-                );
+            if b.is_zero() {
+                return fail(ParseErrorKind::ZeroToNegativePower, at);
             }
             self.bound_power_bits(&base, m, at)?;
-            if let Some(b) = base.constant_value() {
-                return self.check_size(Poly::constant(self.nvars(), b.pow(m)), at);
-            }
-            // Terms of base^m: at most the monomials of degree <= m deg(base)
-            // in the variables base uses, refused before they are formed.
-            let vars = (0..self.nvars()).filter(|&i| base.terms().any(|(mono, _)| mono[i] > 0)).count();
-            let at_most = crate::poly::monomial_count(vars + 1, degree).min(usize::MAX as u128) as usize;
-            let terms = at_most.min(saturating_pow(base.num_terms(), m));
-            if terms > l.max_terms.saturating_mul(4) {
-                return self.err(
-                    ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms, max_terms: l.max_terms },
-                    at,
-                );
-            }
-            return self.check_size(base.pow(m), at);
+            return self.check_size(Poly::constant(self.nvars(), b.recip().pow(m)), at);
         }
-        Ok(base)
-    }
-
-    fn atom(&mut self) -> Result<Poly, ParseError> {
-        let at = self.here();
-        let Some((tok, _)) = self.tokens.get(self.pos).cloned() else {
-            return self.err(ParseErrorKind::UnexpectedEnd, self.end);
-        };
-        self.pos += 1;
-        match tok {
-            Token::Number(s) => match parse_number(s) {
-                Ok(v) => Ok(Poly::constant(self.nvars(), v)),
-                Err(e) => self.err(ParseErrorKind::BadNumber(e.to_string()), at),
-            },
-            Token::Ident(name) => {
-                if let Some(Token::Op('(')) = self.peek() {
-                    return self.err(ParseErrorKind::FunctionCall(name.to_string()), at);
-                }
-                if let Some(i) = self.symbols.coordinates.iter().position(|c| *c == name) {
-                    return Ok(Poly::var(self.nvars(), i));
-                }
-                if let Some(v) = self.symbols.parameters.get(name) {
-                    return Ok(Poly::constant(self.nvars(), v.clone()));
-                }
-                self.err(
-                    ParseErrorKind::UnknownSymbol { name: name.to_string(), known: self.symbols.known_names() },
-                    at,
-                )
-            }
-            Token::Op('(') => {
-                let v = self.expr()?;
-                match self.peek() {
-                    Some(Token::Op(')')) => {
-                        self.pos += 1;
-                        Ok(v)
-                    }
-                    Some(t) => {
-                        let t = token_text(t);
-                        self.err(ParseErrorKind::UnexpectedToken(t), self.here())
-                    }
-                    None => self.err(ParseErrorKind::UnexpectedEnd, self.end),
-                }
-            }
-            Token::Op(c) => self.err(ParseErrorKind::UnexpectedToken(c.to_string()), at),
+        let l = &self.symbols.limits;
+        let degree = base.total_degree().saturating_mul(m);
+        if degree > l.max_degree {
+            return fail(
+                ParseErrorKind::TooLarge {
+                    degree,
+                    max_degree: l.max_degree,
+                    terms: base.num_terms(),
+                    max_terms: l.max_terms,
+                },
+                at,
+            );
         }
+        self.bound_power_bits(&base, m, at)?;
+        if let Some(b) = base.constant_value() {
+            return self.check_size(Poly::constant(self.nvars(), b.pow(m)), at);
+        }
+        // Terms of base^m: at most the monomials of degree <= m deg(base)
+        // in the variables base uses, refused before they are formed.
+        let vars = (0..self.nvars()).filter(|&i| base.terms().any(|(mono, _)| mono[i] > 0)).count();
+        let at_most = crate::poly::monomial_count(vars + 1, degree).min(usize::MAX as u128) as usize;
+        let terms = at_most.min(saturating_pow(base.num_terms(), m));
+        if terms > l.max_terms.saturating_mul(4) {
+            return fail(
+                ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms, max_terms: l.max_terms },
+                at,
+            );
+        }
+        self.check_size(base.pow(m), at)
     }
 }
 

@@ -29,6 +29,7 @@
 //! a lookup.
 
 use crate::interval::Interval;
+use exact::syntax::{Op, Semantics, SyntaxError};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -283,15 +284,17 @@ impl<T: Scalar> Scalar for Jet<T> {
     }
 }
 
-struct Parser<'a> {
-    s: &'a [u8],
-    i: usize,
+/// The language of functions of `y`: numbers and parameters are doubles,
+/// `y` and `pi` are known, `sin cos exp sqrt` may be called, exponents are
+/// constant integers in `[-64, 64]`. Each construct becomes a slot of the
+/// tape, folded to a number when its operands are numbers.
+struct Tape<'a> {
     params: &'a BTreeMap<String, f64>,
-    depth: usize,
     nodes: Vec<Node>,
 }
 
-/// Parse an expression in `y` (parameters are substituted by value).
+/// Parse an expression in `y` (parameters are substituted by value); the
+/// grammar is the one front end's, [`exact::syntax`].
 ///
 /// ```
 /// use fluid::expr::parse;
@@ -304,24 +307,9 @@ struct Parser<'a> {
 /// assert!(parse("log(y)", &Default::default()).unwrap_err().message.contains("unknown function 'log'"));
 /// ```
 pub fn parse(text: &str, params: &BTreeMap<String, f64>) -> Result<Expr, ExprError> {
-    if text.len() > MAX_LENGTH {
-        return err(format!("expression longer than {MAX_LENGTH} bytes"), 0);
-    }
-    if !text.is_ascii() {
-        let pos = text.chars().position(|c| !c.is_ascii()).unwrap_or(0);
-        return err("unexpected non-ASCII character", pos);
-    }
-    let mut p = Parser { s: text.as_bytes(), i: 0, params, depth: 0, nodes: Vec::new() };
-    p.skip();
-    if p.i == p.s.len() {
-        return err("empty expression", 0);
-    }
-    let root = p.expr()?;
-    p.skip();
-    if p.i != p.s.len() {
-        return err(format!("unexpected '{}'", p.s[p.i] as char), p.i);
-    }
-    Ok(Expr { nodes: compact(p.nodes, root) })
+    let mut tape = Tape { params, nodes: Vec::new() };
+    let root = exact::syntax::parse(text, &mut tape, MAX_DEPTH, MAX_LENGTH)?;
+    Ok(Expr { nodes: compact(tape.nodes, root) })
 }
 
 /// Keep only the slots the root depends on, renumbered in order.
@@ -373,26 +361,7 @@ fn apply(f: Func, x: f64) -> f64 {
     }
 }
 
-impl Parser<'_> {
-    fn skip(&mut self) {
-        while self.i < self.s.len() && self.s[self.i].is_ascii_whitespace() {
-            self.i += 1;
-        }
-    }
-
-    fn peek(&mut self) -> Option<u8> {
-        self.skip();
-        self.s.get(self.i).copied()
-    }
-
-    fn enter(&mut self) -> Result<(), ExprError> {
-        self.depth += 1;
-        if self.depth > MAX_DEPTH {
-            return err(format!("expression nested too deeply (limit {MAX_DEPTH})"), self.i);
-        }
-        Ok(())
-    }
-
+impl Tape<'_> {
     fn num(&self, i: u32) -> Option<f64> {
         match self.nodes[i as usize] {
             Node::Num(v) => Some(v),
@@ -422,147 +391,78 @@ impl Parser<'_> {
         self.nodes.push(n);
         (self.nodes.len() - 1) as u32
     }
+}
 
-    fn expr(&mut self) -> Result<u32, ExprError> {
-        self.enter()?;
-        let mut acc = self.term()?;
-        while let Some(c @ (b'+' | b'-')) = self.peek() {
-            self.i += 1;
-            let rhs = self.term()?;
-            acc = self.push(if c == b'+' { Node::Add(acc, rhs) } else { Node::Sub(acc, rhs) });
-        }
-        self.depth -= 1;
-        Ok(acc)
+impl From<SyntaxError> for ExprError {
+    fn from(e: SyntaxError) -> Self {
+        ExprError { message: e.kind.to_string(), position: e.position }
+    }
+}
+
+impl Semantics for Tape<'_> {
+    type Value = u32;
+    type Function = Func;
+    type Error = ExprError;
+
+    fn syntax(&self, e: SyntaxError) -> ExprError {
+        e.into()
     }
 
-    fn term(&mut self) -> Result<u32, ExprError> {
-        let mut acc = self.unary()?;
-        while let Some(c @ (b'*' | b'/')) = self.peek() {
-            self.i += 1;
-            let rhs = self.unary()?;
-            acc = self.push(if c == b'*' { Node::Mul(acc, rhs) } else { Node::Div(acc, rhs) });
-        }
-        Ok(acc)
+    fn number(&mut self, text: &str, at: usize) -> Result<u32, ExprError> {
+        let v = exact::parse_number(text).map_err(|e| ExprError { message: e.to_string(), position: at })?;
+        Ok(self.push_raw(Node::Num(exact::rational_to_f64(&v))))
     }
 
-    fn unary(&mut self) -> Result<u32, ExprError> {
-        match self.peek() {
-            Some(b'-') => {
-                self.i += 1;
-                self.enter()?;
-                let e = self.unary()?;
-                self.depth -= 1;
-                Ok(self.push(Node::Neg(e)))
-            }
-            Some(b'+') => {
-                self.i += 1;
-                self.enter()?;
-                let e = self.unary()?;
-                self.depth -= 1;
-                Ok(e)
-            }
-            _ => self.power(),
+    fn symbol(&mut self, name: &str, at: usize) -> Result<u32, ExprError> {
+        match name {
+            "y" => Ok(self.push_raw(Node::Y)),
+            "pi" => Ok(self.push_raw(Node::Num(std::f64::consts::PI))),
+            _ => match self.params.get(name) {
+                Some(v) => Ok(self.push_raw(Node::Num(*v))),
+                None => {
+                    let known: Vec<&str> =
+                        ["y", "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
+                    err(format!("unknown symbol '{}' (known: {})", exact::quote(name, 40), known.join(", ")), at)
+                }
+            },
         }
     }
 
-    fn power(&mut self) -> Result<u32, ExprError> {
-        let base = self.atom()?;
-        if self.peek() == Some(b'^') {
-            self.i += 1;
-            let at = self.i;
-            self.enter()?;
-            let e = self.unary()?;
-            self.depth -= 1;
-            let v = self
-                .num(e)
-                .ok_or_else(|| ExprError { message: "the exponent must be a constant integer".into(), position: at })?;
-            if v.fract() != 0.0 || v.abs() > 64.0 {
-                return err("the exponent must be an integer between -64 and 64", at);
-            }
-            return Ok(self.push(Node::Pow(base, v as i32)));
+    fn function(&mut self, name: &str, at: usize) -> Result<Func, ExprError> {
+        match name {
+            "sin" => Ok(Func::Sin),
+            "cos" => Ok(Func::Cos),
+            "exp" => Ok(Func::Exp),
+            "sqrt" => Ok(Func::Sqrt),
+            _ => err(format!("unknown function '{}' (allowed: sin, cos, exp, sqrt)", exact::quote(name, 40)), at),
         }
-        Ok(base)
     }
 
-    fn atom(&mut self) -> Result<u32, ExprError> {
-        let at = self.i;
-        match self.peek() {
-            None => err("unexpected end of expression", self.s.len()),
-            Some(b'(') => {
-                self.i += 1;
-                let e = self.expr()?;
-                if self.peek() != Some(b')') {
-                    return err("missing ')'", self.i);
-                }
-                self.i += 1;
-                Ok(e)
-            }
-            Some(c) if c.is_ascii_digit() || c == b'.' => {
-                let start = self.i;
-                while self.i < self.s.len() && (self.s[self.i].is_ascii_digit() || self.s[self.i] == b'.') {
-                    self.i += 1;
-                }
-                if self.i < self.s.len() && (self.s[self.i] == b'e' || self.s[self.i] == b'E') {
-                    let mut j = self.i + 1;
-                    if j < self.s.len() && (self.s[j] == b'+' || self.s[j] == b'-') {
-                        j += 1;
-                    }
-                    if j < self.s.len() && self.s[j].is_ascii_digit() {
-                        while j < self.s.len() && self.s[j].is_ascii_digit() {
-                            j += 1;
-                        }
-                        self.i = j;
-                    }
-                }
-                let text = std::str::from_utf8(&self.s[start..self.i]).unwrap_or("");
-                let v = exact::parse_number(text).map_err(|e| ExprError { message: e.to_string(), position: start })?;
-                Ok(self.push_raw(Node::Num(exact::rational_to_f64(&v))))
-            }
-            Some(c) if c.is_ascii_alphabetic() || c == b'_' => {
-                let start = self.i;
-                while self.i < self.s.len() && (self.s[self.i].is_ascii_alphanumeric() || self.s[self.i] == b'_') {
-                    self.i += 1;
-                }
-                let name = std::str::from_utf8(&self.s[start..self.i]).unwrap_or("");
-                if self.peek() == Some(b'(') {
-                    let f = match name {
-                        "sin" => Func::Sin,
-                        "cos" => Func::Cos,
-                        "exp" => Func::Exp,
-                        "sqrt" => Func::Sqrt,
-                        _ => {
-                            return err(
-                                format!("unknown function '{}' (allowed: sin, cos, exp, sqrt)", exact::quote(name, 40)),
-                                start,
-                            )
-                        }
-                    };
-                    self.i += 1;
-                    let arg = self.expr()?;
-                    if self.peek() != Some(b')') {
-                        return err("missing ')'", self.i);
-                    }
-                    self.i += 1;
-                    return Ok(self.push(Node::Call(f, arg)));
-                }
-                match name {
-                    "y" => Ok(self.push_raw(Node::Y)),
-                    "pi" => Ok(self.push_raw(Node::Num(std::f64::consts::PI))),
-                    _ => match self.params.get(name) {
-                        Some(v) => Ok(self.push_raw(Node::Num(*v))),
-                        None => {
-                            let known: Vec<&str> =
-                                ["y", "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
-                            err(
-                                format!("unknown symbol '{}' (known: {})", exact::quote(name, 40), known.join(", ")),
-                                start,
-                            )
-                        }
-                    },
-                }
-            }
-            Some(c) => err(format!("unexpected '{}'", c as char), at),
+    fn call(&mut self, f: Func, arg: u32, _: usize) -> Result<u32, ExprError> {
+        Ok(self.push(Node::Call(f, arg)))
+    }
+
+    fn binary(&mut self, op: Op, a: u32, b: u32, _: usize, _: usize) -> Result<u32, ExprError> {
+        Ok(self.push(match op {
+            Op::Add => Node::Add(a, b),
+            Op::Sub => Node::Sub(a, b),
+            Op::Mul => Node::Mul(a, b),
+            Op::Div => Node::Div(a, b),
+        }))
+    }
+
+    fn negate(&mut self, a: u32, _: usize) -> Result<u32, ExprError> {
+        Ok(self.push(Node::Neg(a)))
+    }
+
+    fn power(&mut self, base: u32, exponent: u32, _: usize, at: usize) -> Result<u32, ExprError> {
+        let v = self
+            .num(exponent)
+            .ok_or_else(|| ExprError { message: "the exponent must be a constant integer".into(), position: at })?;
+        if v.fract() != 0.0 || v.abs() > 64.0 {
+            return err("the exponent must be an integer between -64 and 64", at);
         }
+        Ok(self.push(Node::Pow(base, v as i32)))
     }
 }
 
@@ -799,6 +699,20 @@ impl Derivative {
 mod tests {
     use super::*;
 
+    /// One front end: a syntax error reads the same, at the same place, in
+    /// the polynomial language of finite-dimensional specs and in this one.
+    #[test]
+    fn both_languages_share_their_syntax_errors() {
+        let symbols = exact::Symbols::new(&["y"]);
+        let nested = format!("{}y{}", "(".repeat(250), ")".repeat(250));
+        for text in ["1 +", "(y", "y)", "y ** 2", "y @ 2", "", "2 y", "*y", "(y))", &nested, "y + é"] {
+            let a = exact::parse_expression(text, &symbols).unwrap_err();
+            let b = parse(text, &BTreeMap::new()).unwrap_err();
+            assert_eq!(a.position, b.position, "{text}");
+            assert_eq!(a.kind.to_string(), b.message, "{text}");
+        }
+    }
+
     #[test]
     fn derivatives_match_finite_differences() {
         let p = BTreeMap::new();
@@ -877,7 +791,7 @@ mod tests {
         assert!(parse("tan(y)", &p).unwrap_err().message.contains("unknown function"));
         assert!(parse("z + 1", &p).unwrap_err().message.contains("unknown symbol 'z'"));
         assert!(parse("y^y", &p).unwrap_err().message.contains("exponent"));
-        assert!(parse("(y", &p).unwrap_err().message.contains("missing ')'"));
+        assert!(parse("(y", &p).unwrap_err().message.contains("unexpected end of expression"));
         assert!(parse("", &p).unwrap_err().message.contains("empty"));
         // power towers and unary chains count towards the depth (no stack overflow)
         let tower = vec!["2"; 5000].join("^");

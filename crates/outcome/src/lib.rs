@@ -74,7 +74,7 @@ macro_rules! named {
 }
 
 /// What the engine concluded about an equilibrium and its noise.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// A definite energy–Casimir form exists: nonlinearly (formally)
@@ -106,7 +106,7 @@ named!(Verdict, "verdict", [
 /// [`VerificationLevel::VerifiedFloat`] is a rigorous floating-point
 /// criterion, and the last two are floating point without proof. The
 /// derived order is this one: `Exact < ExactStructure < ... < Float`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum VerificationLevel {
     /// Rational data, exact claims: `P` definite and `Sigma^2 P - Q`
@@ -155,7 +155,7 @@ impl VerificationLevel {
 ///
 /// The discriminants are `+1` and `-1`, so even an `as` cast gives the
 /// number certificates write.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 #[repr(i8)]
 pub enum Sign {

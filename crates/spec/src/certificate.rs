@@ -1,11 +1,18 @@
 //! Certificates: the verdict, the evidence, the settings and the spec, as JSON.
 
+use crate::document::Literal;
 use crate::parse::Spec;
+use crate::record::{
+    CertificateDocument, ChoiceRecord, ComplexRecord, ConservedRecord, DiscoveryRecord, Engine, EquilibriumRecord,
+    Float, GrowthRecord, InstabilityRecord, LinearisationRecord, MultipliersRecord, NoiseRecord, OptimisationRecord,
+    RationalMatrix, ResidualsRecord, SearchRecord, StoppingRecord,
+};
 use exact::{Matrix, Rational};
 use generator::{analyse, Analysis, StoppingTime, Verdict};
 use nalgebra::Complex;
 use outcome::VerificationLevel;
-use serde_json::{json, Map, Value};
+use serde_json::Value;
+use std::collections::BTreeMap;
 
 /// Version of the certificate format.
 pub const CERTIFICATE_VERSION: u64 = 2;
@@ -18,31 +25,18 @@ pub const ENGINE_VERSION: &str = env!("CARGO_PKG_VERSION");
 pub struct Certificate {
     /// The certificate JSON.
     pub json: Value,
+    /// The same certificate, typed.
+    pub document: CertificateDocument,
     /// The analysis behind it.
     pub analysis: Analysis,
 }
 
-/// Build a JSON object by moving the values in (the `json!` macro would
-/// re-serialise every embedded `Value`, a deep copy per field).
-macro_rules! obj {
-    ($($k:expr => $v:expr),* $(,)?) => {{
-        #[allow(unused_mut)]
-        let mut m = Map::new();
-        $( m.insert($k.to_string(), Value::from($v)); )*
-        Value::Object(m)
-    }};
+fn rationals(v: &[Rational]) -> Vec<Literal> {
+    v.iter().map(|r| Literal(r.clone())).collect()
 }
 
-fn rationals(v: &[Rational]) -> Value {
-    Value::Array(v.iter().map(|r| Value::String(r.to_string())).collect())
-}
-
-fn matrix(m: &Matrix) -> Value {
-    Value::Array(
-        (0..m.nrows())
-            .map(|i| Value::Array((0..m.ncols()).map(|j| Value::String(m[(i, j)].to_string())).collect()))
-            .collect(),
-    )
+fn matrix(m: &Matrix) -> RationalMatrix {
+    (0..m.nrows()).map(|i| (0..m.ncols()).map(|j| Literal(m[(i, j)].clone())).collect()).collect()
 }
 
 /// A float as JSON (non-finite values as strings).
@@ -60,13 +54,8 @@ pub(crate) fn float_json(x: f64) -> Value {
     }
 }
 
-fn complex(z: &Complex<f64>) -> Value {
-    obj! { "re" => float_json(z.re), "im" => float_json(z.im) }
-}
-
-/// The verification level of a verdict and what each part rests on.
-fn level_and_checks(a: &Analysis) -> (VerificationLevel, Value) {
-    (verification_level(a), checks(a))
+fn complex(z: &Complex<f64>) -> ComplexRecord {
+    ComplexRecord { re: Float(z.re), im: Float(z.im) }
 }
 
 /// The verification level of an analysis: `exact` when the verdict is
@@ -88,45 +77,49 @@ pub fn verification_level(a: &Analysis) -> VerificationLevel {
 }
 
 /// What each part of the verdict rests on.
-fn checks(a: &Analysis) -> Value {
-    match a.verdict {
+fn checks(a: &Analysis) -> BTreeMap<String, String> {
+    let parts: &[(&str, &str)] = match a.verdict {
         Verdict::Stable => match a.stable.as_ref().and_then(|s| s.exact.as_ref()) {
-            Some(e) => obj! {
-                "P_definite" => "exact (rational LDL^T)",
-                "first_variation" => "exact (rational)",
-                "drift_residual" => "exact (rational)",
-                "sigma2" => if e.sharp {
-                    "exact: sigma2 * sP - sQ is positive semidefinite and singular (sigma2 = lambda_max)"
-                } else {
-                    "exact: sigma2 * sP - sQ is positive semidefinite (sigma2 is an upper bound within 1e-10 of lambda_max)"
-                },
-            },
-            None => obj! {
-                "P_definite" => "exact (rational LDL^T)",
-                "drift_residual" => "exact (rational)",
-                "sigma2" => "floating point only (exact certification switched off, or it failed at every candidate)",
-            },
+            Some(e) => &[
+                ("P_definite", "exact (rational LDL^T)"),
+                ("first_variation", "exact (rational)"),
+                ("drift_residual", "exact (rational)"),
+                (
+                    "sigma2",
+                    if e.sharp {
+                        "exact: sigma2 * sP - sQ is positive semidefinite and singular (sigma2 = lambda_max)"
+                    } else {
+                        "exact: sigma2 * sP - sQ is positive semidefinite (sigma2 is an upper bound within 1e-10 of lambda_max)"
+                    },
+                ),
+            ],
+            None => &[
+                ("P_definite", "exact (rational LDL^T)"),
+                ("drift_residual", "exact (rational)"),
+                ("sigma2", "floating point only (exact certification switched off, or it failed at every candidate)"),
+            ],
         },
         Verdict::LinearlyUnstable => match a.spectral_proof {
-            Some(generator::SpectralProof::Unstable { .. }) => obj! {
-                "instability" => "exact: Sturm sequence on the characteristic polynomial of A",
-                "eigenpair" => "floating point (faer), for information",
-            },
-            _ => json!({ "eigenvalue": "floating point (faer), real part above tolerance" }),
+            Some(generator::SpectralProof::Unstable { .. }) => &[
+                ("instability", "exact: Sturm sequence on the characteristic polynomial of A"),
+                ("eigenpair", "floating point (faer), for information"),
+            ],
+            _ => &[("eigenvalue", "floating point (faer), real part above tolerance")],
         },
-        Verdict::NotAnEquilibrium => json!({ "equilibrium_residual": "exact (rational)" }),
-        Verdict::NoiseIncompatible => json!({ "noise_residuals": "exact (rational)" }),
-        Verdict::Inconclusive => json!({ "search": "floating point search; no claim is made" }),
-    }
+        Verdict::NotAnEquilibrium => &[("equilibrium_residual", "exact (rational)")],
+        Verdict::NoiseIncompatible => &[("noise_residuals", "exact (rational)")],
+        Verdict::Inconclusive => &[("search", "floating point search; no claim is made")],
+    };
+    parts.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
 }
 
-fn choice_json(ch: &casimir::CasimirChoice) -> Value {
-    obj! {
-        "sign" => ch.sign.as_i8() as i64,
-        "family_parameters" => rationals(&ch.family_parameters),
-        "multipliers" => rationals(&ch.multipliers),
-        "M" => matrix(&ch.m),
-        "relative_margin" => float_json(ch.relative_margin),
+fn choice_record(ch: &casimir::CasimirChoice) -> ChoiceRecord {
+    ChoiceRecord {
+        sign: ch.sign.as_i8() as i64,
+        family_parameters: rationals(&ch.family_parameters),
+        multipliers: rationals(&ch.multipliers),
+        m: matrix(&ch.m),
+        relative_margin: Float(ch.relative_margin),
     }
 }
 
@@ -142,59 +135,36 @@ pub fn spec_digest(spec: &Value) -> String {
 /// Run the pipeline on a parsed spec and build the certificate.
 pub fn certify(spec: &Spec) -> Certificate {
     let analysis = analyse(&spec.system, &spec.settings.pipeline);
-    let json = certificate_json(spec, &analysis);
-    Certificate { json, analysis }
+    let document = certificate_document(spec, &analysis);
+    let json = serde_json::to_value(&document).unwrap_or_default();
+    Certificate { json, document, analysis }
 }
 
 /// Build the certificate JSON from a spec and its analysis.
 pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
+    serde_json::to_value(certificate_document(spec, a)).unwrap_or_default()
+}
+
+/// Build the typed certificate from a spec and its analysis.
+pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
     let system = &spec.system;
     let coords = system.algebra().coordinates();
-    let (level, checks) = level_and_checks(a);
-    let mut c = Map::new();
-    let mut put = |k: &str, v: Value| {
-        c.insert(k.to_string(), v);
-    };
-    put("certificate_version", Value::from(CERTIFICATE_VERSION));
-    put("engine", obj! { "name" => "verify", "version" => ENGINE_VERSION });
-    put("name", Value::from(spec.name.as_str()));
-    put("verdict", Value::from(a.verdict.as_str()));
-    put("reason", Value::from(a.reason.as_str()));
-    put("level", Value::from(level.as_str()));
-    put("checks", checks);
-    if let Some(s2) = a.sigma2() {
-        put("sigma2", float_json(s2));
-    }
+    let rows = |v: &[Vec<Rational>]| v.iter().map(|r| rationals(r)).collect::<Vec<_>>();
     // T is a guarantee: computed from Sigma^2 rounded up (the exact rational
     // when there is one), and rounded down itself (see StoppingTime::time).
-    if let (Some(stop), Some(s2)) = (spec.stopping, a.sigma2_bound()) {
-        let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
-        put(
-            "stopping",
-            obj! {
-                "epsilon" => stop.epsilon,
-                "delta" => stop.delta,
-                "T" => st.time().map_or(Value::String("infinity".into()), float_json),
-                "bound" => "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta",
-            },
-        );
-    }
-    put("spec_sha256", Value::from(spec_digest(&spec.raw)));
-    put("hamiltonian", Value::from(system.hamiltonian().to_string_with(coords)));
-    put("coordinates", Value::Array(coords.iter().map(|c| Value::from(c.as_str())).collect()));
-    put(
-        "equilibrium",
-        obj! { "point" => rationals(system.equilibrium()), "residual" => rationals(&a.equilibrium_residual) },
-    );
-    put(
-        "noise",
-        obj! {
-            "fields" => Value::Array(system.noise().iter().map(|s| rationals(s)).collect()),
-            "residuals" => Value::Array(a.noise_residuals.iter().map(|r| rationals(r)).collect()),
-            "isotropy_basis" => Value::Array(a.isotropy_basis.iter().map(|r| rationals(r)).collect()),
-        },
-    );
-    let conserved: Vec<Value> = system
+    let stopping = match (spec.stopping, a.sigma2_bound()) {
+        (Some(stop), Some(s2)) => {
+            let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
+            Some(StoppingRecord {
+                epsilon: Float(stop.epsilon),
+                delta: Float(stop.delta),
+                t: Float(st.time().unwrap_or(f64::INFINITY)),
+                bound: "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta".into(),
+            })
+        }
+        _ => None,
+    };
+    let conserved = system
         .conserved()
         .iter()
         .zip(&a.noise_commutation)
@@ -203,120 +173,120 @@ pub fn certificate_json(spec: &Spec, a: &Analysis) -> Value {
                 casimir::ConservedKind::Casimir => ("casimir", spec.casimir_source.as_str()),
                 casimir::ConservedKind::FirstIntegral => ("first_integral", "spec"),
             };
-            obj! {
-                "kind" => kind,
-                "source" => source,
-                "expression" => poly.to_string_with(coords),
-                "commutes_with_noise" => Value::Array(commutes.iter().map(|b| Value::Bool(*b)).collect()),
+            ConservedRecord {
+                kind: kind.into(),
+                source: source.into(),
+                expression: poly.to_string_with(coords),
+                commutes_with_noise: commutes.clone(),
             }
         })
         .collect();
-    put("conserved", Value::Array(conserved));
-    if let Some(d) = &spec.discovery {
-        put("casimir_discovery", json!({ "degree_searched": d.degree_searched, "skipped_degrees": d.skipped_degrees }));
-    }
-    if let Some(v) = &a.variation {
-        put(
-            "multipliers",
-            obj! {
-                "particular" => rationals(&v.family.particular),
-                "directions" => Value::Array(v.family.directions.iter().map(|d| rationals(d)).collect()),
-            },
-        );
-    }
-    if let Some(lin) = &a.linearisation {
-        put(
-            "linearisation",
-            obj! {
-                "A" => matrix(&lin.a),
-                "B" => Value::Array(lin.noise.iter().map(matrix).collect()),
-                "spectrum" => Value::Array(a.spectrum.iter().map(complex).collect()),
-            },
-        );
-    }
-    if let Some(p) = &a.spectral_proof {
-        put("spectrum_proof", Value::from(p.as_str()));
-    }
-    if let Some(e) = &a.spectrum_error {
-        put("spectrum_error", Value::from(e.as_str()));
-    }
-    if let Some(inst) = &a.instability {
-        put(
-            "instability",
-            obj! {
-                "eigenvalue" => complex(&inst.eigenvalue),
-                "eigenvector" => Value::Array(inst.eigenvector.iter().map(complex).collect()),
-                "tolerance" => float_json(inst.tolerance),
-            },
-        );
-    }
-    if let Some(casimir::SearchOutcome::NotFound { best_positive_margin, best_negative_margin, restricted_dimension }) =
-        &a.search
-    {
-        put(
-            "search",
-            obj! {
-                "best_positive_margin" => float_json(*best_positive_margin),
-                "best_negative_margin" => float_json(*best_negative_margin),
-                "restricted_dimension" => *restricted_dimension as u64,
-            },
-        );
-    }
-    if let Some(s) = &a.stable {
-        put("casimir_choice", choice_json(&s.choice));
-        if let Some(e) = &s.exact {
-            put("sigma2_exact", Value::from(e.value.to_string()));
-            put("sigma2_sharp", Value::Bool(e.sharp));
+    let search = match &a.search {
+        Some(casimir::SearchOutcome::NotFound { best_positive_margin, best_negative_margin, restricted_dimension }) => {
+            Some(SearchRecord {
+                best_positive_margin: Float(*best_positive_margin),
+                best_negative_margin: Float(*best_negative_margin),
+                restricted_dimension: *restricted_dimension as u64,
+            })
         }
-        let mut opt = Map::new();
-        opt.insert("first_definite_choice".into(), choice_json(&s.first_choice));
-        opt.insert("first_definite_sigma2".into(), float_json(s.first_sigma2));
-        match &s.optimum {
-            Some(o) => {
-                opt.insert("optimised".into(), Value::Bool(true));
-                opt.insert("infimum".into(), float_json(o.infimum));
-                if let (Some(lb), Some(w)) = (&o.infimum_lower_bound, &o.infimum_witness) {
-                    opt.insert("infimum_lower_bound".into(), Value::from(lb.to_string()));
-                    match w {
-                        generator::InfimumWitness::Vector(x) => opt.insert(
-                            "infimum_witness".into(),
-                            Value::Array(x.iter().map(|r| Value::from(r.to_string())).collect()),
-                        ),
-                        generator::InfimumWitness::Matrix(x) => opt.insert("infimum_witness_matrix".into(), matrix(x)),
-                    };
+        _ => None,
+    };
+    let optimisation = a.stable.as_ref().map(|s| {
+        let mut opt = OptimisationRecord {
+            optimised: s.optimum.is_some(),
+            first_definite_choice: choice_record(&s.first_choice),
+            first_definite_sigma2: Float(s.first_sigma2),
+            infimum: None,
+            infimum_lower_bound: None,
+            infimum_witness: None,
+            infimum_witness_matrix: None,
+            gap: None,
+            attained: None,
+            within_tolerance: None,
+            q_depends_on_m: None,
+            method: None,
+            tolerance: None,
+        };
+        if let Some(o) = &s.optimum {
+            opt.infimum = Some(Float(o.infimum));
+            if let (Some(lb), Some(w)) = (&o.infimum_lower_bound, &o.infimum_witness) {
+                opt.infimum_lower_bound = Some(lb.to_string());
+                match w {
+                    generator::InfimumWitness::Vector(x) => opt.infimum_witness = Some(rationals(x)),
+                    generator::InfimumWitness::Matrix(x) => opt.infimum_witness_matrix = Some(matrix(x)),
                 }
-                opt.insert("gap".into(), float_json((s.growth.sigma2 - o.infimum).max(0.0)));
-                opt.insert("attained".into(), Value::Bool(o.attained));
-                opt.insert("within_tolerance".into(), Value::Bool(o.within_tolerance));
-                opt.insert("q_depends_on_M".into(), Value::Bool(o.q_depends_on_m));
-                opt.insert("method".into(), Value::from(o.method));
-                opt.insert("tolerance".into(), float_json(spec.settings.pipeline.optimisation.tolerance));
             }
-            None => {
-                opt.insert("optimised".into(), Value::Bool(false));
-            }
+            opt.gap = Some(Float((s.growth.sigma2 - o.infimum).max(0.0)));
+            opt.attained = Some(o.attained);
+            opt.within_tolerance = Some(o.within_tolerance);
+            opt.q_depends_on_m = Some(o.q_depends_on_m);
+            opt.method = Some(o.method.to_string());
+            opt.tolerance = Some(Float(spec.settings.pipeline.optimisation.tolerance));
         }
-        put("optimisation", Value::Object(opt));
-        put("P", matrix(&s.choice.p));
-        put("Q", matrix(&s.form.q));
-        put(
-            "residuals",
-            obj! {
-                "drift" => matrix(&s.form.drift_residual),
-                "paper_formula_3_3_equals_Q" => s.form.q == s.form.paper_formula,
-            },
-        );
-        put(
-            "growth",
-            obj! {
-                "largest_generalized_eigenvalue" => float_json(s.growth.largest_eigenvalue),
-                "condition_number_P" => float_json(s.growth.condition_number),
-                "generalized_eigenvalues" => Value::Array(s.growth.eigenvalues.iter().map(|x| float_json(*x)).collect()),
-                "fastest_direction" => Value::Array(s.growth.direction.iter().map(|x| float_json(*x)).collect()),
-            },
-        );
+        opt
+    });
+    let exact = a.stable.as_ref().and_then(|s| s.exact.as_ref());
+    CertificateDocument {
+        certificate_version: CERTIFICATE_VERSION,
+        engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
+        name: spec.name.clone(),
+        verdict: a.verdict,
+        reason: a.reason.clone(),
+        level: verification_level(a),
+        checks: checks(a),
+        sigma2: a.sigma2().map(Float),
+        sigma2_exact: exact.map(|e| e.value.to_string()),
+        sigma2_sharp: exact.map(|e| e.sharp),
+        stopping,
+        spec_sha256: spec_digest(&spec.raw),
+        hamiltonian: system.hamiltonian().to_string_with(coords),
+        coordinates: coords.to_vec(),
+        equilibrium: EquilibriumRecord {
+            point: rationals(system.equilibrium()),
+            residual: rationals(&a.equilibrium_residual),
+        },
+        noise: NoiseRecord {
+            fields: rows(system.noise()),
+            residuals: rows(&a.noise_residuals),
+            isotropy_basis: rows(&a.isotropy_basis),
+        },
+        conserved,
+        casimir_discovery: spec.discovery.as_ref().map(|d| DiscoveryRecord {
+            degree_searched: d.degree_searched,
+            skipped_degrees: d.skipped_degrees.clone(),
+        }),
+        multipliers: a.variation.as_ref().map(|v| MultipliersRecord {
+            particular: rationals(&v.family.particular),
+            directions: rows(&v.family.directions),
+        }),
+        linearisation: a.linearisation.as_ref().map(|lin| LinearisationRecord {
+            a: matrix(&lin.a),
+            b: lin.noise.iter().map(matrix).collect(),
+            spectrum: a.spectrum.iter().map(complex).collect(),
+        }),
+        spectrum_proof: a.spectral_proof.as_ref().map(|p| p.as_str().to_string()),
+        spectrum_error: a.spectrum_error.clone(),
+        instability: a.instability.as_ref().map(|inst| InstabilityRecord {
+            eigenvalue: complex(&inst.eigenvalue),
+            eigenvector: inst.eigenvector.iter().map(complex).collect(),
+            tolerance: Float(inst.tolerance),
+        }),
+        search,
+        casimir_choice: a.stable.as_ref().map(|s| choice_record(&s.choice)),
+        optimisation,
+        p: a.stable.as_ref().map(|s| matrix(&s.choice.p)),
+        q: a.stable.as_ref().map(|s| matrix(&s.form.q)),
+        residuals: a.stable.as_ref().map(|s| ResidualsRecord {
+            drift: matrix(&s.form.drift_residual),
+            paper_formula_3_3_equals_q: s.form.q == s.form.paper_formula,
+        }),
+        growth: a.stable.as_ref().map(|s| GrowthRecord {
+            largest_generalized_eigenvalue: Float(s.growth.largest_eigenvalue),
+            condition_number_p: Float(s.growth.condition_number),
+            generalized_eigenvalues: s.growth.eigenvalues.iter().map(|x| Float(*x)).collect(),
+            fastest_direction: s.growth.direction.iter().map(|x| Float(*x)).collect(),
+        }),
+        settings: spec.settings.to_document(),
+        spec: spec.raw.clone(),
     }
-    put("settings", spec.settings.to_json());
-    put("spec", spec.raw.clone());
-    Value::Object(c)
 }

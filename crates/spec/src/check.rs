@@ -18,6 +18,7 @@
 use crate::certificate::certify;
 use crate::json::{as_object, required, SpecError};
 use crate::parse::spec_from_value;
+use crate::record::CertificateDocument;
 use crate::settings::EngineSettings;
 use outcome::{Verdict, VerificationLevel};
 use serde_json::Value;
@@ -69,6 +70,21 @@ pub fn check_certificate(text: &str) -> Result<CheckReport, CheckError> {
     check_certificate_value(&value)
 }
 
+/// Check a typed certificate (one built in Rust or read with
+/// [`crate::document::from_value`]).
+///
+/// ```
+/// let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
+/// let mut doc = spec::certify(&spec::parse_spec(&text).unwrap()).document;
+/// assert_eq!(spec::check_document(&doc).unwrap().verdict, spec::Verdict::Stable);
+/// doc.sigma2_exact = Some("1/4".into()); // below the true 27/100
+/// assert!(spec::check_document(&doc).is_err());
+/// ```
+pub fn check_document(doc: &CertificateDocument) -> Result<CheckReport, CheckError> {
+    let value = serde_json::to_value(doc).map_err(|e| CheckError::BadInput(SpecError::new("$", e.to_string())))?;
+    check_certificate_value(&value)
+}
+
 /// Check a certificate given as a JSON value.
 pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
@@ -83,6 +99,9 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
     }
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     check_engine(map)?;
+    // The shape first: every field of the certificate type, no other.
+    crate::document::from_value::<CertificateDocument>(cert)
+        .map_err(|e| fail(&e.path, format!("not a certificate as this engine writes them: {}", e.message)))?;
     // From here on the file is a certificate: an embedded spec or settings
     // that the engine rejects (a Casimir edited into a non-Casimir) make the
     // certificate fail (exit 1), they are not bad input to the checker.

@@ -18,10 +18,8 @@
 
 use crate::certificate::{float_json, spec_digest, CERTIFICATE_VERSION, ENGINE_VERSION};
 use crate::check::{compare_with, fail, CheckError, CheckReport};
-use crate::json::{
-    as_array, as_object, as_str, check_keys, child, expression_text, index, read_name, required, type_name, Result,
-    SpecError,
-};
+use crate::document::{BoundaryName, Count, Expression, FluidSettingsDoc, FluidSpecDocument, ModelName, Real};
+use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
 use crate::parse::Stopping;
 use fluid::analysis::{
     analyse, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
@@ -78,23 +76,19 @@ pub struct FluidSpec {
     pub sweep: crate::sweep::SweepSection,
 }
 
-const TOP_KEYS: &[&str] = &["name", "description", "parameters", "fluid", "stopping", "settings", "sweep"];
-const FLUID_KEYS: &[&str] =
-    &["model", "x_period", "y_interval", "boundary", "shear_flow", "sound_speed", "noise", "ny", "x_modes"];
-
 /// Parse a fluid spec from text.
 pub fn parse_fluid_spec(text: &str) -> Result<FluidSpec> {
     let value: Value = crate::json::parse_json(text)?;
     fluid_spec_from_value(value)
 }
 
-fn expr(v: &Value, path: &str, params: &BTreeMap<String, f64>) -> Result<Expr> {
-    let text = expression_text(v, path)?;
-    parse(&text, params).map_err(|e| SpecError::new(path, format!("in '{text}': {e}")))
+fn expr(e: &Expression, path: &str, params: &BTreeMap<String, f64>) -> Result<Expr> {
+    let text = &e.0;
+    parse(text, params).map_err(|err| SpecError::new(path, format!("in '{text}': {err}")))
 }
 
-fn constant(v: &Value, path: &str, params: &BTreeMap<String, f64>) -> Result<f64> {
-    let e = expr(v, path, params)?;
+fn constant(e: &Expression, path: &str, params: &BTreeMap<String, f64>) -> Result<f64> {
+    let e = expr(e, path, params)?;
     let x = e.constant().ok_or_else(|| SpecError::new(path, "must be a constant (it may not depend on y)"))?;
     if !x.is_finite() {
         return Err(SpecError::new(path, format!("is not finite ({x})")));
@@ -102,77 +96,92 @@ fn constant(v: &Value, path: &str, params: &BTreeMap<String, f64>) -> Result<f64
     Ok(x)
 }
 
-fn integer(v: &Value, path: &str) -> Result<usize> {
-    let n = v
-        .as_u64()
-        .ok_or_else(|| SpecError::new(path, format!("expected a positive integer, found {}", describe(v))))?;
-    usize::try_from(n).map_err(|_| SpecError::new(path, "too large"))
+fn count(c: Count, path: &str) -> Result<usize> {
+    usize::try_from(c.0).map_err(|_| SpecError::new(path, "too large"))
 }
 
-fn describe(v: &Value) -> String {
-    match v {
-        Value::Number(n) => format!("{n}"),
-        other => type_name(other).to_string(),
+impl FluidSpec {
+    /// A fluid spec from a document built in Rust (no JSON text); `raw` is
+    /// the document as JSON.
+    ///
+    /// ```
+    /// use spec::document::{BoundaryName, Count, FluidDoc, FluidSpecDocument, ModelName};
+    /// let doc = FluidSpecDocument {
+    ///     name: "channel".into(),
+    ///     fluid: FluidDoc {
+    ///         model: ModelName::Incompressible,
+    ///         x_period: "2*pi".into(),
+    ///         y_interval: vec!["0".into(), "pi".into()],
+    ///         boundary: BoundaryName::Walls,
+    ///         shear_flow: "sin(y)".into(),
+    ///         noise: vec!["0.3*cos(y)".into()],
+    ///         ny: Count(64),
+    ///         x_modes: Count(2),
+    ///         sound_speed: None,
+    ///     },
+    ///     ..Default::default()
+    /// };
+    /// let spec = spec::FluidSpec::from_document(&doc).unwrap();
+    /// assert_eq!(spec.problem.ny, 64);
+    /// ```
+    pub fn from_document(doc: &FluidSpecDocument) -> Result<FluidSpec> {
+        let value = serde_json::to_value(doc).map_err(|e| SpecError::new("$", e.to_string()))?;
+        fluid_spec_from_value(value)
     }
 }
 
 /// Parse a fluid spec from a JSON value.
 pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
     let root = "$";
-    let map = as_object(&value, root)?;
-    check_keys(map, TOP_KEYS, root)?;
-    let name = read_name(map, root)?;
+    if !value.is_object() {
+        return Err(SpecError::new(root, format!("expected an object, found {}", type_name(&value))));
+    }
+    let doc: FluidSpecDocument = crate::document::from_value(&value)?;
+    let name = doc.name.clone();
+    if name.trim().is_empty() {
+        return Err(SpecError::new(child(root, "name"), "must not be empty"));
+    }
     let mut params = BTreeMap::new();
-    if let Some(p) = map.get("parameters") {
-        let ppath = child(root, "parameters");
-        for (key, v) in as_object(p, &ppath)? {
-            let kpath = child(&ppath, key);
-            let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-                && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-            if !valid || ["y", "pi", "sin", "cos", "exp", "sqrt"].contains(&key.as_str()) {
-                return Err(SpecError::new(
-                    kpath,
-                    format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi or a function)"),
-                ));
-            }
-            let x = constant(v, &kpath, &params)?;
-            params.insert(key.clone(), x);
+    let ppath = child(root, "parameters");
+    for (key, v) in &doc.parameters {
+        let kpath = child(&ppath, key);
+        let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !valid || ["y", "pi", "sin", "cos", "exp", "sqrt"].contains(&key.as_str()) {
+            return Err(SpecError::new(
+                kpath,
+                format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi or a function)"),
+            ));
         }
+        let x = constant(v, &kpath, &params)?;
+        params.insert(key.clone(), x);
     }
     let fpath = child(root, "fluid");
-    let f = as_object(required(map, "fluid", root)?, &fpath)?;
-    check_keys(f, FLUID_KEYS, &fpath)?;
-    let mpath = child(&fpath, "model");
-    let model_name = as_str(required(f, "model", &fpath)?, &mpath)?;
+    let f = &doc.fluid;
     let spath = child(&fpath, "sound_speed");
-    let model = match model_name {
-        "incompressible" => {
-            if f.contains_key("sound_speed") {
+    let model = match f.model {
+        ModelName::Incompressible => {
+            if f.sound_speed.is_some() {
                 return Err(SpecError::new(spath, "only a compressible model has a sound speed"));
             }
             FluidModel::Incompressible
         }
-        "compressible" => {
-            let c = constant(required(f, "sound_speed", &fpath)?, &spath, &params)?;
+        ModelName::Compressible => {
+            let speed = f.sound_speed.as_ref().ok_or_else(|| SpecError::new(&spath, "required field is missing"))?;
+            let c = constant(speed, &spath, &params)?;
             if c <= 0.0 {
                 return Err(SpecError::new(spath, format!("must be positive, got {c}")));
             }
             FluidModel::Compressible { sound_speed: c }
         }
-        other => {
-            return Err(SpecError::new(
-                mpath,
-                format!("unknown model '{other}' (expected incompressible or compressible)"),
-            ))
-        }
     };
     let xpath = child(&fpath, "x_period");
-    let x_period = constant(required(f, "x_period", &fpath)?, &xpath, &params)?;
+    let x_period = constant(&f.x_period, &xpath, &params)?;
     if x_period <= 0.0 {
         return Err(SpecError::new(xpath, format!("must be positive, got {x_period}")));
     }
     let ipath = child(&fpath, "y_interval");
-    let iv = as_array(required(f, "y_interval", &fpath)?, &ipath)?;
+    let iv = &f.y_interval;
     if iv.len() != 2 {
         return Err(SpecError::new(&ipath, format!("expected [a, b], got {} entries", iv.len())));
     }
@@ -196,26 +205,23 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
             format!("the interval [{a:e}, {b:e}] is too short for its position (length {length:e}; at least 1e-10 of max(|a|, |b|) and 1e-100): the grid nodes would not be distinct doubles"),
         ));
     }
-    let bpath = child(&fpath, "boundary");
-    let boundary = match as_str(required(f, "boundary", &fpath)?, &bpath)? {
-        "walls" => Boundary::Walls,
-        "periodic" => Boundary::Periodic,
-        other => return Err(SpecError::new(bpath, format!("unknown boundary '{other}' (expected walls or periodic)"))),
+    let boundary = match f.boundary {
+        BoundaryName::Walls => Boundary::Walls,
+        BoundaryName::Periodic => Boundary::Periodic,
     };
     let upath = child(&fpath, "shear_flow");
-    let u = expr(required(f, "shear_flow", &fpath)?, &upath, &params)?;
+    let u = expr(&f.shear_flow, &upath, &params)?;
     let npath = child(&fpath, "noise");
-    let noise_list = as_array(required(f, "noise", &fpath)?, &npath)?;
-    if noise_list.len() > crate::parse::MAX_NOISE_FIELDS {
+    if f.noise.len() > crate::parse::MAX_NOISE_FIELDS {
         return Err(SpecError::new(
             &npath,
             format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
         ));
     }
     let noise =
-        noise_list.iter().enumerate().map(|(i, v)| expr(v, &index(&npath, i), &params)).collect::<Result<Vec<_>>>()?;
+        f.noise.iter().enumerate().map(|(i, v)| expr(v, &index(&npath, i), &params)).collect::<Result<Vec<_>>>()?;
     let nypath = child(&fpath, "ny");
-    let ny = integer(required(f, "ny", &fpath)?, &nypath)?;
+    let ny = count(f.ny, &nypath)?;
     if ny < NY_RANGE.0 {
         return Err(SpecError::new(
             nypath,
@@ -236,7 +242,7 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
         _ => {}
     }
     let kpath = child(&fpath, "x_modes");
-    let x_modes = integer(required(f, "x_modes", &fpath)?, &kpath)?;
+    let x_modes = count(f.x_modes, &kpath)?;
     if x_modes == 0 || x_modes > MAX_X_MODES {
         return Err(SpecError::new(kpath, format!("must be between 1 and {MAX_X_MODES}, got {x_modes}")));
     }
@@ -269,13 +275,14 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
     let profile = Profile::new(u, noise, (a, b), boundary);
     // Profile checks up front so the error names the spec field.
     profile.check(&[]).map_err(|e| profile_error(e, &fpath))?;
-    let stopping = match map.get("stopping") {
-        None => None,
-        Some(v) => Some(crate::parse::read_stopping(v, &child(root, "stopping"))?),
+    let stopping =
+        doc.stopping.as_ref().map(|s| crate::parse::read_stopping(s, &child(root, "stopping"))).transpose()?;
+    let settings = match &doc.settings {
+        Some(s) => read_settings(s, &child(root, "settings"))?,
+        None => FluidSettings::default(),
     };
-    let settings = read_settings(map.get("settings"), &child(root, "settings"))?;
     let names: Vec<String> = params.keys().cloned().collect();
-    let sweep = crate::sweep::read_sweep_section(map.get("sweep"), &child(root, "sweep"), &names)?;
+    let sweep = crate::sweep::read_sweep_section(doc.sweep.as_ref(), &child(root, "sweep"), &names)?;
     let problem = FluidProblem { model, profile, x_period, ny, x_modes };
     Ok(FluidSpec { name, raw: value, problem, stopping, settings, sweep })
 }
@@ -301,22 +308,20 @@ fn profile_error(e: ProfileError, fpath: &str) -> SpecError {
     }
 }
 
-fn read_settings(v: Option<&Value>, path: &str) -> Result<FluidSettings> {
+fn read_settings(doc: &FluidSettingsDoc, path: &str) -> Result<FluidSettings> {
     let mut s = FluidSettings::default();
-    let Some(v) = v else { return Ok(s) };
-    let map = as_object(v, path)?;
-    check_keys(map, &["lanczos_tolerance", "convergence_from", "instability_ny"], path)?;
-    if let Some(t) = map.get("lanczos_tolerance") {
-        let p = child(path, "lanczos_tolerance");
-        let x = t.as_f64().ok_or_else(|| SpecError::new(&p, format!("expected a number, found {}", describe(t))))?;
+    if let Some(Real(x)) = doc.lanczos_tolerance {
         if !(1e-14..=1e-3).contains(&x) {
-            return Err(SpecError::new(p, format!("must be between 1e-14 and 1e-3, got {x}")));
+            return Err(SpecError::new(
+                child(path, "lanczos_tolerance"),
+                format!("must be between 1e-14 and 1e-3, got {x}"),
+            ));
         }
         s.lanczos_tolerance = x;
     }
-    if let Some(t) = map.get("convergence_from") {
+    if let Some(t) = doc.convergence_from {
         let p = child(path, "convergence_from");
-        let n = integer(t, &p)?;
+        let n = count(t, &p)?;
         if !(16..=4096).contains(&n) || n % ELEMENT_DEGREE != 0 {
             return Err(SpecError::new(
                 p,
@@ -325,9 +330,9 @@ fn read_settings(v: Option<&Value>, path: &str) -> Result<FluidSettings> {
         }
         s.convergence_from = n;
     }
-    if let Some(t) = map.get("instability_ny") {
+    if let Some(t) = doc.instability_ny {
         let p = child(path, "instability_ny");
-        let n = integer(t, &p)?;
+        let n = count(t, &p)?;
         if !(32..=1024).contains(&n) || n % ELEMENT_DEGREE != 0 {
             return Err(SpecError::new(
                 p,
@@ -337,6 +342,14 @@ fn read_settings(v: Option<&Value>, path: &str) -> Result<FluidSettings> {
         s.instability_ny = n;
     }
     Ok(s)
+}
+
+/// The recorded settings of a certificate, read as the spec's are.
+fn recorded_settings(v: Option<&Value>, path: &str) -> Result<FluidSettings> {
+    match v {
+        None => Ok(FluidSettings::default()),
+        Some(v) => read_settings(&crate::document::from_value_at(v, path)?, path),
+    }
 }
 
 /// The pipeline's fixed constants (`fluid::constants`), recorded so a
@@ -602,7 +615,7 @@ pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport,
             format!("the embedded spec is not valid: {}", e.message),
         )
     })?;
-    spec.settings = read_settings(map.get("settings"), "$.settings")
+    spec.settings = recorded_settings(map.get("settings"), "$.settings")
         .map_err(|e| fail(&e.path, format!("the recorded settings are not valid: {}", e.message)))?;
     // Independent claims first.
     if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {

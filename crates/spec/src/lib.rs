@@ -36,19 +36,21 @@
 mod certificate;
 mod check;
 mod claims;
+pub mod document;
 #[cfg(feature = "fluid")]
 mod fluid;
 mod json;
 mod library;
 mod parse;
 mod pretty;
+pub mod record;
 mod settings;
 mod sweep;
 
 pub use certificate::{
     certificate_json, certify, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
 };
-pub use check::{check_certificate, check_certificate_value, CheckError, CheckReport, FLOAT_TOLERANCE};
+pub use check::{check_certificate, check_certificate_value, check_document, CheckError, CheckReport, FLOAT_TOLERANCE};
 pub use claims::{verify_claims, ClaimFailure};
 #[cfg(feature = "fluid")]
 pub use fluid::{

@@ -1,10 +1,8 @@
 //! Reading a spec: JSON in, a validated [`casimir::System`] out, and every
 //! error named by its JSON path.
 
-use crate::json::{
-    as_array, as_object, as_str, check_keys, child, expression_text, float, index, index_value, rational, read_name,
-    required, type_name, Result, SpecError,
-};
+use crate::document::{AlgebraDoc, Expression, SpecDocument, StoppingDoc};
+use crate::json::{child, index, type_name, Result, SpecError};
 use crate::settings::EngineSettings;
 use crate::sweep::{read_sweep_section, SweepSection};
 use algebra::{builtin, builtin_names, AlgebraError, LieAlgebra};
@@ -71,21 +69,6 @@ pub struct Spec {
     shape: Arc<Shape>,
 }
 
-const TOP_KEYS: &[&str] = &[
-    "name",
-    "description",
-    "algebra",
-    "parameters",
-    "hamiltonian",
-    "casimirs",
-    "first_integrals",
-    "equilibrium",
-    "noise",
-    "stopping",
-    "settings",
-    "sweep",
-];
-
 /// Largest number of noise fields accepted.
 pub const MAX_NOISE_FIELDS: usize = 256;
 
@@ -130,6 +113,14 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
 }
 
 impl Spec {
+    /// A spec from a document built in Rust (no JSON text); `raw`, the
+    /// JSON embedded in certificates, is the document serialised. See the
+    /// example in [`crate::document`].
+    pub fn from_document(doc: &SpecDocument) -> Result<Spec> {
+        let value = serde_json::to_value(doc).map_err(|e| SpecError::new("$", e.to_string()))?;
+        spec_from_value(value)
+    }
+
     /// The system at other parameter values (every parameter of the spec
     /// must be present in `parameters`). The expressions are re-read with
     /// the new values and the system re-validated; the algebra, the settings
@@ -234,91 +225,68 @@ impl Expr {
 
 fn read_shape(value: &Value) -> Result<Shape> {
     let root = "$";
-    let map = as_object(value, root)?;
-    check_keys(map, TOP_KEYS, root)?;
-    let name = read_name(map, root)?;
-    let settings = EngineSettings::from_json(map.get("settings"), &child(root, "settings"))?;
+    if !value.is_object() {
+        return Err(SpecError::new(root, format!("expected an object, found {}", type_name(value))));
+    }
+    let doc: SpecDocument = crate::document::from_value(value)?;
+    let name = doc.name.clone();
+    if name.trim().is_empty() {
+        return Err(SpecError::new(child(root, "name"), "must not be empty"));
+    }
+    let settings = match &doc.settings {
+        Some(s) => EngineSettings::from_document(s, &child(root, "settings"))?,
+        None => EngineSettings::default(),
+    };
 
     // Algebra.
     let algebra_path = child(root, "algebra");
-    let (algebra, builtin_casimirs, builtin_name) = read_algebra(required(map, "algebra", root)?, &algebra_path)?;
+    let (algebra, builtin_casimirs, builtin_name) = read_algebra(&doc.algebra, &algebra_path)?;
     let n = algebra.dim();
 
     let mut parameters = BTreeMap::new();
-    if let Some(p) = map.get("parameters") {
-        let ppath = child(root, "parameters");
-        for (key, v) in as_object(p, &ppath)? {
-            let kpath = child(&ppath, key);
-            if !is_identifier(key) {
-                return Err(SpecError::new(
-                    kpath,
-                    format!("'{key}' is not a valid parameter name (letters, digits, '_')"),
-                ));
-            }
-            if algebra.coordinates().contains(key) {
-                return Err(SpecError::new(kpath, format!("parameter '{key}' has the name of a coordinate")));
-            }
-            parameters.insert(key.clone(), rational(v, &kpath)?);
+    let ppath = child(root, "parameters");
+    for (key, v) in &doc.parameters {
+        let kpath = child(&ppath, key);
+        if !is_identifier(key) {
+            return Err(SpecError::new(kpath, format!("'{key}' is not a valid parameter name (letters, digits, '_')")));
         }
+        if algebra.coordinates().contains(key) {
+            return Err(SpecError::new(kpath, format!("parameter '{key}' has the name of a coordinate")));
+        }
+        parameters.insert(key.clone(), v.0.clone());
     }
-    let hamiltonian = Expr::new(expression_text(required(map, "hamiltonian", root)?, &child(root, "hamiltonian"))?);
-    let list = |key: &str| -> Result<Option<Vec<Expr>>> {
-        let Some(v) = map.get(key) else { return Ok(None) };
-        let path = child(root, key);
-        as_array(v, &path)?
-            .iter()
-            .enumerate()
-            .map(|(i, e)| expression_text(e, &index(&path, i)).map(Expr::new))
-            .collect::<Result<Vec<_>>>()
-            .map(Some)
-    };
-    let given_casimirs = list("casimirs")?;
-    let first_integrals = list("first_integrals")?.unwrap_or_default();
+    let hamiltonian = Expr::new(doc.hamiltonian.0.clone());
+    let texts = |list: &Vec<Expression>| list.iter().map(|e| Expr::new(e.0.clone())).collect::<Vec<_>>();
+    let given_casimirs = doc.casimirs.as_ref().map(texts);
+    let first_integrals = doc.first_integrals.as_ref().map(texts).unwrap_or_default();
 
     let epath = child(root, "equilibrium");
-    let eq = as_array(required(map, "equilibrium", root)?, &epath)?;
-    if eq.len() != n {
+    if doc.equilibrium.len() != n {
         return Err(SpecError::new(
             &epath,
-            format!("expected {n} components (the algebra's dimension), got {}", eq.len()),
+            format!("expected {n} components (the algebra's dimension), got {}", doc.equilibrium.len()),
         ));
     }
-    let equilibrium = eq
-        .iter()
-        .enumerate()
-        .map(|(i, v)| expression_text(v, &index(&epath, i)).map(Expr::new))
-        .collect::<Result<Vec<_>>>()?;
+    let equilibrium = texts(&doc.equilibrium);
 
     let npath = child(root, "noise");
-    let noise_list = as_array(required(map, "noise", root)?, &npath)?;
-    if noise_list.len() > MAX_NOISE_FIELDS {
+    if doc.noise.len() > MAX_NOISE_FIELDS {
         return Err(SpecError::new(&npath, format!("at most {MAX_NOISE_FIELDS} noise fields are supported")));
     }
     let mut noise = Vec::new();
-    for (i, field) in noise_list.iter().enumerate() {
-        let fpath = index(&npath, i);
-        let comps = as_array(field, &fpath)?;
-        if comps.len() != n {
+    for (i, field) in doc.noise.iter().enumerate() {
+        if field.len() != n {
             return Err(SpecError::new(
-                &fpath,
-                format!("expected {n} components (the algebra's dimension), got {}", comps.len()),
+                index(&npath, i),
+                format!("expected {n} components (the algebra's dimension), got {}", field.len()),
             ));
         }
-        noise.push(
-            comps
-                .iter()
-                .enumerate()
-                .map(|(j, v)| expression_text(v, &index(&fpath, j)).map(Expr::new))
-                .collect::<Result<Vec<_>>>()?,
-        );
+        noise.push(texts(field));
     }
 
-    let stopping = match map.get("stopping") {
-        None => None,
-        Some(v) => Some(read_stopping(v, &child(root, "stopping"))?),
-    };
+    let stopping = doc.stopping.as_ref().map(|s| read_stopping(s, &child(root, "stopping"))).transpose()?;
     let names: Vec<String> = parameters.keys().cloned().collect();
-    let sweep = read_sweep_section(map.get("sweep"), &child(root, "sweep"), &names)?;
+    let sweep = read_sweep_section(doc.sweep.as_ref(), &child(root, "sweep"), &names)?;
 
     // Casimirs: given, builtin, or discovered.
     let (casimirs, casimir_source, discovery) = match given_casimirs {
@@ -454,53 +422,34 @@ pub(crate) fn is_identifier(s: &str) -> bool {
 
 type AlgebraRead = (LieAlgebra, Option<Vec<&'static str>>, Option<String>);
 
-fn read_algebra(v: &Value, path: &str) -> Result<AlgebraRead> {
-    match v {
-        Value::String(name) => match builtin(name) {
+fn read_algebra(doc: &AlgebraDoc, path: &str) -> Result<AlgebraRead> {
+    match doc {
+        AlgebraDoc::Builtin(name) => match builtin(name) {
             Some(b) => Ok((b.algebra, Some(b.casimirs), Some(name.clone()))),
             None => Err(SpecError::new(
                 path,
                 format!("unknown algebra '{name}' (builtins: {}; or give an object with coordinates and structure_constants)", builtin_names().join(", ")),
             )),
         },
-        Value::Object(map) => {
-            check_keys(map, &["name", "coordinates", "structure_constants"], path)?;
-            let label = match map.get("name") {
-                Some(n) => as_str(n, &child(path, "name"))?.to_string(),
-                None => "custom".to_string(),
-            };
-            let cpath = child(path, "coordinates");
-            let coords = as_array(required(map, "coordinates", path)?, &cpath)?
-                .iter()
-                .enumerate()
-                .map(|(i, c)| as_str(c, &index(&cpath, i)).map(str::to_string))
-                .collect::<Result<Vec<_>>>()?;
+        AlgebraDoc::Custom(custom) => {
+            let label = custom.name.clone().unwrap_or_else(|| "custom".to_string());
             let spath = child(path, "structure_constants");
-            let rows_json = as_array(required(map, "structure_constants", path)?, &spath)?;
             let max_rows = algebra::MAX_DIMENSION.pow(3);
-            if rows_json.len() > max_rows {
+            if custom.structure_constants.len() > max_rows {
                 return Err(SpecError::new(&spath, format!("more than {max_rows} rows")));
             }
-            let mut rows = Vec::with_capacity(rows_json.len());
-            for (i, r) in rows_json.iter().enumerate() {
-                let rpath = index(&spath, i);
-                let entries = as_array(r, &rpath)?;
-                if entries.len() != 4 {
-                    return Err(SpecError::new(
-                        &rpath,
-                        format!("expected a row [a, b, k, c] of 4 entries, got {}", entries.len()),
-                    ));
-                }
-                let a = index_value(&entries[0], &index(&rpath, 0))?;
-                let b = index_value(&entries[1], &index(&rpath, 1))?;
-                let k = index_value(&entries[2], &index(&rpath, 2))?;
-                let c = rational(&entries[3], &index(&rpath, 3))?;
-                rows.push((a, b, k, c));
+            let too_large = |i: usize, j: usize| SpecError::new(index(&index(&spath, i), j), "index is too large");
+            let mut rows = Vec::with_capacity(custom.structure_constants.len());
+            for (i, r) in custom.structure_constants.iter().enumerate() {
+                let a = usize::try_from(r.a.0).map_err(|_| too_large(i, 0))?;
+                let b = usize::try_from(r.b.0).map_err(|_| too_large(i, 1))?;
+                let k = usize::try_from(r.k.0).map_err(|_| too_large(i, 2))?;
+                rows.push((a, b, k, r.c.0.clone()));
             }
-            let algebra = LieAlgebra::from_structure_constants(&label, &coords, &rows).map_err(|e| algebra_error(e, path))?;
+            let algebra = LieAlgebra::from_structure_constants(&label, &custom.coordinates, &rows)
+                .map_err(|e| algebra_error(e, path))?;
             Ok((algebra, None, None))
         }
-        other => Err(SpecError::new(path, format!("expected a builtin name or an object, found {}", type_name(other)))),
     }
 }
 
@@ -520,11 +469,9 @@ fn algebra_error(e: AlgebraError, path: &str) -> SpecError {
     SpecError::new(at, e.to_string())
 }
 
-pub(crate) fn read_stopping(v: &Value, path: &str) -> Result<Stopping> {
-    let map = as_object(v, path)?;
-    check_keys(map, &["epsilon", "delta"], path)?;
-    let epsilon = float(required(map, "epsilon", path)?, &child(path, "epsilon"))?;
-    let delta = float(required(map, "delta", path)?, &child(path, "delta"))?;
+pub(crate) fn read_stopping(doc: &StoppingDoc, path: &str) -> Result<Stopping> {
+    let epsilon = exact::rational_to_f64(&doc.epsilon.0);
+    let delta = exact::rational_to_f64(&doc.delta.0);
     if delta <= 0.0 {
         return Err(SpecError::new(child(path, "delta"), format!("must be positive, got {delta}")));
     }

@@ -1,8 +1,13 @@
 //! Engine settings: defaults, reading from a spec's optional `settings`
-//! object, and writing them into certificates.
+//! object ([`SettingsDoc`]), and writing them into certificates.
+//!
+//! Each setting is named once, as a field of [`SettingsDoc`]; its default is
+//! the engine's `Default` and its range is in [`RANGES`]. The JSON Schema
+//! (`schema/spec.schema.json`) takes both from here.
 
-use crate::json::{as_object, check_keys, child, float, index_value, Result, SpecError};
-use serde_json::{json, Value};
+use crate::document::{Index, Real, SettingsDoc};
+use crate::json::{Result, SpecError};
+use serde_json::Value;
 
 /// All settings that influence a certificate, with documented defaults.
 #[derive(Clone, Debug, PartialEq)]
@@ -22,140 +27,108 @@ impl Default for EngineSettings {
     }
 }
 
-/// One setting: its key in `settings`, how it is read (with its range) and
-/// how it is written into certificates, in one place.
-struct Setting {
-    name: &'static str,
-    read: fn(&Value, &str, &mut EngineSettings) -> Result<()>,
-    write: fn(&EngineSettings) -> Value,
-}
-
-fn boolean(v: &Value, path: &str) -> Result<bool> {
-    v.as_bool().ok_or_else(|| SpecError::new(path, "expected true or false"))
-}
-
-/// Every setting that influences a certificate. The defaults live in
-/// [`EngineSettings::default`] and the documented `Default`s of the
-/// pipeline's settings.
-const SETTINGS: &[Setting] = &[
-    Setting {
-        name: "definiteness_tolerance",
-        read: |v, p, s| {
-            s.pipeline.search.definiteness_tolerance = in_range(float(v, p)?, 1e-15, 0.5, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.search.definiteness_tolerance),
-    },
-    Setting {
-        name: "search_iterations",
-        read: |v, p, s| {
-            s.pipeline.search.max_iterations = in_range(index_value(v, p)?, 1, 100_000, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.search.max_iterations),
-    },
-    Setting {
-        name: "search_expansions",
-        read: |v, p, s| {
-            s.pipeline.search.max_expansions = in_range(index_value(v, p)?, 0, 10, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.search.max_expansions),
-    },
-    Setting {
-        name: "max_denominator",
-        read: |v, p, s| {
-            s.pipeline.search.max_denominator = in_range(index_value(v, p)? as u64, 16, 1_000_000_000_000, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.search.max_denominator),
-    },
-    Setting {
-        name: "instability_tolerance",
-        read: |v, p, s| {
-            s.pipeline.instability_tolerance = in_range(float(v, p)?, 1e-15, 0.5, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.instability_tolerance),
-    },
-    Setting {
-        name: "discovery_degree",
-        read: |v, p, s| {
-            s.discovery_degree = in_range(index_value(v, p)?, 0, 8, p)? as u32;
-            Ok(())
-        },
-        write: |s| json!(s.discovery_degree),
-    },
-    Setting {
-        name: "discovery_max_unknowns",
-        read: |v, p, s| {
-            s.discovery_max_unknowns = in_range(index_value(v, p)?, 1, 20_000, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.discovery_max_unknowns),
-    },
-    Setting {
-        name: "optimise",
-        read: |v, p, s| {
-            s.pipeline.optimise = boolean(v, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.optimise),
-    },
-    Setting {
-        name: "exact",
-        read: |v, p, s| {
-            s.pipeline.exact = boolean(v, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.exact),
-    },
-    Setting {
-        name: "optimisation_tolerance",
-        read: |v, p, s| {
-            s.pipeline.optimisation.tolerance = in_range(float(v, p)?, 1e-14, 0.1, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.optimisation.tolerance),
-    },
-    Setting {
-        name: "optimisation_iterations",
-        read: |v, p, s| {
-            s.pipeline.optimisation.max_iterations = in_range(index_value(v, p)?, 1, 100_000, p)?;
-            Ok(())
-        },
-        write: |s| json!(s.pipeline.optimisation.max_iterations),
-    },
+/// The accepted range `[min, max]` of every numeric setting.
+pub const RANGES: &[(&str, f64, f64)] = &[
+    ("definiteness_tolerance", 1e-15, 0.5),
+    ("search_iterations", 1.0, 100_000.0),
+    ("search_expansions", 0.0, 10.0),
+    ("max_denominator", 16.0, 1e12),
+    ("instability_tolerance", 1e-15, 0.5),
+    ("discovery_degree", 0.0, 8.0),
+    ("discovery_max_unknowns", 1.0, 20_000.0),
+    ("optimisation_tolerance", 1e-14, 0.1),
+    ("optimisation_iterations", 1.0, 100_000.0),
 ];
 
-fn in_range<T: PartialOrd + std::fmt::Display>(v: T, lo: T, hi: T, path: &str) -> Result<T> {
-    if v < lo || v > hi {
-        return Err(SpecError::new(path, format!("must be between {lo} and {hi}, got {v}")));
+/// The range of a numeric setting.
+pub fn range_of(name: &str) -> Option<(f64, f64)> {
+    RANGES.iter().find(|r| r.0 == name).map(|r| (r.1, r.2))
+}
+
+/// The value of a setting, checked against its range (integers are exact
+/// as doubles far beyond these ranges).
+fn in_range(x: f64, name: &str, path: &str) -> Result<f64> {
+    let (lo, hi) = range_of(name).unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    if !(lo..=hi).contains(&x) {
+        return Err(SpecError::new(format!("{path}.{name}"), format!("must be between {lo} and {hi}, got {x}")));
     }
-    Ok(v)
+    Ok(x)
 }
 
 impl EngineSettings {
-    /// Read from an optional JSON object; absent keys keep their defaults.
-    pub fn from_json(value: Option<&Value>, path: &str) -> Result<Self> {
+    /// The defaults with the document's settings applied, each checked
+    /// against its range; `path` is the JSON path of the settings object.
+    pub fn from_document(doc: &SettingsDoc, path: &str) -> Result<Self> {
         let mut s = EngineSettings::default();
-        let Some(value) = value else { return Ok(s) };
-        let map = as_object(value, path)?;
-        let keys: Vec<&str> = SETTINGS.iter().map(|k| k.name).collect();
-        check_keys(map, &keys, path)?;
-        for (key, v) in map {
-            let p = child(path, key);
-            match SETTINGS.iter().find(|k| k.name == key) {
-                Some(setting) => (setting.read)(v, &p, &mut s)?,
-                None => return Err(SpecError::new(&p, format!("unknown setting '{key}'"))),
-            }
+        let real = |x: Option<Real>, name: &str| x.map(|r| in_range(r.0, name, path)).transpose();
+        let int =
+            |x: Option<Index>, name: &str| x.map(|r| in_range(r.0 as f64, name, path).map(|v| v as u64)).transpose();
+        if let Some(x) = real(doc.definiteness_tolerance, "definiteness_tolerance")? {
+            s.pipeline.search.definiteness_tolerance = x;
+        }
+        if let Some(x) = int(doc.search_iterations, "search_iterations")? {
+            s.pipeline.search.max_iterations = x as usize;
+        }
+        if let Some(x) = int(doc.search_expansions, "search_expansions")? {
+            s.pipeline.search.max_expansions = x as usize;
+        }
+        if let Some(x) = int(doc.max_denominator, "max_denominator")? {
+            s.pipeline.search.max_denominator = x;
+        }
+        if let Some(x) = real(doc.instability_tolerance, "instability_tolerance")? {
+            s.pipeline.instability_tolerance = x;
+        }
+        if let Some(x) = int(doc.discovery_degree, "discovery_degree")? {
+            s.discovery_degree = x as u32;
+        }
+        if let Some(x) = int(doc.discovery_max_unknowns, "discovery_max_unknowns")? {
+            s.discovery_max_unknowns = x as usize;
+        }
+        if let Some(x) = doc.optimise {
+            s.pipeline.optimise = x;
+        }
+        if let Some(x) = doc.exact {
+            s.pipeline.exact = x;
+        }
+        if let Some(x) = real(doc.optimisation_tolerance, "optimisation_tolerance")? {
+            s.pipeline.optimisation.tolerance = x;
+        }
+        if let Some(x) = int(doc.optimisation_iterations, "optimisation_iterations")? {
+            s.pipeline.optimisation.max_iterations = x as usize;
         }
         Ok(s)
     }
 
+    /// Every setting, as the document a certificate records.
+    pub fn to_document(&self) -> SettingsDoc {
+        let p = &self.pipeline;
+        SettingsDoc {
+            definiteness_tolerance: Some(Real(p.search.definiteness_tolerance)),
+            search_iterations: Some(Index(p.search.max_iterations as u64)),
+            search_expansions: Some(Index(p.search.max_expansions as u64)),
+            max_denominator: Some(Index(p.search.max_denominator)),
+            instability_tolerance: Some(Real(p.instability_tolerance)),
+            discovery_degree: Some(Index(self.discovery_degree as u64)),
+            discovery_max_unknowns: Some(Index(self.discovery_max_unknowns as u64)),
+            optimise: Some(p.optimise),
+            exact: Some(p.exact),
+            optimisation_tolerance: Some(Real(p.optimisation.tolerance)),
+            optimisation_iterations: Some(Index(p.optimisation.max_iterations as u64)),
+        }
+    }
+
+    /// Read from an optional JSON object at `path`; absent keys keep their
+    /// defaults.
+    pub fn from_json(value: Option<&Value>, path: &str) -> Result<Self> {
+        match value {
+            None => Ok(EngineSettings::default()),
+            Some(v) => Self::from_document(&crate::document::from_value_at(v, path)?, path),
+        }
+    }
+
     /// The settings as a JSON object (all keys).
     pub fn to_json(&self) -> Value {
-        Value::Object(SETTINGS.iter().map(|k| (k.name.to_string(), (k.write)(self))).collect())
+        serde_json::to_value(self.to_document()).unwrap_or_default()
     }
 }
 
@@ -181,12 +154,17 @@ mod tests {
             assert!(x.as_f64() == y.as_f64() && x.as_bool() == y.as_bool(), "{k}: {x} written as {y}");
         }
         assert_eq!(EngineSettings::from_json(Some(&s.to_json()), "$.settings").unwrap(), s);
-        assert_eq!(EngineSettings::default().to_json().as_object().unwrap().len(), SETTINGS.len());
+        // Every numeric setting has a range, every setting is written.
+        let all = EngineSettings::default().to_json();
+        let numeric = all.as_object().unwrap().iter().filter(|(_, v)| v.is_number()).count();
+        assert_eq!(numeric, RANGES.len());
+        assert!(RANGES.iter().all(|r| all.get(r.0).is_some()));
         let bad: Value = serde_json::from_str(r#"{"search_expansions": 11}"#).unwrap();
         let e = EngineSettings::from_json(Some(&bad), "$.settings").unwrap_err();
         assert_eq!(e.path, "$.settings.search_expansions");
         assert!(e.message.contains("between 0 and 10"), "{e}");
         let unknown: Value = serde_json::from_str(r#"{"max_doublings": 3}"#).unwrap();
-        assert!(EngineSettings::from_json(Some(&unknown), "$.settings").is_err());
+        let e = EngineSettings::from_json(Some(&unknown), "$.settings").unwrap_err();
+        assert_eq!(e.path, "$.settings.max_doublings");
     }
 }

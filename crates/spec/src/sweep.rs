@@ -16,9 +16,9 @@
 //! boundary is the zero set of its expression; a domain entry keeps the
 //! points where its expression is `>= 0`.
 
-use crate::json::{as_array, as_object, as_str, check_keys, child, index, Result, SpecError};
+use crate::document::SweepDoc;
+use crate::json::{child, index, Result, SpecError};
 use exact::{parse_expression, parse_number, Poly, Rational, Symbols};
-use serde_json::Value;
 
 /// Largest number of points in one swept range.
 pub const MAX_RANGE_COUNT: u64 = 1_000_000_000;
@@ -168,10 +168,8 @@ impl SweepSection {
 }
 
 /// Read the optional `sweep` section; `names` are the spec's parameters.
-pub(crate) fn read_sweep_section(v: Option<&Value>, path: &str, names: &[String]) -> Result<SweepSection> {
-    let Some(v) = v else { return Ok(SweepSection::default()) };
-    let map = as_object(v, path)?;
-    check_keys(map, &["ranges", "boundaries", "reference_sigma2", "domain"], path)?;
+pub(crate) fn read_sweep_section(doc: Option<&SweepDoc>, path: &str, names: &[String]) -> Result<SweepSection> {
+    let Some(doc) = doc else { return Ok(SweepSection::default()) };
     let mut s = SweepSection::default();
     let symbols = Symbols::new(names);
     let poly = |text: &str, p: &str| -> Result<Poly> {
@@ -179,38 +177,25 @@ pub(crate) fn read_sweep_section(v: Option<&Value>, path: &str, names: &[String]
             SpecError::new(p, format!("in '{text}': {e} (a polynomial in the parameters {})", names.join(", ")))
         })
     };
-    if let Some(r) = map.get("ranges") {
-        let rpath = child(path, "ranges");
-        for (i, e) in as_array(r, &rpath)?.iter().enumerate() {
-            let p = index(&rpath, i);
-            let range = ParamRange::parse(as_str(e, &p)?).map_err(|m| SpecError::new(&p, m.0))?;
-            if !names.contains(&range.name) {
-                return Err(SpecError::new(&p, unknown_parameter(&range.name, names)));
-            }
-            if s.ranges.iter().any(|q: &ParamRange| q.name == range.name) {
-                return Err(SpecError::new(&p, format!("parameter '{}' is swept twice", range.name)));
-            }
-            s.ranges.push(range);
+    let rpath = child(path, "ranges");
+    for (i, e) in doc.ranges.iter().flatten().enumerate() {
+        let p = index(&rpath, i);
+        let range = ParamRange::parse(e).map_err(|m| SpecError::new(&p, m.0))?;
+        if !names.contains(&range.name) {
+            return Err(SpecError::new(&p, unknown_parameter(&range.name, names)));
         }
+        if s.ranges.iter().any(|q: &ParamRange| q.name == range.name) {
+            return Err(SpecError::new(&p, format!("parameter '{}' is swept twice", range.name)));
+        }
+        s.ranges.push(range);
     }
-    for key in ["boundaries", "reference_sigma2"] {
-        let Some(list) = map.get(key) else { continue };
+    for (key, list) in [("boundaries", &doc.boundaries), ("reference_sigma2", &doc.reference_sigma2)] {
         let lpath = child(path, key);
-        for (i, e) in as_array(list, &lpath)?.iter().enumerate() {
-            let p = index(&lpath, i);
-            let m = as_object(e, &p)?;
-            check_keys(m, &["expression", "label"], &p)?;
-            let epath = child(&p, "expression");
-            let text = as_str(
-                m.get("expression").ok_or_else(|| SpecError::new(&epath, "required field is missing"))?,
-                &epath,
-            )?;
-            let label = match m.get("label") {
-                Some(l) => as_str(l, &child(&p, "label"))?.to_string(),
-                None => text.to_string(),
-            };
-            let a =
-                Annotation { label, expression: text.to_string(), names: names.to_vec(), poly: poly(text, &epath)? };
+        for (i, e) in list.iter().flatten().enumerate() {
+            let epath = child(&index(&lpath, i), "expression");
+            let text = &e.expression;
+            let label = e.label.clone().unwrap_or_else(|| text.clone());
+            let a = Annotation { label, expression: text.clone(), names: names.to_vec(), poly: poly(text, &epath)? };
             if key == "boundaries" {
                 s.boundaries.push(a)
             } else {
@@ -218,18 +203,15 @@ pub(crate) fn read_sweep_section(v: Option<&Value>, path: &str, names: &[String]
             }
         }
     }
-    if let Some(list) = map.get("domain") {
-        let lpath = child(path, "domain");
-        for (i, e) in as_array(list, &lpath)?.iter().enumerate() {
-            let p = index(&lpath, i);
-            let text = as_str(e, &p)?;
-            s.domain.push(Annotation {
-                label: format!("{text} >= 0"),
-                expression: text.to_string(),
-                names: names.to_vec(),
-                poly: poly(text, &p)?,
-            });
-        }
+    let lpath = child(path, "domain");
+    for (i, text) in doc.domain.iter().flatten().enumerate() {
+        let p = index(&lpath, i);
+        s.domain.push(Annotation {
+            label: format!("{text} >= 0"),
+            expression: text.clone(),
+            names: names.to_vec(),
+            poly: poly(text, &p)?,
+        });
     }
     Ok(s)
 }

@@ -1,0 +1,153 @@
+//! The compressible (barotropic) model: the noise-compatibility test and
+//! the structural `Sigma^2 = 0` with the shifted energy–Casimir form.
+
+use super::*;
+
+/// The compressible model (see `docs/fluids.md`): the coadjoint action of
+/// the noise `(eta(y), 0)` on the momentum `m = rho u` contains
+/// `(grad sigma)^T m = (0, U eta')`, a y-momentum source at the equilibrium
+/// that no pressure can absorb (the density is not constrained), so the
+/// equilibrium is kept only by noise with `U eta' = 0`, i.e. constant
+/// `eta` where the flow is non-zero. For such noise `B_k = -ik eta_k I`
+/// commutes with the drift and with the form, so `Sigma^2 = 0`; the form
+/// `|du|^2 + 2(U + c) drho du_x + c_s^2 drho^2 + w (curl du + U' drho)^2`
+/// is positive definite iff `w >= 0` and `|U + c| < c_s` on the interval.
+///
+/// What `stable` rests on is proved, not sampled: every `eta_k'` vanishes
+/// identically (interval arithmetic, [`crate::expr::Derivative::sign_on`]),
+/// and the range of `U` over the closed interval is enclosed rigorously, so
+/// that `|U + c| < c_s` holds everywhere for the chosen `c`. The weight's
+/// sign is proved for the pseudomomentum and the uniform flow (level
+/// `exact_structure`) and only sampled for a forced shift (level `float`).
+/// Noise whose residual `sup |U eta'|` is far above rounding on the samples
+/// is `noise_incompatible` (level `float`); noise in between, neither proved
+/// compatible nor clearly not, is `inconclusive`.
+pub(super) fn analyse_compressible(
+    problem: &FluidProblem,
+    settings: &FluidSettings,
+    sound_speed: f64,
+    paper_bound: f64,
+) -> FluidAnalysis {
+    let profile = &problem.profile;
+    let (a, b) = profile.interval;
+    let ys = profile.samples(crate::constants::FINE_SAMPLES);
+    let us: Vec<f64> = ys.iter().map(|y| profile.u[0].eval(*y)).collect();
+    let u_abs = us.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+    let noise_residuals: Vec<f64> = profile
+        .eta
+        .iter()
+        .map(|[_, d]| ys.iter().zip(&us).map(|(y, u)| (u * d.eval(*y)).abs()).fold(0.0, f64::max))
+        .collect();
+    let constant_noise: Vec<bool> = profile
+        .eta
+        .iter()
+        .map(|[_, d]| {
+            d.expr().constant().is_some() || d.sign_on(a, b, crate::choice::SIGN_PROOF_BUDGET) == SignProof::Zero
+        })
+        .collect();
+    let incompressible = analyse(&FluidProblem { model: FluidModel::Incompressible, ..problem.clone() }, settings).ok();
+    let (incompressible_verdict, incompressible_sigma2) =
+        incompressible.as_ref().map(|a| (a.verdict, a.sigma2)).unwrap_or((Verdict::Inconclusive, None));
+    let choice = choose(profile);
+    // A rigorous enclosure of the range of U over the closed interval.
+    let range = profile.u[0].range_on(a, b, 1024);
+    let uniform = profile.u[1].sign_on(a, b, crate::choice::SIGN_PROOF_BUDGET) == SignProof::Zero;
+    let c_s = Interval::point(sound_speed);
+    // The largest c with c + U_hi < c_s (exactly, through the interval's lower bound).
+    let below_cs = |u_hi: f64| (c_s - Interval::point(u_hi)).lo;
+    let above = |x: f64| -x; // negation is exact
+    let (shift_interval, proved_weight) = if !(range.lo.is_finite() && range.hi.is_finite()) {
+        (None, false)
+    } else {
+        match &choice {
+            Choice::Pseudomomentum { sign } if sign.is_positive() => {
+                // U + c > 0 (w = (U + c)/U'' >= 0) and U + c < c_s
+                let (lo, hi) = (above(range.lo), below_cs(range.hi));
+                ((lo < hi).then_some((lo, hi)), true)
+            }
+            Choice::Pseudomomentum { .. } => {
+                // U'' < 0: U + c < 0 and U + c > -c_s
+                let (lo, hi) = ((Interval::point(-sound_speed) - Interval::point(range.lo)).hi, above(range.hi));
+                ((lo < hi).then_some((lo, hi)), true)
+            }
+            _ if uniform => {
+                // U constant (U' = 0 proved): c = -U brings the flow to rest
+                let c = -(0.5 * range.lo + 0.5 * range.hi);
+                let w = Interval::point(c) + range;
+                ((w.hi < sound_speed && w.lo > -sound_speed).then_some((c, c)), true)
+            }
+            Choice::Forced { shift, sign, .. } if sign.is_positive() => {
+                let worst = Interval::point(*shift) + range;
+                ((worst.hi < sound_speed && worst.lo > -sound_speed).then_some((*shift, *shift)), false)
+            }
+            _ => (None, false),
+        }
+    };
+    let mut summary = form_summary(&choice);
+    let compressible = CompressibleReport {
+        sound_speed,
+        noise_residuals: noise_residuals.clone(),
+        shift_interval,
+        incompressible_verdict,
+        incompressible_sigma2,
+    };
+    let base = FluidAnalysis {
+        compressible: Some(compressible),
+        ..FluidAnalysis::without_certificate(Verdict::Inconclusive, String::new(), summary.clone(), paper_bound)
+    };
+    let scale = u_abs.max(f64::MIN_POSITIVE);
+    if let Some(i) = (0..noise_residuals.len()).find(|&i| !constant_noise[i] && noise_residuals[i] > 1e-12 * scale) {
+        return FluidAnalysis {
+            verdict: Verdict::NoiseIncompatible,
+            verification: Some(VerificationLevel::Float),
+            reason: format!(
+                "the coadjoint action of noise[{i}] on the momentum rho u contains (grad sigma)^T m = (0, U eta'), which is not zero at the equilibrium (compressible.noise_residuals gives sup |U eta'|): in compressible flow no pressure absorbs it (in incompressible flow it is a gradient), so the noise moves the shear flow; compatible noise has U eta' = 0 (constant eta where U != 0)"
+            ),
+            ..base
+        };
+    }
+    if let Some(i) = constant_noise.iter().position(|c| !c) {
+        return FluidAnalysis {
+            reason: format!(
+                "noise[{i}]: U eta' is below 1e-12 of max|U| on every sample, but eta' could not be proved identically zero, so neither compatibility (B_k a multiple of the identity) nor incompatibility is established"
+            ),
+            ..base
+        };
+    }
+    let Some((lo, hi)) = shift_interval else {
+        let reason = match &choice {
+            Choice::NoForm { reason } => reason.clone(),
+            Choice::Forced { sign, .. } if !sign.is_positive() => "the forced Casimir weight is negative, and a compressible form cannot be negative definite (the acoustic energy is positive)".into(),
+            _ => format!(
+                "no Galilean shift c makes the form definite: it needs |U + c| < c_s = {sound_speed} and (U + c)/U'' >= 0 on the whole interval, but U ranges over [{:.6}, {:.6}] (a rigorous enclosure)",
+                range.lo, range.hi
+            ),
+        };
+        return FluidAnalysis { reason, ..base };
+    };
+    let c = if lo == hi { lo } else { 0.5 * lo + 0.5 * hi };
+    summary.energy = 1.0;
+    summary.galilean_shift = Some(c);
+    summary.sign = Some(Sign::Positive);
+    summary.kind = "energy_casimir_momentum";
+    let worst = Interval::point(c) + range;
+    let worst = worst.hi.abs().max(worst.lo.abs());
+    let ks = wavenumbers(problem);
+    let modes = ks
+        .iter()
+        .map(|&(m, k)| ModeResult { m, k, sigma2: 0.0, sigma2_upper: Some(0.0), form_verified: true, iterations: 0 })
+        .collect();
+    FluidAnalysis {
+        verdict: Verdict::Stable,
+        reason: format!(
+            "every noise field is constant (eta' = 0 proved), so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} (admissible c in [{lo:.6}, {hi:.6}]) is positive definite because |U + c| <= {worst:.6} < c_s = {sound_speed} on the whole interval (a rigorous enclosure of U){}",
+            if proved_weight { "" } else { ", with the Casimir weight (U + c)/U'' non-negative on a fine sample (not proved: level float)" }
+        ),
+        form: summary,
+        sigma2: Some(0.0),
+        sigma2_upper: Some(0.0),
+        verification: Some(if proved_weight { VerificationLevel::ExactStructure } else { VerificationLevel::Float }),
+        modes,
+        ..base
+    }
+}

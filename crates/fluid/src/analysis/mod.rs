@@ -1,0 +1,261 @@
+//! The fluid pipeline: profile checks, the choice of functional, Sigma^2 per
+//! x-mode (Lanczos at every resolution of the convergence table, the dense
+//! verified check at the finest), the paper's constants beside ours, the
+//! linear-instability test, and the compressible noise-compatibility test.
+
+use crate::choice::{casimir_weight, choose, Choice};
+use crate::constants::{VERIFY_ATTEMPTS, VERIFY_MARGIN_GROWTH, VERIFY_MARGIN_START, VERIFY_RITZ_WEIGHT};
+use crate::expr::SignProof;
+use crate::grid::{Boundary, YGrid};
+use crate::interval::Interval;
+use crate::modes::{Coefficients, Form, Mode};
+use crate::profile::{Profile, ProfileError};
+use rayon::prelude::*;
+
+mod compressible;
+mod forms;
+mod incompressible;
+mod instability;
+mod scaling;
+
+use compressible::*;
+use forms::*;
+use incompressible::*;
+use instability::*;
+use scaling::*;
+
+pub use forms::chosen_form;
+pub use incompressible::prove_mode_bounds;
+
+/// Incompressible or compressible (barotropic, `rho_e = 1`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FluidModel {
+    /// 2D incompressible Euler (vorticity form).
+    Incompressible,
+    /// 2D compressible barotropic Euler with sound speed `c_s` at `rho = 1`.
+    Compressible {
+        /// `c_s`.
+        sound_speed: f64,
+    },
+}
+
+impl FluidModel {
+    /// Name as in the spec.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            FluidModel::Incompressible => "incompressible",
+            FluidModel::Compressible { .. } => "compressible",
+        }
+    }
+}
+
+/// A shear-flow stability problem.
+#[derive(Clone, Debug)]
+pub struct FluidProblem {
+    /// The model.
+    pub model: FluidModel,
+    /// Profile, noise, interval, boundary.
+    pub profile: Profile,
+    /// Period in x.
+    pub x_period: f64,
+    /// Finest y-resolution.
+    pub ny: usize,
+    /// Number of x-modes `m = 1..=x_modes` (`k = 2 pi m / x_period`).
+    pub x_modes: usize,
+}
+
+/// Numerical settings of the fluid pipeline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FluidSettings {
+    /// Relative residual at which a Lanczos run stops (default `1e-10`).
+    pub lanczos_tolerance: f64,
+    /// Coarsest `ny` of the convergence table (default 64); the table doubles up to `ny`.
+    pub convergence_from: usize,
+    /// Resolution of the dense eigenvalue test for linear instability (default 256).
+    pub instability_ny: usize,
+}
+
+impl Default for FluidSettings {
+    fn default() -> Self {
+        FluidSettings { lanczos_tolerance: 1e-10, convergence_from: 64, instability_ny: 256 }
+    }
+}
+
+/// The verdicts are the finite-dimensional pipeline's [`Verdict`] (a shear
+/// flow is always an equilibrium, so `NotAnEquilibrium` does not occur).
+pub use outcome::{Sign, Verdict, VerificationLevel};
+
+/// Sigma^2 of one x-mode at the finest grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModeResult {
+    /// Index `m` (`k = 2 pi m / x_period`).
+    pub m: usize,
+    /// Wavenumber.
+    pub k: f64,
+    /// `max(lambda_max, 0)`.
+    pub sigma2: f64,
+    /// The verified upper bound (`None` if the dense check failed).
+    pub sigma2_upper: Option<f64>,
+    /// `V ≻ 0` verified by the dense check.
+    pub form_verified: bool,
+    /// Lanczos steps.
+    pub iterations: usize,
+}
+
+/// One row of the convergence table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConvergenceRow {
+    /// Resolution.
+    pub ny: usize,
+    /// Sigma^2 (max over modes) of the chosen functional.
+    pub sigma2: Option<f64>,
+    /// Sigma^2 with the paper's Casimir (`c = 0`), if admissible.
+    pub sigma2_paper_choice: Option<f64>,
+}
+
+/// The functional used, for the certificate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FormSummary {
+    /// `pseudomomentum`, `enstrophy`, `energy_casimir` or `none`.
+    pub kind: &'static str,
+    /// Coefficient of the energy.
+    pub energy: f64,
+    /// The Galilean shift `c` (`None` for the pseudomomentum: the limit `|c| -> infinity`).
+    pub galilean_shift: Option<f64>,
+    /// Sign making the form positive (`None`: no form).
+    pub sign: Option<Sign>,
+    /// The Casimir weight as a formula in words.
+    pub casimir_weight: String,
+}
+
+/// Evidence of linear instability.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnstableMode {
+    /// Index `m`.
+    pub m: usize,
+    /// Wavenumber.
+    pub k: f64,
+    /// Growth rate at the test resolution.
+    pub growth_rate: f64,
+    /// Growth rate at half that resolution (agreement shows convergence).
+    pub growth_rate_coarse: f64,
+    /// The test resolution.
+    pub ny: usize,
+}
+
+/// The compressible noise-compatibility test.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompressibleReport {
+    /// `c_s`.
+    pub sound_speed: f64,
+    /// `sup_y |U eta_k'|` per noise field: the y-momentum the noise puts into
+    /// the equilibrium (zero iff compatible).
+    pub noise_residuals: Vec<f64>,
+    /// The admissible Galilean shifts `(c_lo, c_hi)` making the form definite, if any.
+    pub shift_interval: Option<(f64, f64)>,
+    /// The verdict of the same profile and noise in the incompressible model.
+    pub incompressible_verdict: Verdict,
+    /// Its Sigma^2.
+    pub incompressible_sigma2: Option<f64>,
+}
+
+/// Everything the fluid pipeline found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FluidAnalysis {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Why, in a sentence.
+    pub reason: String,
+    /// The functional.
+    pub form: FormSummary,
+    /// Sigma^2 (max over modes), if stable.
+    pub sigma2: Option<f64>,
+    /// Verified upper bound of Sigma^2 (max over modes), if every mode verified.
+    pub sigma2_upper: Option<f64>,
+    /// How the bound was verified.
+    pub verification: Option<VerificationLevel>,
+    /// Per-mode values at the finest grid.
+    pub modes: Vec<ModeResult>,
+    /// Sigma^2 under refinement.
+    pub convergence: Vec<ConvergenceRow>,
+    /// The paper's `sup_y sum_k eta_k'(y)^2` (`None` where it exceeds the
+    /// range of doubles).
+    pub paper_bound: Option<f64>,
+    /// Sigma^2 with the paper's functional (`c = 0`), if it is definite.
+    pub paper_choice_sigma2: Option<f64>,
+    /// Sigma^2 of `H + C + cM` for shifts `c` moving away from the
+    /// admissible edge: `(c, Sigma^2)`, decreasing to the pseudomomentum's 0.
+    pub shift_curve: Vec<(f64, f64)>,
+    /// `max_k ||sym(V A)||_F / ||V||_F` at the coarsest table resolution.
+    pub drift_residual: Option<f64>,
+    /// Evidence of linear instability, if found.
+    pub instability: Option<UnstableMode>,
+    /// The compressible part, if the model is compressible.
+    pub compressible: Option<CompressibleReport>,
+}
+
+impl FluidAnalysis {
+    /// A result with no Sigma^2 and no evidence beyond the verdict and reason.
+    fn without_certificate(verdict: Verdict, reason: String, form: FormSummary, paper_bound: f64) -> Self {
+        FluidAnalysis {
+            verdict,
+            reason,
+            form,
+            sigma2: None,
+            sigma2_upper: None,
+            verification: None,
+            modes: vec![],
+            convergence: vec![],
+            paper_bound: Some(paper_bound),
+            paper_choice_sigma2: None,
+            shift_curve: vec![],
+            drift_residual: None,
+            instability: None,
+            compressible: None,
+        }
+    }
+}
+
+/// Bad input found while analysing (the spec layer maps these to JSON paths).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FluidError {
+    /// The profile or noise is unusable.
+    #[error(transparent)]
+    Profile(#[from] ProfileError),
+}
+
+/// The wavenumbers `k_m = 2 pi m / x_period`, `m = 1..=x_modes`.
+pub fn wavenumbers(problem: &FluidProblem) -> Vec<(usize, f64)> {
+    (1..=problem.x_modes).map(|m| (m, 2.0 * std::f64::consts::PI * m as f64 / problem.x_period)).collect()
+}
+
+/// The resolutions of the convergence table: `from, 2 from, ...` below `ny`, then `ny`.
+pub fn table_resolutions(ny: usize, from: usize) -> Vec<usize> {
+    let mut out = vec![];
+    let mut r = from.max(16);
+    while r < ny {
+        out.push(r);
+        r *= 2;
+    }
+    out.push(ny);
+    out
+}
+
+/// Run the pipeline.
+///
+/// The noise enters `Q` quadratically and nowhere else, so the pipeline runs
+/// on the noise divided by a power of two `2^e` close to its largest value
+/// (exactly, in binary floating point) and multiplies every `Sigma^2` by
+/// `4^e` at the end. An amplitude of `1e160` then gives `Sigma^2` near
+/// `1e318`, which no double holds: the verdict is `inconclusive` with that
+/// reason, never a `Sigma^2` rounded to 0 or to infinity (the squares
+/// overflowed to NaN before, which was floored to 0).
+pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<FluidAnalysis, FluidError> {
+    let profile = &problem.profile;
+    let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
+    profile.check(fine.nodes())?;
+    let (scaled, e) = normalise_noise(problem, &fine);
+    let a = analyse_normalised(&scaled, settings, &fine);
+    Ok(if e == 0 { a } else { rescale(a, e) })
+}

@@ -1,0 +1,808 @@
+//! The spec contract as typed documents: serde-derived structs for the
+//! finite-dimensional spec ([`SpecDocument`]), the fluid spec
+//! ([`FluidSpecDocument`]) and their sections, and the JSON Schema of both,
+//! generated from these types (schemars).
+//!
+//! Reading a spec has two stages. First the JSON is deserialised into these
+//! types, which rejects unknown fields, missing required fields and values
+//! of the wrong type, every error named by its JSON path (serde_path_to_error
+//! tracks the path). Then the parser turns the document into a validated
+//! system: expressions are parsed, dimensions matched, ranges checked. A Rust
+//! user can build a document directly and hand it to
+//! [`Spec::from_document`](crate::Spec::from_document) or
+//! [`FluidSpec::from_document`](crate::FluidSpec::from_document) without
+//! writing JSON.
+//!
+//! ```
+//! use spec::document::{AlgebraDoc, Expression, SpecDocument};
+//! let doc = SpecDocument {
+//!     name: "rigid body".into(),
+//!     algebra: AlgebraDoc::Builtin("so3".into()),
+//!     hamiltonian: Expression::from("Pi1^2/6 + Pi2^2/4 + Pi3^2/2"),
+//!     equilibrium: vec!["1".into(), "0".into(), "0".into()],
+//!     noise: vec![vec!["3/10".into(), "0".into(), "0".into()]],
+//!     ..SpecDocument::default()
+//! };
+//! let spec = spec::Spec::from_document(&doc).unwrap();
+//! // Major axis I1 = 3 > I2 = 2 > I3 = 1, noise about it: stable.
+//! assert_eq!(spec::certify(&spec).analysis.verdict, spec::Verdict::Stable);
+//! ```
+
+use crate::json::SpecError;
+use exact::{parse_number, Rational};
+use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// An expression: a string such as `"Pi1^2/(2*I1)"` or a JSON number used
+/// as a constant. Kept as text; the parser reads it.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(transparent)]
+pub struct Expression(pub String);
+
+impl From<&str> for Expression {
+    fn from(s: &str) -> Self {
+        Expression(s.to_string())
+    }
+}
+
+impl From<String> for Expression {
+    fn from(s: String) -> Self {
+        Expression(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for Expression {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        // Through `Value`: with serde_json's arbitrary_precision a number
+        // does not reach an ordinary visitor as a number.
+        match Value::deserialize(d)? {
+            Value::String(s) => Ok(Expression(s)),
+            Value::Number(n) => Ok(Expression(n.to_string())),
+            other => Err(de::Error::custom(format!(
+                "expected an expression (a string or a number), found {}",
+                crate::json::type_name(&other)
+            ))),
+        }
+    }
+}
+
+impl JsonSchema for Expression {
+    fn schema_name() -> Cow<'static, str> {
+        "Expression".into()
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "description": "An expression: a string (polynomial in the coordinates and parameters, + - * / ^ and parentheses; fluids also sin, cos, exp, sqrt, pi and y) or a number.",
+            "type": ["string", "number"]
+        })
+    }
+}
+
+/// An exact rational: a JSON number (read exactly from its decimal text) or
+/// a string such as `"3/10"` or `"1e-3"`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Literal(pub Rational);
+
+impl Default for Literal {
+    fn default() -> Self {
+        Literal(Rational::from_integer(0.into()))
+    }
+}
+
+impl Serialize for Literal {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.0.to_string())
+    }
+}
+
+impl<'de> Deserialize<'de> for Literal {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = match Value::deserialize(d)? {
+            Value::Number(n) => n.to_string(),
+            Value::String(s) => s,
+            other => {
+                return Err(de::Error::custom(format!(
+                    "expected a number or a rational string, found {}",
+                    crate::json::type_name(&other)
+                )))
+            }
+        };
+        parse_number(&text).map(Literal).map_err(de::Error::custom)
+    }
+}
+
+impl JsonSchema for Literal {
+    fn schema_name() -> Cow<'static, str> {
+        "Literal".into()
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "description": "An exact number: a JSON number (read exactly from its decimal text) or a string: an integer, a decimal such as \"0.3\" or \"1e-3\", or a rational such as \"3/10\".",
+            "anyOf": [
+                {"type": "number"},
+                {"type": "string", "pattern": "^\\s*[-+]?[0-9]*\\.?[0-9]*([eE][-+]?[0-9]+)?\\s*(/\\s*[-+]?[0-9]+\\s*)?$"}
+            ]
+        })
+    }
+}
+
+/// A non-negative integer, as a JSON number or a string (`3` or `"3"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(transparent)]
+pub struct Index(pub u64);
+
+impl<'de> Deserialize<'de> for Index {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let r = Literal::deserialize(d)?.0;
+        if !r.is_integer() || r < Rational::from_integer(0.into()) {
+            return Err(de::Error::custom(format!("expected a non-negative integer, found {r}")));
+        }
+        num_traits::ToPrimitive::to_u64(&r.to_integer()).map(Index).ok_or_else(|| de::Error::custom("too large"))
+    }
+}
+
+impl JsonSchema for Index {
+    fn schema_name() -> Cow<'static, str> {
+        "Index".into()
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "description": "A non-negative integer (a JSON number, or a string holding one).",
+            "anyOf": [{"type": "integer", "minimum": 0}, {"type": "string", "pattern": "^\\s*\\+?[0-9]+\\s*$"}]
+        })
+    }
+}
+
+/// A non-negative integer given as a JSON number (`64`, not `"64"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(transparent)]
+pub struct Count(pub u64);
+
+impl<'de> Deserialize<'de> for Count {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        v.as_u64().map(Count).ok_or_else(|| {
+            let found = match &v {
+                Value::Number(n) => n.to_string(),
+                other => crate::json::type_name(other).to_string(),
+            };
+            de::Error::custom(format!("expected a positive integer, found {found}"))
+        })
+    }
+}
+
+impl JsonSchema for Count {
+    fn schema_name() -> Cow<'static, str> {
+        "Count".into()
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({"type": "integer", "minimum": 0})
+    }
+}
+
+/// A double: a JSON number or a numeric string, read exactly and rounded
+/// once to the nearest double.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct Real(pub f64);
+
+impl<'de> Deserialize<'de> for Real {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(Real(exact::rational_to_f64(&Literal::deserialize(d)?.0)))
+    }
+}
+
+impl JsonSchema for Real {
+    fn schema_name() -> Cow<'static, str> {
+        "Real".into()
+    }
+    fn json_schema(g: &mut SchemaGenerator) -> Schema {
+        Literal::json_schema(g)
+    }
+}
+
+/// A finite-dimensional spec: a Lie–Poisson system with its equilibrium and
+/// noise (DESIGN.md §5). Required: `name`, `algebra`, `hamiltonian`,
+/// `equilibrium`, `noise`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: spec of a stochastic Lie-Poisson system")]
+pub struct SpecDocument {
+    /// The schema this file follows, for editors (`"$schema":
+    /// "./schema/spec.schema.json"`); ignored by the engine.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
+    /// A non-empty name, used for output file names (sanitised).
+    pub name: String,
+    /// Free text, ignored by the engine.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// A builtin algebra's name (so3, se3, ...) or structure constants.
+    pub algebra: AlgebraDoc,
+    /// Named exact constants the expressions may use.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, Literal>,
+    /// The Hamiltonian, a polynomial in the coordinates.
+    pub hamiltonian: Expression,
+    /// Casimirs; absent: the builtin algebra's, else discovered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub casimirs: Option<Vec<Expression>>,
+    /// Further conserved quantities (checked to commute with the Hamiltonian).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_integrals: Option<Vec<Expression>>,
+    /// The equilibrium, one constant per coordinate.
+    pub equilibrium: Vec<Expression>,
+    /// The noise fields `xi_k` in the algebra, one constant per coordinate
+    /// each (at most 256 fields).
+    pub noise: Vec<Vec<Expression>>,
+    /// The stopping question.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopping: Option<StoppingDoc>,
+    /// Engine settings; absent keys take their defaults (in the schema).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settings: Option<SettingsDoc>,
+    /// Sweep annotations: ranges, boundaries, reference constants, domain.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<SweepDoc>,
+}
+
+/// The algebra: a builtin name, or coordinates and structure constants.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum AlgebraDoc {
+    /// A builtin algebra by name (`verify schema` lists them).
+    Builtin(String),
+    /// An algebra given by its structure constants.
+    Custom(CustomAlgebra),
+}
+
+impl Default for AlgebraDoc {
+    fn default() -> Self {
+        AlgebraDoc::Builtin(String::new())
+    }
+}
+
+impl<'de> Deserialize<'de> for AlgebraDoc {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        // A visitor rather than `#[serde(untagged)]`: untagged enums buffer
+        // their input, which loses the JSON path of an error inside the
+        // object and, with arbitrary_precision, every number.
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = AlgebraDoc;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a builtin name or an object")
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<AlgebraDoc, E> {
+                Ok(AlgebraDoc::Builtin(s.to_string()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<AlgebraDoc, A::Error> {
+                CustomAlgebra::deserialize(de::value::MapAccessDeserializer::new(map)).map(AlgebraDoc::Custom)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl JsonSchema for AlgebraDoc {
+    fn schema_name() -> Cow<'static, str> {
+        "Algebra".into()
+    }
+    fn json_schema(g: &mut SchemaGenerator) -> Schema {
+        let names: &[&str] = algebra::builtin_names();
+        let custom = g.subschema_for::<CustomAlgebra>();
+        json_schema!({
+            "description": "A builtin algebra's name, or an object with coordinates and structure constants.",
+            "anyOf": [{"type": "string", "enum": names}, custom]
+        })
+    }
+}
+
+/// An algebra given by structure constants `[e_a, e_b] = sum_k c e_k`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CustomAlgebra {
+    /// A label for the algebra (default `custom`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Coordinate names (identifiers), one per basis element.
+    pub coordinates: Vec<String>,
+    /// Rows `[a, b, k, c]`: `c` is the coefficient of `e_k` in `[e_a, e_b]`
+    /// (indices from 0; antisymmetry is implied).
+    pub structure_constants: Vec<StructureRow>,
+}
+
+/// One structure constant `[a, b, k, c]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StructureRow {
+    /// Index of the first basis element.
+    pub a: Index,
+    /// Index of the second basis element.
+    pub b: Index,
+    /// Index of the element in the bracket.
+    pub k: Index,
+    /// The coefficient.
+    pub c: Literal,
+}
+
+impl Serialize for StructureRow {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        (self.a, self.b, self.k, &self.c).serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for StructureRow {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = StructureRow;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a row [a, b, k, c] of 4 entries")
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<StructureRow, A::Error> {
+                let short = |n| de::Error::invalid_length(n, &"a row [a, b, k, c] of 4 entries");
+                let a = seq.next_element()?.ok_or_else(|| short(0))?;
+                let b = seq.next_element()?.ok_or_else(|| short(1))?;
+                let k = seq.next_element()?.ok_or_else(|| short(2))?;
+                let c = seq.next_element()?.ok_or_else(|| short(3))?;
+                let mut extra = 4;
+                while seq.next_element::<de::IgnoredAny>()?.is_some() {
+                    extra += 1;
+                }
+                if extra > 4 {
+                    return Err(short(extra));
+                }
+                Ok(StructureRow { a, b, k, c })
+            }
+        }
+        d.deserialize_seq(V)
+    }
+}
+
+impl JsonSchema for StructureRow {
+    fn schema_name() -> Cow<'static, str> {
+        "StructureRow".into()
+    }
+    fn json_schema(g: &mut SchemaGenerator) -> Schema {
+        let index = g.subschema_for::<Index>();
+        let literal = g.subschema_for::<Literal>();
+        json_schema!({
+            "description": "[a, b, k, c]: c is the coefficient of e_k in [e_a, e_b].",
+            "type": "array",
+            "prefixItems": [index, index, index, literal],
+            "items": false,
+            "minItems": 4
+        })
+    }
+}
+
+/// The stopping question: the probability that `|dmu_t|_P^2` exceeds
+/// `epsilon` before `T`, starting from `|dmu_0|_P^2 = delta`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct StoppingDoc {
+    /// Threshold on `|dmu_t|_P^2`; must exceed `delta`.
+    pub epsilon: Literal,
+    /// Initial size `|dmu_0|_P^2`; positive.
+    pub delta: Literal,
+}
+
+/// Engine settings of a finite-dimensional spec. Every key is optional; the
+/// schema gives each default and range, taken from the engine's own
+/// `Default` and range table.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SettingsDoc {
+    /// Smallest relative eigenvalue of `P` accepted as definite.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub definiteness_tolerance: Option<Real>,
+    /// Iterations of the search for a definite Casimir choice.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_iterations: Option<Index>,
+    /// Times the search widens its range of `M`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_expansions: Option<Index>,
+    /// Largest denominator when rounding the choice to rationals.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_denominator: Option<Index>,
+    /// Real part above which an eigenvalue of `A` counts as unstable.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instability_tolerance: Option<Real>,
+    /// Highest degree searched when Casimirs are discovered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discovery_degree: Option<Index>,
+    /// Largest number of unknowns per degree in Casimir discovery.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discovery_max_unknowns: Option<Index>,
+    /// Optimise `Sigma^2` over the Casimir freedom.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimise: Option<bool>,
+    /// Certify `Sigma^2` in exact rational arithmetic.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exact: Option<bool>,
+    /// Relative tolerance of the optimiser.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimisation_tolerance: Option<Real>,
+    /// Iterations of the optimiser.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimisation_iterations: Option<Index>,
+}
+
+/// The optional `sweep` section: what a sweep over the spec's parameters
+/// draws and compares against.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SweepDoc {
+    /// Default ranges, `NAME=LO:HI:N` (a grid) or `NAME=V1,V2,...`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ranges: Option<Vec<String>>,
+    /// Curves where the verdict is expected to change (polynomials in the
+    /// parameters, zero on the curve).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub boundaries: Option<Vec<Annotation>>,
+    /// Closed forms of `Sigma^2` to compare against.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_sigma2: Option<Vec<Annotation>>,
+    /// Polynomials that must be non-negative for a point to be physical.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub domain: Option<Vec<String>>,
+}
+
+/// A labelled polynomial in the parameters.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Annotation {
+    /// The polynomial.
+    pub expression: String,
+    /// Its label in tables and plots (default: the expression).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+}
+
+/// A fluid spec: 2D Euler about a shear flow `U(y)` in a periodic channel
+/// (README, "Fluids"). Required: `name`, `fluid`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: spec of a stochastic shear flow")]
+pub struct FluidSpecDocument {
+    /// The schema this file follows, for editors (`"$schema":
+    /// "./schema/fluid-spec.schema.json"`); ignored by the engine.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
+    /// A non-empty name.
+    pub name: String,
+    /// Free text, ignored by the engine.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Named constants (expressions evaluated in name order, each may use
+    /// the ones before it).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, Expression>,
+    /// The flow.
+    pub fluid: FluidDoc,
+    /// The stopping question.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopping: Option<StoppingDoc>,
+    /// Numerical settings; absent keys take their defaults.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settings: Option<FluidSettingsDoc>,
+    /// Sweep annotations.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<SweepDoc>,
+}
+
+/// The fluid model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelName {
+    /// Incompressible 2D Euler (vorticity).
+    #[default]
+    Incompressible,
+    /// Compressible barotropic 2D Euler (needs `sound_speed`).
+    Compressible,
+}
+
+/// The boundary in y.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum BoundaryName {
+    /// Rigid walls at both ends of the interval.
+    #[default]
+    Walls,
+    /// A periodic interval.
+    Periodic,
+}
+
+/// The flow: model, domain, shear flow, noise and discretisation.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FluidDoc {
+    /// `incompressible` or `compressible`.
+    pub model: ModelName,
+    /// The period in x (a positive constant, e.g. `"2*pi"`).
+    pub x_period: Expression,
+    /// `[a, b]`, the interval in y.
+    pub y_interval: Vec<Expression>,
+    /// `walls` or `periodic`.
+    pub boundary: BoundaryName,
+    /// The shear flow `U(y)`.
+    pub shear_flow: Expression,
+    /// The sound speed of a compressible model (positive constant).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sound_speed: Option<Expression>,
+    /// The noise stream functions or velocities `eta_k(y)` (at most 256).
+    pub noise: Vec<Expression>,
+    /// Grid points in y (16 to 4096; a multiple of the element degree with
+    /// walls, even when periodic).
+    pub ny: Count,
+    /// Number of x-modes `m = 1..x_modes` (1 to 2048).
+    pub x_modes: Count,
+}
+
+/// Numerical settings of a fluid spec.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FluidSettingsDoc {
+    /// Relative tolerance of the Lanczos eigenvalue estimates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lanczos_tolerance: Option<Real>,
+    /// Smallest `ny` of the convergence table.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convergence_from: Option<Count>,
+    /// `ny` of the instability search.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instability_ny: Option<Count>,
+}
+
+/// Deserialise a document from a JSON value, naming the JSON path of the
+/// first error (`$.noise[0][1]`) in the engine's words.
+///
+/// ```
+/// use spec::document::{from_value, SpecDocument};
+/// let v = serde_json::json!({"name": "x", "algebra": "so3", "hamiltonian": 1,
+///                            "equilibrium": [0, 0, 0], "noise": [[0, 0, {}]]});
+/// let e = from_value::<SpecDocument>(&v).unwrap_err();
+/// assert_eq!(e.path, "$.noise[0][2]");
+/// assert!(e.message.contains("found an object"));
+/// ```
+pub fn from_value<T: de::DeserializeOwned>(value: &Value) -> Result<T, SpecError> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let mut path = String::from("$");
+        for segment in e.path().iter() {
+            match segment {
+                serde_path_to_error::Segment::Seq { index } => path.push_str(&format!("[{index}]")),
+                serde_path_to_error::Segment::Map { key } => path.push_str(&format!(".{key}")),
+                serde_path_to_error::Segment::Enum { variant } => path.push_str(&format!(".{variant}")),
+                serde_path_to_error::Segment::Unknown => {}
+            }
+        }
+        let (path, message) = in_our_words(path, &e.into_inner().to_string());
+        SpecError::new(path, message)
+    })
+}
+
+/// [`from_value`] for a value found at `path` (errors name paths below it).
+pub fn from_value_at<T: de::DeserializeOwned>(value: &Value, path: &str) -> Result<T, SpecError> {
+    from_value(value).map_err(|e| SpecError::new(format!("{path}{}", e.path.trim_start_matches('$')), e.message))
+}
+
+/// serde's messages rephrased the way the engine's own errors read
+/// (`expected an array, found a string`), with the path moved to the field
+/// for a missing or unknown field.
+fn in_our_words(path: String, message: &str) -> (String, String) {
+    let quoted = |s: &str| -> Option<String> {
+        let start = s.find('`')? + 1;
+        let len = s[start..].find('`')?;
+        Some(s[start..start + len].to_string())
+    };
+    if let Some(rest) = message.strip_prefix("missing field ") {
+        let field = quoted(rest).unwrap_or_default();
+        return (format!("{path}.{field}"), "required field is missing".into());
+    }
+    if let Some(rest) = message.strip_prefix("unknown field ") {
+        let field = quoted(rest).unwrap_or_default();
+        if field == "$serde_json::private::Number" {
+            return (path, "expected an object, found a number".into());
+        }
+        let allowed: Vec<String> = rest
+            .split_once(", expected")
+            .map(|(_, list)| list.split('`').skip(1).step_by(2).map(str::to_string).collect())
+            .unwrap_or_default();
+        let allowed = if allowed.is_empty() { "none".to_string() } else { allowed.join(", ") };
+        // serde_path_to_error has already entered the key.
+        let at = if path.ends_with(&format!(".{field}")) { path } else { format!("{path}.{field}") };
+        return (at, format!("unknown field '{field}' (allowed here: {allowed})"));
+    }
+    if let Some(rest) = message.strip_prefix("unknown variant ") {
+        let value = quoted(rest).unwrap_or_default();
+        let allowed: Vec<String> = rest
+            .split_once(", expected")
+            .map(|(_, list)| list.split('`').skip(1).step_by(2).map(str::to_string).collect())
+            .unwrap_or_default();
+        let what = path.rsplit('.').next().unwrap_or("value").to_string();
+        return (path, format!("unknown {what} '{value}' (expected {})", allowed.join(" or ")));
+    }
+    if let Some(rest) = message.strip_prefix("invalid type: ") {
+        if let Some((found, expected)) = rest.split_once(", expected ") {
+            return (path, format!("expected {}, found {}", expected_words(expected), found_words(found)));
+        }
+    }
+    if let Some(rest) = message.strip_prefix("invalid length ") {
+        if let Some((n, expected)) = rest.split_once(", expected ") {
+            return (path, format!("expected {}, got {n} entries", expected_words(expected)));
+        }
+    }
+    (path, message.to_string())
+}
+
+fn expected_words(expected: &str) -> String {
+    if expected.starts_with("struct ") || expected == "a map" {
+        "an object".into()
+    } else if expected == "a sequence" {
+        "an array".into()
+    } else {
+        expected.to_string()
+    }
+}
+
+fn found_words(found: &str) -> &'static str {
+    if found.starts_with("string") {
+        "a string"
+    } else if found.starts_with("integer") || found.starts_with("floating point") || found == "number" {
+        "a number"
+    } else if found.starts_with("boolean") {
+        "a boolean"
+    } else if found == "sequence" {
+        "an array"
+    } else if found == "map" {
+        "an object"
+    } else if found == "unit value" || found == "null" {
+        "null"
+    } else {
+        "another type"
+    }
+}
+
+/// The JSON Schema of finite-dimensional specs, generated from
+/// [`SpecDocument`], with each setting's default and range filled in from
+/// the engine (committed as `schema/spec.schema.json`).
+pub fn spec_schema() -> Value {
+    let mut schema = serde_json::to_value(schemars::schema_for!(SpecDocument)).unwrap_or(Value::Null);
+    let defaults = serde_json::to_value(crate::settings::EngineSettings::default().to_document()).unwrap_or_default();
+    if let Some(props) = schema.pointer_mut("/$defs/SettingsDoc/properties").and_then(Value::as_object_mut) {
+        for (name, prop) in props.iter_mut() {
+            if let Some(d) = defaults.get(name) {
+                prop["default"] = d.clone();
+            }
+            if let Some((lo, hi)) = crate::settings::range_of(name) {
+                prop["minimum"] = serde_json::json!(lo);
+                prop["maximum"] = serde_json::json!(hi);
+            }
+        }
+    }
+    schema
+}
+
+/// The JSON Schema of fluid specs, generated from [`FluidSpecDocument`]
+/// (committed as `schema/fluid-spec.schema.json`).
+pub fn fluid_spec_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(FluidSpecDocument)).unwrap_or(Value::Null)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn base() -> Value {
+        json!({"name": "x", "algebra": "so3", "hamiltonian": "Pi1^2", "equilibrium": [1, 0, 0], "noise": [[0, 0, 0]]})
+    }
+
+    #[test]
+    fn errors_name_the_field_in_the_engines_words() {
+        let cases: Vec<(Value, &str, &str)> = vec![
+            (
+                {
+                    let mut v = base();
+                    v["nmae"] = json!(1);
+                    v
+                },
+                "$.nmae",
+                "unknown field 'nmae' (allowed here: $schema, name,",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v.as_object_mut().unwrap().remove("noise");
+                    v
+                },
+                "$.noise",
+                "required field is missing",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v["noise"] = json!("sigma");
+                    v
+                },
+                "$.noise",
+                "expected an array, found a string",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v["algebra"] = json!(3);
+                    v
+                },
+                "$.algebra",
+                "found a number",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v["algebra"] = json!({"coordinates": ["a"], "structure_constants": [[0, 1, 2]]});
+                    v
+                },
+                "$.algebra.structure_constants[0]",
+                "expected a row [a, b, k, c] of 4 entries, got 3 entries",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v["algebra"] = json!({"coordinates": ["a"], "structure_constants": [[0, 1, -2, 1]]});
+                    v
+                },
+                "$.algebra.structure_constants[0][2]",
+                "non-negative integer",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v["parameters"] = json!({"I": "1/0"});
+                    v
+                },
+                "$.parameters.I",
+                "",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v["settings"] = json!({"exact": 1});
+                    v
+                },
+                "$.settings.exact",
+                "expected a boolean, found a number",
+            ),
+            (
+                {
+                    let mut v = base();
+                    v["stopping"] = json!({"epsilon": 1});
+                    v
+                },
+                "$.stopping.delta",
+                "required field is missing",
+            ),
+        ];
+        for (v, path, words) in cases {
+            let e = from_value::<SpecDocument>(&v).unwrap_err();
+            assert_eq!(e.path, path, "{e}");
+            assert!(e.message.contains(words), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_document_round_trips_through_json() {
+        let v = json!({"name": "x", "algebra": {"coordinates": ["a", "b", "c"], "structure_constants": [[0, 1, 2, "3/2"]]},
+                       "parameters": {"k": 0.25}, "hamiltonian": "a^2", "equilibrium": [1, 0, 0], "noise": [[0, 0, 0]],
+                       "settings": {"exact": false, "search_iterations": 7}, "sweep": {"ranges": ["k=0:1:3"]}});
+        let doc: SpecDocument = from_value(&v).unwrap();
+        assert_eq!(doc.parameters["k"].0, parse_number("1/4").unwrap());
+        let again: SpecDocument = from_value(&serde_json::to_value(&doc).unwrap()).unwrap();
+        assert_eq!(doc, again);
+    }
+}

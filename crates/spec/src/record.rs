@@ -1,0 +1,377 @@
+//! The certificate of a finite-dimensional spec as a typed document
+//! ([`CertificateDocument`]): the engine builds its certificates from this
+//! type, [`check_certificate`](crate::check_certificate) reads a certificate
+//! into it before re-deriving it (so a malformed one is refused with the
+//! JSON path of the field), and a Rust user reads the claims from it with
+//! their types: exact rationals for `P`, `Q` and the Casimir choice,
+//! [`Verdict`] and [`VerificationLevel`] for the outcome.
+//!
+//! ```
+//! let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.cert.json")).unwrap();
+//! let value: serde_json::Value = serde_json::from_str(&text).unwrap();
+//! let doc: spec::record::CertificateDocument = spec::document::from_value(&value).unwrap();
+//! assert_eq!(doc.verdict, spec::Verdict::Stable);
+//! // The rigid body about its major axis (I = 3, 2, 1, sigma = 3/10):
+//! // Sigma^2 = sigma^2 I1 (I2 - I3) / (I3 (I1 - I2)) = 27/100 (tests/library.rs).
+//! assert_eq!(doc.sigma2_exact.as_deref(), Some("27/100"));
+//! assert_eq!(doc.p.unwrap().len(), 3);
+//! ```
+
+use crate::document::{Literal, SettingsDoc};
+use outcome::{Verdict, VerificationLevel};
+use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
+use serde::de::{self, Deserializer};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+
+/// A double as certificates write it: a JSON number, or `"infinity"`,
+/// `"-infinity"`, `"nan"` for the values JSON has no number for.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Float(pub f64);
+
+impl Serialize for Float {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        crate::certificate::float_json(self.0).serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for Float {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        match Value::deserialize(d)? {
+            Value::Number(n) => n.as_f64().map(Float).ok_or_else(|| de::Error::custom("not a double")),
+            Value::String(s) if s == "infinity" => Ok(Float(f64::INFINITY)),
+            Value::String(s) if s == "-infinity" => Ok(Float(f64::NEG_INFINITY)),
+            Value::String(s) if s == "nan" => Ok(Float(f64::NAN)),
+            other => Err(de::Error::custom(format!(
+                "expected a number (or \"infinity\", \"-infinity\", \"nan\"), found {}",
+                crate::json::type_name(&other)
+            ))),
+        }
+    }
+}
+
+impl JsonSchema for Float {
+    fn schema_name() -> Cow<'static, str> {
+        "Float".into()
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({"anyOf": [{"type": "number"}, {"enum": ["infinity", "-infinity", "nan"]}]})
+    }
+}
+
+/// A matrix of exact rationals, by rows.
+pub type RationalMatrix = Vec<Vec<Literal>>;
+
+/// The certificate of a finite-dimensional spec (DESIGN.md §5). Optional
+/// parts are present when the verdict has them: `casimir_choice`, `P`, `Q`,
+/// `growth`, `optimisation` for `stable`; `instability` for a floating-point
+/// `linearly_unstable`; `search` for `inconclusive`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: certificate of a stochastic Lie-Poisson system")]
+pub struct CertificateDocument {
+    /// Format version ([`crate::CERTIFICATE_VERSION`]).
+    pub certificate_version: u64,
+    /// The engine that wrote it.
+    pub engine: Engine,
+    /// The spec's name.
+    pub name: String,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Why, in a sentence.
+    pub reason: String,
+    /// What the verdict rests on.
+    pub level: VerificationLevel,
+    /// What each part of the verdict rests on, part by part.
+    pub checks: BTreeMap<String, String>,
+    /// `Sigma^2` (stable verdicts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2: Option<Float>,
+    /// `Sigma^2` as an exact rational upper bound.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_exact: Option<String>,
+    /// Whether `sigma2_exact` equals the largest generalized eigenvalue.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_sharp: Option<bool>,
+    /// The stopping-time bound, when the spec asks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopping: Option<StoppingRecord>,
+    /// SHA-256 of the embedded spec's compact JSON.
+    pub spec_sha256: String,
+    /// The Hamiltonian as read.
+    pub hamiltonian: String,
+    /// The coordinates.
+    pub coordinates: Vec<String>,
+    /// The equilibrium and its exact residual.
+    pub equilibrium: EquilibriumRecord,
+    /// The noise fields, their residuals and the isotropy algebra.
+    pub noise: NoiseRecord,
+    /// The conserved quantities.
+    pub conserved: Vec<ConservedRecord>,
+    /// How far Casimir discovery looked, when it ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub casimir_discovery: Option<DiscoveryRecord>,
+    /// The multipliers that make the first variation vanish.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multipliers: Option<MultipliersRecord>,
+    /// `A`, the `B_k` and the spectrum of `A`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linearisation: Option<LinearisationRecord>,
+    /// How the spectral claim was proved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spectrum_proof: Option<String>,
+    /// Why the spectrum could not be computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spectrum_error: Option<String>,
+    /// The unstable eigenpair (floating point).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instability: Option<InstabilityRecord>,
+    /// How close the search for a definite form came.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search: Option<SearchRecord>,
+    /// The Casimir choice that makes `P` definite.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub casimir_choice: Option<ChoiceRecord>,
+    /// The optimisation of `Sigma^2` over the Casimir freedom.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimisation: Option<OptimisationRecord>,
+    /// The second variation `P` (exact).
+    #[serde(default, skip_serializing_if = "Option::is_none", rename = "P")]
+    pub p: Option<RationalMatrix>,
+    /// The noise form `Q` (exact).
+    #[serde(default, skip_serializing_if = "Option::is_none", rename = "Q")]
+    pub q: Option<RationalMatrix>,
+    /// Exact residuals of the stable verdict.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub residuals: Option<ResidualsRecord>,
+    /// The generalized eigenproblem `Q v = l P v` in floating point.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth: Option<GrowthRecord>,
+    /// The settings in force (all of them).
+    pub settings: SettingsDoc,
+    /// The spec exactly as given.
+    pub spec: Value,
+}
+
+/// The engine's name and version.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Engine {
+    /// `verify`.
+    pub name: String,
+    /// The crate version.
+    pub version: String,
+}
+
+/// `P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct StoppingRecord {
+    /// The threshold.
+    pub epsilon: Float,
+    /// The initial size.
+    pub delta: Float,
+    /// `ln(epsilon/delta)/Sigma^2`, rounded down (`"infinity"` when `Sigma^2 = 0`).
+    #[serde(rename = "T")]
+    pub t: Float,
+    /// The bound in words.
+    pub bound: String,
+}
+
+/// The equilibrium and its residual `ad*_{dH} mu_e` (exact).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EquilibriumRecord {
+    /// The point.
+    pub point: Vec<Literal>,
+    /// The residual (zero at an equilibrium).
+    pub residual: Vec<Literal>,
+}
+
+/// The noise fields, `ad*_{xi_k} mu_e`, and the isotropy algebra of `mu_e`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseRecord {
+    /// The fields `xi_k`.
+    pub fields: Vec<Vec<Literal>>,
+    /// `ad*_{xi_k} mu_e` (zero for compatible noise).
+    pub residuals: Vec<Vec<Literal>>,
+    /// A basis of the noise that would be compatible.
+    pub isotropy_basis: Vec<Vec<Literal>>,
+}
+
+/// A conserved quantity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConservedRecord {
+    /// `casimir` or `first_integral`.
+    pub kind: String,
+    /// `spec`, `builtin` or `discovered`.
+    pub source: String,
+    /// The polynomial.
+    pub expression: String,
+    /// Whether it Poisson-commutes with each noise field's momentum map.
+    pub commutes_with_noise: Vec<bool>,
+}
+
+/// How far Casimir discovery looked.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DiscoveryRecord {
+    /// Highest degree searched.
+    pub degree_searched: u32,
+    /// Degrees skipped for size.
+    pub skipped_degrees: Vec<u32>,
+}
+
+/// The affine family of multipliers with a vanishing first variation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MultipliersRecord {
+    /// A particular solution.
+    pub particular: Vec<Literal>,
+    /// Free directions.
+    pub directions: Vec<Vec<Literal>>,
+}
+
+/// The linearisation at the equilibrium.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LinearisationRecord {
+    /// The drift `A`.
+    #[serde(rename = "A")]
+    pub a: RationalMatrix,
+    /// The noise matrices `B_k`.
+    #[serde(rename = "B")]
+    pub b: Vec<RationalMatrix>,
+    /// Eigenvalues of `A` (floating point).
+    pub spectrum: Vec<ComplexRecord>,
+}
+
+/// A complex number.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ComplexRecord {
+    /// Real part.
+    pub re: Float,
+    /// Imaginary part.
+    pub im: Float,
+}
+
+/// An eigenvalue of `A` with positive real part, and its eigenvector.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct InstabilityRecord {
+    /// The eigenvalue.
+    pub eigenvalue: ComplexRecord,
+    /// The eigenvector.
+    pub eigenvector: Vec<ComplexRecord>,
+    /// The tolerance it exceeds.
+    pub tolerance: Float,
+}
+
+/// The best margins of a search that found no definite form.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SearchRecord {
+    /// Best relative margin towards a positive definite `P`.
+    pub best_positive_margin: Float,
+    /// Best relative margin towards a negative definite `P`.
+    pub best_negative_margin: Float,
+    /// Dimension of the space the form was restricted to.
+    pub restricted_dimension: u64,
+}
+
+/// A Casimir choice: multipliers, family parameters and `M`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ChoiceRecord {
+    /// The sign of `P` (+1 or -1).
+    pub sign: i64,
+    /// Coordinates along the free multiplier directions.
+    pub family_parameters: Vec<Literal>,
+    /// The multipliers.
+    pub multipliers: Vec<Literal>,
+    /// The symmetric matrix of the quadratic Casimir terms.
+    #[serde(rename = "M")]
+    pub m: RationalMatrix,
+    /// The smallest eigenvalue of `sP` relative to the largest.
+    pub relative_margin: Float,
+}
+
+/// The optimisation of `Sigma^2` over the Casimir freedom.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OptimisationRecord {
+    /// Whether the optimiser ran.
+    pub optimised: bool,
+    /// The first definite choice found.
+    pub first_definite_choice: ChoiceRecord,
+    /// Its `Sigma^2`.
+    pub first_definite_sigma2: Float,
+    /// Estimated infimum over the family.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub infimum: Option<Float>,
+    /// A certified lower bound on `Sigma^2` over the family (exact).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub infimum_lower_bound: Option<String>,
+    /// The vector that certifies the lower bound.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub infimum_witness: Option<Vec<Literal>>,
+    /// The matrix that certifies the lower bound (free multipliers).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub infimum_witness_matrix: Option<RationalMatrix>,
+    /// `sigma2 - infimum`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gap: Option<Float>,
+    /// Whether the infimum is attained.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attained: Option<bool>,
+    /// Whether the gap is within the tolerance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub within_tolerance: Option<bool>,
+    /// Whether `Q` depends on `M`.
+    #[serde(default, skip_serializing_if = "Option::is_none", rename = "q_depends_on_M")]
+    pub q_depends_on_m: Option<bool>,
+    /// The method.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    /// The optimiser's tolerance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<Float>,
+}
+
+/// Exact residuals of a stable verdict.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ResidualsRecord {
+    /// `A^T P + P A` (zero: the energy-Casimir form is conserved by the drift).
+    pub drift: RationalMatrix,
+    /// Whether the paper's formula (3.3) gives the same `Q`.
+    #[serde(rename = "paper_formula_3_3_equals_Q")]
+    pub paper_formula_3_3_equals_q: bool,
+}
+
+/// The generalized eigenproblem `Q v = l P v` in floating point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GrowthRecord {
+    /// The largest eigenvalue.
+    pub largest_generalized_eigenvalue: Float,
+    /// The condition number of `P`.
+    #[serde(rename = "condition_number_P")]
+    pub condition_number_p: Float,
+    /// All eigenvalues.
+    pub generalized_eigenvalues: Vec<Float>,
+    /// The eigenvector of the largest, `v^T P v = 1`.
+    pub fastest_direction: Vec<Float>,
+}
+
+/// The JSON Schema of certificates of finite-dimensional specs, generated
+/// from [`CertificateDocument`] (committed as
+/// `schema/certificate.schema.json`).
+pub fn certificate_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(CertificateDocument)).unwrap_or(Value::Null)
+}

@@ -1,0 +1,160 @@
+//! The JSON Schemas of specs (`schema/*.schema.json`) are generated from the
+//! typed documents (`spec::document`) and committed so that editors can
+//! validate and complete a spec. These tests keep the committed files in
+//! step with the types, and check with an independent JSON Schema validator
+//! (the `jsonschema` crate) that the schema and the engine agree: every
+//! fixture is valid, and malformed specs the engine rejects as bad input are
+//! invalid.
+
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn committed(name: &str) -> Value {
+    let path = root().join("schema").join(name);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Fails when a document type changed without `verify schema` being re-run:
+/// `cargo run -p verify -- schema spec > schema/spec.schema.json` (and
+/// `fluid-spec` for the fluid schema).
+#[test]
+fn committed_schemas_match_the_types() {
+    assert_eq!(committed("spec.schema.json"), spec::document::spec_schema(), "re-run verify schema spec");
+    assert_eq!(
+        committed("fluid-spec.schema.json"),
+        spec::document::fluid_spec_schema(),
+        "re-run verify schema fluid-spec"
+    );
+    assert_eq!(
+        committed("certificate.schema.json"),
+        spec::record::certificate_schema(),
+        "re-run verify schema certificate"
+    );
+}
+
+/// Every committed certificate of a finite-dimensional spec is valid
+/// against the certificate schema and reads into the typed document, which
+/// writes it back unchanged; an added field makes it invalid for both.
+#[test]
+fn fixture_certificates_match_the_certificate_type() {
+    let schema = jsonschema::validator_for(&committed("certificate.schema.json")).unwrap();
+    let mut seen = 0;
+    let mut dirs = vec![root().join("fixtures")];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path);
+                continue;
+            }
+            if !path.to_string_lossy().ends_with(".cert.json") {
+                continue;
+            }
+            let v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            if spec::is_fluid_spec(&v["spec"]) {
+                continue;
+            }
+            let errors: Vec<String> = schema.iter_errors(&v).map(|e| e.to_string()).collect();
+            assert!(errors.is_empty(), "{}: {errors:?}", path.display());
+            let doc: spec::record::CertificateDocument = spec::document::from_value(&v).unwrap();
+            assert_eq!(serde_json::to_value(&doc).unwrap(), v, "{}", path.display());
+            let mut extra = v.clone();
+            extra["growth_bonus"] = json!(1);
+            assert!(!schema.is_valid(&extra));
+            let e = spec::document::from_value::<spec::record::CertificateDocument>(&extra).unwrap_err();
+            assert_eq!(e.path, "$.growth_bonus");
+            seen += 1;
+        }
+    }
+    assert!(seen >= 5, "{seen} certificates");
+}
+
+fn fixtures() -> Vec<(PathBuf, Value)> {
+    let mut out = Vec::new();
+    let mut dirs = vec![root().join("fixtures")];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().to_string();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if name.ends_with(".json") && !name.ends_with(".cert.json") {
+                let v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+                out.push((path, v));
+            }
+        }
+    }
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    out
+}
+
+#[test]
+fn every_fixture_is_valid_against_its_schema() {
+    let finite = jsonschema::validator_for(&committed("spec.schema.json")).unwrap();
+    let fluid = jsonschema::validator_for(&committed("fluid-spec.schema.json")).unwrap();
+    let all = fixtures();
+    let (mut n_finite, mut n_fluid) = (0, 0);
+    for (path, v) in &all {
+        let is_fluid = spec::is_fluid_spec(v);
+        let validator = if is_fluid { &fluid } else { &finite };
+        let errors: Vec<String> = validator.iter_errors(v).map(|e| e.to_string()).collect();
+        assert!(errors.is_empty(), "{}: {errors:?}", path.display());
+        // Each fixture is valid for exactly one of the two schemas.
+        let other = if is_fluid { &finite } else { &fluid };
+        assert!(!other.is_valid(v), "{}", path.display());
+        if is_fluid {
+            n_fluid += 1
+        } else {
+            n_finite += 1
+        }
+    }
+    assert!(n_finite >= 5 && n_fluid >= 2, "{n_finite} finite, {n_fluid} fluid fixtures found");
+}
+
+/// Structural mistakes: the engine refuses them as bad input (naming the
+/// path) and the schema marks them invalid.
+#[test]
+fn structural_mistakes_are_invalid_for_both() {
+    let finite = jsonschema::validator_for(&committed("spec.schema.json")).unwrap();
+    let good = json!({"name": "rb", "algebra": "so3", "parameters": {"s": "3/10"},
+                      "hamiltonian": "Pi1^2/6 + Pi2^2/4 + Pi3^2/2", "equilibrium": [1, 0, 0],
+                      "noise": [["s", 0, 0]], "settings": {"exact": true}});
+    assert!(finite.is_valid(&good));
+    spec::spec_from_value(good.clone()).unwrap();
+    // An editor's "$schema" key is allowed and ignored.
+    let mut tagged = good.clone();
+    tagged["$schema"] = json!("../schema/spec.schema.json");
+    assert!(finite.is_valid(&tagged));
+    let (a, b) = (spec::spec_from_value(good.clone()).unwrap(), spec::spec_from_value(tagged).unwrap());
+    assert_eq!(spec::certify(&a).json["sigma2_exact"], spec::certify(&b).json["sigma2_exact"]);
+    type Edit = Box<dyn Fn(&mut Value)>;
+    let edits: Vec<(&str, Edit)> = vec![
+        ("$.nmae", Box::new(|v| v["nmae"] = json!("x"))),
+        ("$.noise", Box::new(|v| v["noise"] = json!("s"))),
+        (
+            "$.noise",
+            Box::new(|v| {
+                v.as_object_mut().unwrap().remove("noise");
+            }),
+        ),
+        ("$.algebra", Box::new(|v| v["algebra"] = json!(3))),
+        ("$.algebra", Box::new(|v| v["algebra"] = json!("so5"))),
+        ("$.settings.exact", Box::new(|v| v["settings"]["exact"] = json!("yes"))),
+        ("$.settings.search_expansions", Box::new(|v| v["settings"]["search_expansions"] = json!(11))),
+        ("$.settings.max_doublings", Box::new(|v| v["settings"]["max_doublings"] = json!(3))),
+        ("$.stopping.delta", Box::new(|v| v["stopping"] = json!({"epsilon": 1}))),
+        ("$.equilibrium[1]", Box::new(|v| v["equilibrium"][1] = json!([0]))),
+    ];
+    for (path, edit) in edits {
+        let mut v = good.clone();
+        edit(&mut v);
+        assert!(!finite.is_valid(&v), "{path}: the schema accepts {v}");
+        let e = spec::spec_from_value(v).unwrap_err();
+        assert_eq!(e.path, path, "{e}");
+    }
+}
