@@ -35,15 +35,21 @@ fn committed_schemas_match_the_types() {
         spec::record::certificate_schema(),
         "re-run verify schema certificate"
     );
+    assert_eq!(
+        committed("fluid-certificate.schema.json"),
+        spec::record::fluid_certificate_schema(),
+        "re-run verify schema fluid-certificate"
+    );
 }
 
-/// Every committed certificate of a finite-dimensional spec is valid
-/// against the certificate schema and reads into the typed document, which
-/// writes it back unchanged; an added field makes it invalid for both.
+/// Every committed certificate is valid against its certificate schema
+/// and reads into its typed document, which writes it back unchanged; an
+/// added field makes it invalid for both.
 #[test]
-fn fixture_certificates_match_the_certificate_type() {
-    let schema = jsonschema::validator_for(&committed("certificate.schema.json")).unwrap();
-    let mut seen = 0;
+fn fixture_certificates_match_the_certificate_types() {
+    let finite = jsonschema::validator_for(&committed("certificate.schema.json")).unwrap();
+    let fluid = jsonschema::validator_for(&committed("fluid-certificate.schema.json")).unwrap();
+    let (mut n_finite, mut n_fluid) = (0, 0);
     let mut dirs = vec![root().join("fixtures")];
     while let Some(dir) = dirs.pop() {
         for entry in std::fs::read_dir(&dir).unwrap() {
@@ -56,22 +62,32 @@ fn fixture_certificates_match_the_certificate_type() {
                 continue;
             }
             let v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-            if spec::is_fluid_spec(&v["spec"]) {
-                continue;
-            }
+            let is_fluid = spec::is_fluid_spec(&v["spec"]);
+            let schema = if is_fluid { &fluid } else { &finite };
             let errors: Vec<String> = schema.iter_errors(&v).map(|e| e.to_string()).collect();
             assert!(errors.is_empty(), "{}: {errors:?}", path.display());
-            let doc: spec::record::CertificateDocument = spec::document::from_value(&v).unwrap();
-            assert_eq!(serde_json::to_value(&doc).unwrap(), v, "{}", path.display());
+            let back = if is_fluid {
+                n_fluid += 1;
+                let doc: spec::record::FluidCertificateDocument = spec::document::from_value(&v).unwrap();
+                serde_json::to_value(&doc).unwrap()
+            } else {
+                n_finite += 1;
+                let doc: spec::record::CertificateDocument = spec::document::from_value(&v).unwrap();
+                serde_json::to_value(&doc).unwrap()
+            };
+            assert_eq!(back, v, "{}", path.display());
             let mut extra = v.clone();
             extra["growth_bonus"] = json!(1);
             assert!(!schema.is_valid(&extra));
-            let e = spec::document::from_value::<spec::record::CertificateDocument>(&extra).unwrap_err();
+            let e = if is_fluid {
+                spec::document::from_value::<spec::record::FluidCertificateDocument>(&extra).unwrap_err()
+            } else {
+                spec::document::from_value::<spec::record::CertificateDocument>(&extra).unwrap_err()
+            };
             assert_eq!(e.path, "$.growth_bonus");
-            seen += 1;
         }
     }
-    assert!(seen >= 5, "{seen} certificates");
+    assert!(n_finite >= 5 && n_fluid >= 2, "{n_finite} finite, {n_fluid} fluid certificates");
 }
 
 fn fixtures() -> Vec<(PathBuf, Value)> {

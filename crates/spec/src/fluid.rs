@@ -16,11 +16,16 @@
 //! assert_eq!(spec::parse_fluid_spec(&bad).unwrap_err().path, "$.fluid.ny");
 //! ```
 
-use crate::certificate::{float_json, spec_digest, CERTIFICATE_VERSION, ENGINE_VERSION};
+use crate::certificate::{spec_digest, CERTIFICATE_VERSION, ENGINE_VERSION};
 use crate::check::{compare_with, fail, CheckError, CheckReport};
 use crate::document::{BoundaryName, Count, Expression, FluidSettingsDoc, FluidSpecDocument, ModelName, Real};
 use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
 use crate::parse::Stopping;
+use crate::record::{
+    CompressibleRecord, ConvergenceRecord, DiscretisationRecord, Engine, Float, FluidCertificateDocument,
+    FluidFormRecord, FluidOptimisationRecord, LevelOrNone, ModeRecord, PaperRecord, ShiftPoint, StoppingRecord,
+    UnstableModeRecord,
+};
 use fluid::analysis::{
     analyse, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
 };
@@ -29,7 +34,7 @@ use fluid::grid::{Boundary, ELEMENT_DEGREE};
 use fluid::profile::{Profile, ProfileError};
 use generator::StoppingTime;
 use outcome::{Sign, Verdict, VerificationLevel};
-use serde_json::{json, Map, Value};
+use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// Relative tolerance when re-checking the floating-point fields of a fluid
@@ -352,18 +357,13 @@ fn recorded_settings(v: Option<&Value>, path: &str) -> Result<FluidSettings> {
     }
 }
 
-/// The pipeline's fixed constants (`fluid::constants`), recorded so a
-/// certificate states every number its claims depended on.
-fn constants_json() -> Value {
-    Value::Object(fluid::constants::all().into_iter().map(|(k, v)| (k.to_string(), float_json(v))).collect())
-}
-
-fn settings_json(s: &FluidSettings) -> Value {
-    json!({ "lanczos_tolerance": s.lanczos_tolerance, "convergence_from": s.convergence_from, "instability_ny": s.instability_ny })
-}
-
-fn opt(x: Option<f64>) -> Value {
-    x.map_or(Value::Null, float_json)
+/// The settings as the certificate records them (all keys).
+fn settings_document(s: &FluidSettings) -> FluidSettingsDoc {
+    FluidSettingsDoc {
+        lanczos_tolerance: Some(Real(s.lanczos_tolerance)),
+        convergence_from: Some(Count(s.convergence_from as u64)),
+        instability_ny: Some(Count(s.instability_ny as u64)),
+    }
 }
 
 /// Run the fluid pipeline and build the certificate JSON.
@@ -383,6 +383,12 @@ pub struct FluidCertificate {
 }
 
 impl FluidCertificate {
+    /// The certificate, typed (the JSON is written from this type, so it
+    /// reads back; `None` would mean a bug, not bad input).
+    pub fn document(&self) -> Option<FluidCertificateDocument> {
+        crate::document::from_value(&self.json).ok()
+    }
+
     /// The verdict.
     pub fn verdict(&self) -> Verdict {
         self.analysis.as_ref().map_or(Verdict::Inconclusive, |a| a.verdict)
@@ -420,6 +426,8 @@ impl FluidCertificate {
 /// assert_eq!(cert.level(), Some(spec::VerificationLevel::ExactStructure));
 /// assert_eq!(cert.sigma2(), Some(0.0));
 /// assert_eq!(cert.check().unwrap().verdict, spec::Verdict::Stable);
+/// let doc = cert.document().unwrap();
+/// assert_eq!(doc.modes.unwrap().len(), doc.discretisation.unwrap().x_modes as usize);
 /// ```
 pub fn certify_fluid_spec(spec: &FluidSpec) -> FluidCertificate {
     let analysis = analyse(&spec.problem, &spec.settings);
@@ -428,19 +436,13 @@ pub fn certify_fluid_spec(spec: &FluidSpec) -> FluidCertificate {
         // The profile was checked at parse time on a fine sample; the grid
         // nodes are checked again here and can still hit a singularity.
         Err(e) => {
-            let mut c = Map::new();
-            c.insert("certificate_version".into(), Value::from(CERTIFICATE_VERSION));
-            c.insert("engine".into(), json!({"name": "verify", "version": ENGINE_VERSION}));
-            c.insert("name".into(), Value::from(spec.name.as_str()));
-            c.insert("kind".into(), Value::from("fluid"));
-            c.insert("verdict".into(), Value::from("inconclusive"));
-            c.insert("reason".into(), Value::from(format!("the profile cannot be discretised: {e}")));
-            c.insert("level".into(), Value::from("none"));
-            c.insert("spec_sha256".into(), Value::from(spec_digest(&spec.raw)));
-            c.insert("settings".into(), settings_json(&spec.settings));
-            c.insert("constants".into(), constants_json());
-            c.insert("spec".into(), spec.raw.clone());
-            Value::Object(c)
+            let doc = FluidCertificateDocument {
+                verdict: Verdict::Inconclusive,
+                reason: format!("the profile cannot be discretised: {e}"),
+                level: LevelOrNone(None),
+                ..empty_document(spec)
+            };
+            serde_json::to_value(doc).unwrap_or_default()
         }
     };
     FluidCertificate { json, analysis }
@@ -448,157 +450,172 @@ pub fn certify_fluid_spec(spec: &FluidSpec) -> FluidCertificate {
 
 /// The certificate JSON of an analysis.
 pub fn fluid_certificate_json(spec: &FluidSpec, a: &FluidAnalysis) -> Value {
+    serde_json::to_value(fluid_certificate_document(spec, a)).unwrap_or_default()
+}
+
+/// The parts of a fluid certificate that do not depend on the analysis.
+fn empty_document(spec: &FluidSpec) -> FluidCertificateDocument {
+    FluidCertificateDocument {
+        certificate_version: CERTIFICATE_VERSION,
+        engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
+        name: spec.name.clone(),
+        kind: "fluid".into(),
+        verdict: Verdict::Inconclusive,
+        reason: String::new(),
+        level: LevelOrNone(None),
+        checks: None,
+        sigma2: None,
+        sigma2_upper: None,
+        stopping: None,
+        spec_sha256: spec_digest(&spec.raw),
+        model: None,
+        formulation: None,
+        discretisation: None,
+        form: None,
+        modes: None,
+        convergence: None,
+        paper: None,
+        optimisation: None,
+        drift_residual: None,
+        instability: None,
+        compressible: None,
+        settings: settings_document(&spec.settings),
+        constants: fluid::constants::all().into_iter().map(|(k, v)| (k.to_string(), Float(v))).collect(),
+        spec: spec.raw.clone(),
+    }
+}
+
+/// Build the typed certificate of a fluid spec from its analysis.
+pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidCertificateDocument {
     let p = &spec.problem;
-    let mut c = Map::new();
-    let mut put = |k: &str, v: Value| {
-        c.insert(k.to_string(), v);
+    let opt = |x: Option<f64>| x.map(Float);
+    let sigma2_check = match a.verification {
+        Some(VerificationLevel::ExactStructure) => "exact: the form is diagonal (a Casimir-momentum or enstrophy form) or the noise is a multiple of the identity, so Q = 0 identically for the discretised operators",
+        Some(VerificationLevel::VerifiedFloat) => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite by a floating-point Cholesky with rounding accounted for (Rump-style), for the floating-point matrices as computed; sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
+        Some(VerificationLevel::Float) => "floating point only: the dense verified check did not pass",
+        _ => "no claim is made",
     };
-    put("certificate_version", Value::from(CERTIFICATE_VERSION));
-    put("engine", json!({"name": "verify", "version": ENGINE_VERSION}));
-    put("name", Value::from(spec.name.as_str()));
-    put("kind", Value::from("fluid"));
-    put("verdict", Value::from(a.verdict.as_str()));
-    put("reason", Value::from(a.reason.as_str()));
-    put("level", Value::from(VerificationLevel::name_of(a.verification)));
-    put(
-        "checks",
-        json!({
-            "sigma2": match a.verification {
-                Some(VerificationLevel::ExactStructure) => "exact: the form is diagonal (a Casimir-momentum or enstrophy form) or the noise is a multiple of the identity, so Q = 0 identically for the discretised operators",
-                Some(VerificationLevel::VerifiedFloat) => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite by a floating-point Cholesky with rounding accounted for (Rump-style), for the floating-point matrices as computed; sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
-                Some(VerificationLevel::Float) => "floating point only: the dense verified check did not pass",
-                _ => "no claim is made",
-            },
-            "discretisation": "the claims are about the discretised linear SDE; the convergence table shows how they move under refinement",
-        }),
-    );
-    if let Some(s2) = a.sigma2 {
-        put("sigma2", float_json(s2));
-    }
-    if let Some(u) = a.sigma2_upper {
-        put("sigma2_upper", float_json(u));
-    }
+    let checks = [
+        ("sigma2", sigma2_check),
+        ("discretisation", "the claims are about the discretised linear SDE; the convergence table shows how they move under refinement"),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v.to_string()))
+    .collect();
     // T is a guarantee: only a proved upper bound of Sigma^2 gives one (the
     // Lanczos value is a lower estimate).
-    if let (Some(stop), Some(s2)) = (spec.stopping, a.sigma2_upper) {
-        let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
-        put(
-            "stopping",
-            json!({
-                "epsilon": stop.epsilon,
-                "delta": stop.delta,
-                "T": st.time().map_or(Value::String("infinity".into()), float_json),
-                "bound": "P(|dw_t|_V^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dw_0|_V^2 = delta, with Sigma^2 = sigma2_upper",
-            }),
-        );
-    }
-    put("spec_sha256", Value::from(spec_digest(&spec.raw)));
-    put("model", Value::from(p.model.as_str()));
-    put(
-        "formulation",
-        Value::from(match p.model {
-            FluidModel::Incompressible => "vorticity: dw = -ik (U + U'' L^-1) w dt - sum_j ik eta_j w o dW^j per x-mode exp(ikx), L = k^2 - d^2/dy^2 with psi = 0 at walls",
-            FluidModel::Compressible { .. } => "momentum-density m = rho u and density rho, noise acting by the coadjoint action (Lie derivative) of (eta_j(y), 0)",
-        }),
-    );
+    let stopping = match (spec.stopping, a.sigma2_upper) {
+        (Some(stop), Some(s2)) => {
+            let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
+            Some(StoppingRecord {
+                epsilon: Float(stop.epsilon),
+                delta: Float(stop.delta),
+                t: Float(st.time().unwrap_or(f64::INFINITY)),
+                bound: "P(|dw_t|_V^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dw_0|_V^2 = delta, with Sigma^2 = sigma2_upper".into(),
+            })
+        }
+        _ => None,
+    };
+    let formulation = match p.model {
+        FluidModel::Incompressible => "vorticity: dw = -ik (U + U'' L^-1) w dt - sum_j ik eta_j w o dW^j per x-mode exp(ikx), L = k^2 - d^2/dy^2 with psi = 0 at walls",
+        FluidModel::Compressible { .. } => "momentum-density m = rho u and density rho, noise acting by the coadjoint action (Lie derivative) of (eta_j(y), 0)",
+    };
     let unknowns = match p.profile.boundary {
         Boundary::Walls => p.ny - 1,
         Boundary::Periodic => p.ny,
     };
-    put(
-        "discretisation",
-        json!({
-            "x": format!("Fourier modes m = 1..{} (k = 2 pi m / x_period); m = 0 is frozen (A = B = 0)", p.x_modes),
-            "y": match p.profile.boundary {
-                Boundary::Walls => format!("continuous Galerkin spectral elements of degree {ELEMENT_DEGREE} with Gauss-Lobatto-Legendre quadrature, {} elements", p.ny / ELEMENT_DEGREE),
-                Boundary::Periodic => "Fourier collocation".to_string(),
-            },
-            "ny": p.ny,
-            "unknowns_per_mode": unknowns,
-            "x_modes": p.x_modes,
-        }),
-    );
-    put(
-        "form",
-        json!({
-            "kind": a.form.kind,
-            "energy_coefficient": a.form.energy,
-            "galilean_shift": opt(a.form.galilean_shift),
-            // 0 when there is no form (the contract's number, kept).
-            "sign": a.form.sign.map_or(0.0, Sign::as_f64),
-            "casimir_weight": a.form.casimir_weight,
-        }),
-    );
-    put(
-        "modes",
-        Value::Array(
-            a.modes
-                .iter()
-                .map(|m| {
-                    json!({
-                        "m": m.m, "k": float_json(m.k), "sigma2": float_json(m.sigma2), "sigma2_upper": opt(m.sigma2_upper),
-                        "form_verified": m.form_verified, "lanczos_iterations": m.iterations,
-                    })
-                })
-                .collect(),
-        ),
-    );
-    put(
-        "convergence",
-        Value::Array(
-            a.convergence
-                .iter()
-                .map(
-                    |r| json!({"ny": r.ny, "sigma2": opt(r.sigma2), "sigma2_paper_choice": opt(r.sigma2_paper_choice)}),
-                )
-                .collect(),
-        ),
-    );
-    put(
-        "paper",
-        json!({
-            "bound": opt(a.paper_bound),
-            "bound_formula": "sup_y sum_k eta_k'(y)^2 (the paper's eq. (eta-bound))",
-            "choice_sigma2": opt(a.paper_choice_sigma2),
-            "choice": "energy + Casimir with Phi'' = U/U'' (no Galilean shift, c = 0), when that form is definite",
-        }),
-    );
-    put(
-        "optimisation",
-        json!({
-            "over": "the Galilean (momentum) multiplier c and the energy coefficient of e H + C_Phi + c M",
-            "shift_curve": a.shift_curve.iter().map(|(c, s)| json!({"c": float_json(*c), "sigma2": float_json(*s)})).collect::<Vec<_>>(),
-            "infimum": opt(a.sigma2),
-            "attained_by": a.form.kind,
-        }),
-    );
-    if let Some(r) = a.drift_residual {
-        put("drift_residual", float_json(r));
+    let discretisation = DiscretisationRecord {
+        x: format!("Fourier modes m = 1..{} (k = 2 pi m / x_period); m = 0 is frozen (A = B = 0)", p.x_modes),
+        y: match p.profile.boundary {
+            Boundary::Walls => format!(
+                "continuous Galerkin spectral elements of degree {ELEMENT_DEGREE} with Gauss-Lobatto-Legendre quadrature, {} elements",
+                p.ny / ELEMENT_DEGREE
+            ),
+            Boundary::Periodic => "Fourier collocation".to_string(),
+        },
+        ny: p.ny as u64,
+        unknowns_per_mode: unknowns as u64,
+        x_modes: p.x_modes as u64,
+    };
+    let form = FluidFormRecord {
+        kind: a.form.kind.to_string(),
+        energy_coefficient: Float(a.form.energy),
+        galilean_shift: opt(a.form.galilean_shift),
+        // 0 when there is no form (the contract's number, kept).
+        sign: Float(a.form.sign.map_or(0.0, Sign::as_f64)),
+        casimir_weight: a.form.casimir_weight.clone(),
+    };
+    let modes = a
+        .modes
+        .iter()
+        .map(|m| ModeRecord {
+            m: m.m as u64,
+            k: Float(m.k),
+            sigma2: Float(m.sigma2),
+            sigma2_upper: opt(m.sigma2_upper),
+            form_verified: m.form_verified,
+            lanczos_iterations: m.iterations as u64,
+        })
+        .collect();
+    let convergence = a
+        .convergence
+        .iter()
+        .map(|r| ConvergenceRecord {
+            ny: r.ny as u64,
+            sigma2: opt(r.sigma2),
+            sigma2_paper_choice: opt(r.sigma2_paper_choice),
+        })
+        .collect();
+    let paper = PaperRecord {
+        bound: opt(a.paper_bound),
+        bound_formula: "sup_y sum_k eta_k'(y)^2 (the paper's eq. (eta-bound))".into(),
+        choice_sigma2: opt(a.paper_choice_sigma2),
+        choice: "energy + Casimir with Phi'' = U/U'' (no Galilean shift, c = 0), when that form is definite".into(),
+    };
+    let optimisation = FluidOptimisationRecord {
+        over: "the Galilean (momentum) multiplier c and the energy coefficient of e H + C_Phi + c M".into(),
+        shift_curve: a.shift_curve.iter().map(|(c, s)| ShiftPoint { c: Float(*c), sigma2: Float(*s) }).collect(),
+        infimum: opt(a.sigma2),
+        attained_by: a.form.kind.to_string(),
+    };
+    let instability = a.instability.as_ref().map(|u| UnstableModeRecord {
+        m: u.m as u64,
+        k: Float(u.k),
+        growth_rate: Float(u.growth_rate),
+        growth_rate_half_resolution: Float(u.growth_rate_coarse),
+        ny: u.ny as u64,
+    });
+    let compressible = a.compressible.as_ref().map(|cr| CompressibleRecord {
+        sound_speed: Float(cr.sound_speed),
+        noise_residuals: cr.noise_residuals.iter().map(|x| Float(*x)).collect(),
+        noise_residual_formula:
+            "sup_y |U eta_k'|: the y-momentum (grad sigma)^T m put into the equilibrium by noise field k".into(),
+        compatible_noise: "eta constant wherever U != 0".into(),
+        galilean_shift_interval: cr.shift_interval.map(|(lo, hi)| vec![Float(lo), Float(hi)]),
+        incompressible_verdict: cr.incompressible_verdict,
+        incompressible_sigma2: opt(cr.incompressible_sigma2),
+    });
+    FluidCertificateDocument {
+        verdict: a.verdict,
+        reason: a.reason.clone(),
+        level: LevelOrNone(a.verification),
+        checks: Some(checks),
+        sigma2: a.sigma2.map(Float),
+        sigma2_upper: a.sigma2_upper.map(Float),
+        stopping,
+        model: Some(p.model.as_str().to_string()),
+        formulation: Some(formulation.into()),
+        discretisation: Some(discretisation),
+        form: Some(form),
+        modes: Some(modes),
+        convergence: Some(convergence),
+        paper: Some(paper),
+        optimisation: Some(optimisation),
+        drift_residual: a.drift_residual.map(Float),
+        instability,
+        compressible,
+        ..empty_document(spec)
     }
-    if let Some(u) = &a.instability {
-        put(
-            "instability",
-            json!({"m": u.m, "k": float_json(u.k), "growth_rate": float_json(u.growth_rate), "growth_rate_half_resolution": float_json(u.growth_rate_coarse), "ny": u.ny}),
-        );
-    }
-    if let Some(cr) = &a.compressible {
-        put(
-            "compressible",
-            json!({
-                "sound_speed": float_json(cr.sound_speed),
-                "noise_residuals": cr.noise_residuals.iter().map(|x| float_json(*x)).collect::<Vec<_>>(),
-                "noise_residual_formula": "sup_y |U eta_k'|: the y-momentum (grad sigma)^T m put into the equilibrium by noise field k",
-                "compatible_noise": "eta constant wherever U != 0",
-                "galilean_shift_interval": cr.shift_interval.map_or(Value::Null, |(lo, hi)| json!([float_json(lo), float_json(hi)])),
-                "incompressible_verdict": cr.incompressible_verdict.as_str(),
-                "incompressible_sigma2": opt(cr.incompressible_sigma2),
-            }),
-        );
-    }
-    put("settings", settings_json(&spec.settings));
-    put("constants", constants_json());
-    put("spec", spec.raw.clone());
-    Value::Object(c)
 }
 
 /// Re-check a fluid certificate: independent claims, then re-derivation and
@@ -607,6 +624,9 @@ pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport,
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     crate::check::check_engine(map)?;
+    // The shape first: every field of the certificate type, no other.
+    crate::document::from_value::<FluidCertificateDocument>(cert)
+        .map_err(|e| fail(&e.path, format!("not a certificate as this engine writes them: {}", e.message)))?;
     // A certificate whose embedded spec or settings the engine rejects fails
     // (exit 1); only a file that is not a certificate is bad input.
     let mut spec = fluid_spec_from_value(spec_value).map_err(|e| {

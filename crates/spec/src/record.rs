@@ -375,3 +375,252 @@ pub struct GrowthRecord {
 pub fn certificate_schema() -> Value {
     serde_json::to_value(schemars::schema_for!(CertificateDocument)).unwrap_or(Value::Null)
 }
+
+/// A verification level, or `"none"` when no claim is made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LevelOrNone(pub Option<VerificationLevel>);
+
+impl Serialize for LevelOrNone {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(VerificationLevel::name_of(self.0))
+    }
+}
+
+impl<'de> Deserialize<'de> for LevelOrNone {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        if s == "none" {
+            return Ok(LevelOrNone(None));
+        }
+        VerificationLevel::deserialize(de::value::StrDeserializer::<D::Error>::new(&s)).map(|l| LevelOrNone(Some(l)))
+    }
+}
+
+impl JsonSchema for LevelOrNone {
+    fn schema_name() -> Cow<'static, str> {
+        "LevelOrNone".into()
+    }
+    fn json_schema(g: &mut SchemaGenerator) -> Schema {
+        let level = g.subschema_for::<VerificationLevel>();
+        json_schema!({"anyOf": [level, {"const": "none"}]})
+    }
+}
+
+/// The certificate of a fluid spec (README, "Fluids"): the claims are about
+/// the discretised linear SDE, per x-mode, with the convergence table beside
+/// them. When the profile cannot be discretised (a singularity at a grid
+/// node) the verdict is `inconclusive` and the analysis parts are absent.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: certificate of a stochastic shear flow")]
+pub struct FluidCertificateDocument {
+    /// Format version ([`crate::CERTIFICATE_VERSION`]).
+    pub certificate_version: u64,
+    /// The engine that wrote it.
+    pub engine: Engine,
+    /// The spec's name.
+    pub name: String,
+    /// `fluid`.
+    pub kind: String,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Why, in a sentence.
+    pub reason: String,
+    /// What the verdict rests on (`none`: no claim).
+    pub level: LevelOrNone,
+    /// What each part rests on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checks: Option<BTreeMap<String, String>>,
+    /// `Sigma^2`, the largest per-mode Lanczos value (a lower estimate).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2: Option<Float>,
+    /// A proved upper bound of `Sigma^2` (verified per mode).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_upper: Option<Float>,
+    /// The stopping-time bound, from `sigma2_upper`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopping: Option<StoppingRecord>,
+    /// SHA-256 of the embedded spec's compact JSON.
+    pub spec_sha256: String,
+    /// `incompressible` or `compressible`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// The equations, in words.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formulation: Option<String>,
+    /// The discretisation in x and y.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discretisation: Option<DiscretisationRecord>,
+    /// The conserved form used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub form: Option<FluidFormRecord>,
+    /// Per x-mode results.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modes: Option<Vec<ModeRecord>>,
+    /// `Sigma^2` at every resolution of the convergence table.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convergence: Option<Vec<ConvergenceRecord>>,
+    /// The paper's bound and choice beside ours.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub paper: Option<PaperRecord>,
+    /// The optimisation over the Galilean shift.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimisation: Option<FluidOptimisationRecord>,
+    /// `max |A^T V + V A|` relative, for the form used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drift_residual: Option<Float>,
+    /// The growing mode, when linearly unstable.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instability: Option<UnstableModeRecord>,
+    /// The compressible model's noise-compatibility test.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compressible: Option<CompressibleRecord>,
+    /// The settings in force (all of them).
+    pub settings: crate::document::FluidSettingsDoc,
+    /// The pipeline's fixed constants (`fluid::constants`).
+    pub constants: BTreeMap<String, Float>,
+    /// The spec exactly as given.
+    pub spec: Value,
+}
+
+/// The discretisation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DiscretisationRecord {
+    /// In x.
+    pub x: String,
+    /// In y.
+    pub y: String,
+    /// Grid points in y.
+    pub ny: u64,
+    /// Unknowns per x-mode.
+    pub unknowns_per_mode: u64,
+    /// x-modes.
+    pub x_modes: u64,
+}
+
+/// The conserved form `e H + C_Phi + c M`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FluidFormRecord {
+    /// `energy_casimir`, `pseudomomentum`, `enstrophy` or `none`.
+    pub kind: String,
+    /// `e`.
+    pub energy_coefficient: Float,
+    /// `c` (null: none).
+    pub galilean_shift: Option<Float>,
+    /// `+1`, `-1`, or `0` when there is no form.
+    pub sign: Float,
+    /// `Phi''(omega_e)` in words.
+    pub casimir_weight: String,
+}
+
+/// One x-mode.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ModeRecord {
+    /// Mode number.
+    pub m: u64,
+    /// Wavenumber `2 pi m / x_period`.
+    pub k: Float,
+    /// Lanczos value (lower estimate).
+    pub sigma2: Float,
+    /// Verified upper bound (null: not verified).
+    pub sigma2_upper: Option<Float>,
+    /// Whether `V` was verified definite.
+    pub form_verified: bool,
+    /// Lanczos iterations.
+    pub lanczos_iterations: u64,
+}
+
+/// One row of the convergence table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConvergenceRecord {
+    /// Resolution.
+    pub ny: u64,
+    /// `Sigma^2` at this resolution.
+    pub sigma2: Option<Float>,
+    /// `Sigma^2` of the paper's choice at this resolution.
+    pub sigma2_paper_choice: Option<Float>,
+}
+
+/// The paper's constants.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PaperRecord {
+    /// The paper's bound.
+    pub bound: Option<Float>,
+    /// Its formula.
+    pub bound_formula: String,
+    /// `Sigma^2` of the paper's choice.
+    pub choice_sigma2: Option<Float>,
+    /// The paper's choice in words.
+    pub choice: String,
+}
+
+/// A point of the shift curve.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ShiftPoint {
+    /// Galilean shift `c`.
+    pub c: Float,
+    /// `Sigma^2` at `c`.
+    pub sigma2: Float,
+}
+
+/// The optimisation over the conserved form.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FluidOptimisationRecord {
+    /// What is optimised over.
+    pub over: String,
+    /// `Sigma^2` against the shift.
+    pub shift_curve: Vec<ShiftPoint>,
+    /// The infimum found.
+    pub infimum: Option<Float>,
+    /// The form that attains it.
+    pub attained_by: String,
+}
+
+/// The fastest-growing mode.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct UnstableModeRecord {
+    /// Mode number.
+    pub m: u64,
+    /// Wavenumber.
+    pub k: Float,
+    /// Growth rate at `ny`.
+    pub growth_rate: Float,
+    /// Growth rate at half the resolution.
+    pub growth_rate_half_resolution: Float,
+    /// Resolution.
+    pub ny: u64,
+}
+
+/// The compressible model's noise-compatibility test.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CompressibleRecord {
+    /// The sound speed.
+    pub sound_speed: Float,
+    /// `sup |U eta_k'|` per noise field.
+    pub noise_residuals: Vec<Float>,
+    /// The formula.
+    pub noise_residual_formula: String,
+    /// Which noise is compatible.
+    pub compatible_noise: String,
+    /// Shifts `c` with `|U + c| < c_s` (null: none).
+    pub galilean_shift_interval: Option<Vec<Float>>,
+    /// The incompressible verdict of the same flow.
+    pub incompressible_verdict: Verdict,
+    /// Its `Sigma^2`.
+    pub incompressible_sigma2: Option<Float>,
+}
+
+/// The JSON Schema of fluid certificates (committed as
+/// `schema/fluid-certificate.schema.json`).
+pub fn fluid_certificate_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(FluidCertificateDocument)).unwrap_or(Value::Null)
+}
