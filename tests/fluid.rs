@@ -303,6 +303,40 @@ fn monte_carlo_of_the_discretised_sde_agrees_with_the_certified_growth() {
     }
 }
 
+/// The paper's bound `sup_y sum eta_k'^2` is not valid in general. For
+/// `U = sin y` between walls at `y = -3, 3` with the linear noise `0.1 y`
+/// (paper's bound `0.01`), the shift `c = 0` is forced (`U''` vanishes at 0)
+/// and the energy-Casimir form is definite while the gravest wavenumber
+/// `k = 2 pi / L` keeps `k^2 + (pi/6)^2 > 1` (Arnold), i.e. `L < 7.375`. As
+/// `L` approaches that boundary `Sigma^2` grows without bound; at `L = 7.3`
+/// the exact second moment of the discretised SDE, started on the fastest
+/// direction, leaves `e^{0.01 t} V(0)` far behind while staying under the
+/// certified `e^{Sigma^2 t} V(0)`.
+#[test]
+fn the_papers_bound_fails_near_arnolds_boundary_and_exact_moments_show_it() {
+    let paper = 0.01; // sup (0.1 y)'^2
+    let mut ratios = vec![];
+    for l in [6.0, 7.0, 7.3] {
+        let p = problem("sin(y)", &["0.1*y"], (-3.0, 3.0), Boundary::Walls, l, 64, 1);
+        let (grid, coef, form) = forced_setup(&p);
+        let k = 2.0 * PI / l;
+        let mode = Mode::new(&grid, k);
+        let (sigma2, x0) = dense_top(&mode.generator_matrix(&form, &coef), &mode.form_matrix(&form));
+        ratios.push(sigma2 / paper);
+        if l == 7.3 {
+            let sde = ModeSde::new(&grid, &coef, &form, k);
+            let w0 = nalgebra::DVector::from_iterator(x0.len(), x0.iter().map(|x| nalgebra::Complex::new(*x, 0.0)));
+            let v0 = sde.energy(&w0);
+            for (t, ev) in sde.exact_mean_energy(&x0, 2.0, 4) {
+                assert!(ev > v0 * (paper * t).exp() * 1.1, "t = {t}: E V = {ev} is within the paper's bound");
+                assert!(ev <= v0 * (sigma2 * t).exp() * (1.0 + 1e-9), "t = {t}: {ev} above the certified growth");
+            }
+        }
+    }
+    // Growing towards the boundary, and above the paper's bound at every L.
+    assert!(ratios[0] > 1.0 && ratios[1] > 3.0 * ratios[0] && ratios[2] > 3.0 * ratios[1], "{ratios:?}");
+}
+
 #[test]
 fn pseudomomentum_is_conserved_along_every_simulated_path() {
     // For U'' > 0 the form int omega^2 / U'' is invariant under the drift and

@@ -148,6 +148,9 @@ fn summary(cert: &Value) -> String {
     if let Some(r) = cert["reason"].as_str() {
         s.push_str(&format!("\n  {r}"));
     }
+    if let Some(list) = cert.pointer("/compressible/compatible_completion") {
+        s.push_str(&format!("\n  compatible noise (paste as fluid.noise): {list}"));
+    }
     s
 }
 

@@ -535,13 +535,127 @@ pub struct FluidDoc {
     /// The sound speed of a compressible model (positive constant).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sound_speed: Option<Expression>,
-    /// The noise stream functions or velocities `eta_k(y)` (at most 256).
-    pub noise: Vec<Expression>,
+    /// The noise fields (at most 256): a transport velocity `eta_k(y)`
+    /// alone, or with a potential part for compressible flow.
+    pub noise: Vec<NoiseEntry>,
     /// Grid points in y (16 to 4096; a multiple of the element degree with
     /// walls, even when periodic).
     pub ny: Count,
     /// Number of x-modes `m = 1..x_modes` (1 to 2048).
     pub x_modes: Count,
+}
+
+/// One fluid noise field: the transport velocity `(eta(y), 0)` alone (a
+/// string or number), or the pair `{"transport": eta, "potential": r}` of
+/// the compressible semidirect-product algebra, where `r(y)` is a potential
+/// (a stochastic potential force `-grad r`) or `"compatible"` for
+/// `r = -int U eta' dy`, the completion that keeps the equilibrium.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NoiseEntry {
+    /// Transport only.
+    Transport(Expression),
+    /// Transport with a potential part.
+    WithPotential {
+        /// `eta(y)`.
+        transport: Expression,
+        /// `r(y)`, or `"compatible"`.
+        potential: Expression,
+    },
+}
+
+impl NoiseEntry {
+    /// The transport part.
+    pub fn transport(&self) -> &Expression {
+        match self {
+            NoiseEntry::Transport(e) | NoiseEntry::WithPotential { transport: e, .. } => e,
+        }
+    }
+}
+
+impl From<&str> for NoiseEntry {
+    fn from(s: &str) -> Self {
+        NoiseEntry::Transport(Expression::from(s))
+    }
+}
+
+/// The object form of a noise entry.
+#[derive(Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+struct NoisePair {
+    /// The transport velocity `eta(y)` (x-component of the noise field).
+    transport: Expression,
+    /// The potential `r(y)`, or `"compatible"` for `r = -int U eta' dy`.
+    potential: Expression,
+}
+
+impl Serialize for NoiseEntry {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            NoiseEntry::Transport(e) => e.serialize(s),
+            NoiseEntry::WithPotential { transport, potential } => {
+                NoisePair { transport: transport.clone(), potential: potential.clone() }.serialize(s)
+            }
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for NoiseEntry {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        // A visitor, as for `AlgebraDoc`: the path of an error inside the
+        // object is kept, and a number (arbitrary precision) is read through
+        // `Value`.
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = NoiseEntry;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("an expression or an object {\"transport\", \"potential\"}")
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<NoiseEntry, E> {
+                Ok(NoiseEntry::Transport(Expression(s.to_string())))
+            }
+            fn visit_u64<E: de::Error>(self, x: u64) -> Result<NoiseEntry, E> {
+                Ok(NoiseEntry::Transport(Expression(x.to_string())))
+            }
+            fn visit_i64<E: de::Error>(self, x: i64) -> Result<NoiseEntry, E> {
+                Ok(NoiseEntry::Transport(Expression(x.to_string())))
+            }
+            fn visit_f64<E: de::Error>(self, x: f64) -> Result<NoiseEntry, E> {
+                Ok(NoiseEntry::Transport(Expression(x.to_string())))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<NoiseEntry, A::Error> {
+                let (mut transport, mut potential) = (None, None);
+                while let Some(key) = map.next_key::<String>()? {
+                    match key.as_str() {
+                        // How serde_json (arbitrary_precision) hands over a number.
+                        "$serde_json::private::Number" => {
+                            return Ok(NoiseEntry::Transport(Expression(map.next_value::<String>()?)));
+                        }
+                        "transport" => transport = Some(map.next_value::<Expression>()?),
+                        "potential" => potential = Some(map.next_value::<Expression>()?),
+                        other => return Err(de::Error::unknown_field(other, &["transport", "potential"])),
+                    }
+                }
+                let transport = transport.ok_or_else(|| de::Error::missing_field("transport"))?;
+                let potential = potential.ok_or_else(|| de::Error::missing_field("potential"))?;
+                Ok(NoiseEntry::WithPotential { transport, potential })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl JsonSchema for NoiseEntry {
+    fn schema_name() -> Cow<'static, str> {
+        "NoiseEntry".into()
+    }
+    fn json_schema(g: &mut SchemaGenerator) -> Schema {
+        let expression = g.subschema_for::<Expression>();
+        let pair = g.subschema_for::<NoisePair>();
+        json_schema!({
+            "description": "A transport velocity eta(y), or {\"transport\": eta, \"potential\": r} with r(y) an expression or \"compatible\" (r = -int U eta' dy, which keeps a compressible equilibrium).",
+            "anyOf": [expression, pair]
+        })
+    }
 }
 
 /// Numerical settings of a fluid spec.

@@ -18,7 +18,9 @@
 
 use crate::certificate::{spec_digest, CERTIFICATE_VERSION, ENGINE_VERSION};
 use crate::check::{compare_with, fail, CheckError, CheckReport};
-use crate::document::{BoundaryName, Count, Expression, FluidSettingsDoc, FluidSpecDocument, ModelName, Real};
+use crate::document::{
+    BoundaryName, Count, Expression, FluidSettingsDoc, FluidSpecDocument, ModelName, NoiseEntry, Real,
+};
 use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
 use crate::parse::Stopping;
 use crate::record::{
@@ -31,7 +33,7 @@ use fluid::analysis::{
 };
 use fluid::expr::{parse, Expr};
 use fluid::grid::{Boundary, ELEMENT_DEGREE};
-use fluid::profile::{Profile, ProfileError};
+use fluid::profile::{Potential, Profile, ProfileError};
 use generator::StoppingTime;
 use outcome::{Sign, Verdict, VerificationLevel};
 use serde_json::Value;
@@ -152,10 +154,10 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
         let kpath = child(&ppath, key);
         let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
             && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if !valid || ["y", "pi", "sin", "cos", "exp", "sqrt"].contains(&key.as_str()) {
+        if !valid || ["y", "pi", "sin", "cos", "exp", "sqrt", "compatible"].contains(&key.as_str()) {
             return Err(SpecError::new(
                 kpath,
-                format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi or a function)"),
+                format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi, a function or 'compatible')"),
             ));
         }
         let x = constant(v, &kpath, &params)?;
@@ -223,8 +225,25 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
             format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
         ));
     }
-    let noise =
-        f.noise.iter().enumerate().map(|(i, v)| expr(v, &index(&npath, i), &params)).collect::<Result<Vec<_>>>()?;
+    let mut noise = Vec::with_capacity(f.noise.len());
+    let mut potentials = Vec::with_capacity(f.noise.len());
+    for (i, entry) in f.noise.iter().enumerate() {
+        let ipath = index(&npath, i);
+        match entry {
+            NoiseEntry::Transport(e) => {
+                noise.push(expr(e, &ipath, &params)?);
+                potentials.push(Potential::None);
+            }
+            NoiseEntry::WithPotential { transport, potential } => {
+                noise.push(expr(transport, &child(&ipath, "transport"), &params)?);
+                potentials.push(if potential.0.trim() == "compatible" {
+                    Potential::Compatible
+                } else {
+                    Potential::given(expr(potential, &child(&ipath, "potential"), &params)?)
+                });
+            }
+        }
+    }
     let nypath = child(&fpath, "ny");
     let ny = count(f.ny, &nypath)?;
     if ny < NY_RANGE.0 {
@@ -277,7 +296,7 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
             ),
         ));
     }
-    let profile = Profile::new(u, noise, (a, b), boundary);
+    let profile = Profile::new(u, noise, (a, b), boundary).with_potentials(potentials);
     // Profile checks up front so the error names the spec field.
     profile.check(&[]).map_err(|e| profile_error(e, &fpath))?;
     let stopping =
@@ -453,6 +472,28 @@ pub fn fluid_certificate_json(spec: &FluidSpec, a: &FluidAnalysis) -> Value {
     serde_json::to_value(fluid_certificate_document(spec, a)).unwrap_or_default()
 }
 
+/// The spec's noise list with each incompatible field `i` replaced by
+/// `{"transport": eta_i, "potential": "compatible"}` (`None` when every
+/// field is compatible).
+fn completion(raw: &Value, incompatible: &[usize]) -> Option<Vec<Value>> {
+    if incompatible.is_empty() {
+        return None;
+    }
+    let list = raw.pointer("/fluid/noise")?.as_array()?;
+    Some(
+        list.iter()
+            .enumerate()
+            .map(|(i, entry)| {
+                if !incompatible.contains(&i) {
+                    return entry.clone();
+                }
+                let transport = entry.get("transport").unwrap_or(entry).clone();
+                serde_json::json!({"transport": transport, "potential": "compatible"})
+            })
+            .collect(),
+    )
+}
+
 /// The parts of a fluid certificate that do not depend on the analysis.
 fn empty_document(spec: &FluidSpec) -> FluidCertificateDocument {
     FluidCertificateDocument {
@@ -588,9 +629,9 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
     let compressible = a.compressible.as_ref().map(|cr| CompressibleRecord {
         sound_speed: Float(cr.sound_speed),
         noise_residuals: cr.noise_residuals.iter().map(|x| Float(*x)).collect(),
-        noise_residual_formula:
-            "sup_y |U eta_k'|: the y-momentum (grad sigma)^T m put into the equilibrium by noise field k".into(),
-        compatible_noise: "eta constant wherever U != 0".into(),
+        noise_residual_formula: "sup_y |U eta_k' + r_k'|: the y-momentum (grad sigma)^T m + rho grad r put into the equilibrium by noise field k = ((eta_k, 0), r_k)".into(),
+        compatible_noise: "eta constant wherever U != 0, or any eta with the potential r' = -U eta' ({\"transport\": eta, \"potential\": \"compatible\"})".into(),
+        compatible_completion: completion(&spec.raw, &cr.incompatible),
         galilean_shift_interval: cr.shift_interval.map(|(lo, hi)| vec![Float(lo), Float(hi)]),
         incompressible_verdict: cr.incompressible_verdict,
         incompressible_sigma2: opt(cr.incompressible_sigma2),

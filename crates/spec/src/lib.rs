@@ -10,6 +10,12 @@
 //!   spec itself.
 //! * [`check_certificate`] re-derives everything from the embedded spec and
 //!   compares; any altered number fails with the path of the field.
+//! * [`document`] and [`record`]: the contract as serde-derived types
+//!   (specs, fluid specs, settings, certificates, fluid certificates). Every
+//!   spec is read into a document first (unknown fields, missing fields and
+//!   wrong types refused with the JSON path), and every certificate is
+//!   written from a record; the JSON Schemas in `schema/` are generated from
+//!   these types (`verify schema`).
 //! * From Rust without JSON: [`certify_system`] certifies a
 //!   [`casimir::System`] built in code, and [`Certificate::check`] re-checks
 //!   the result (a heavy top in twelve lines in the docs of [`certify_system`]).

@@ -605,13 +605,19 @@ pub struct UnstableModeRecord {
 pub struct CompressibleRecord {
     /// The sound speed.
     pub sound_speed: Float,
-    /// `sup |U eta_k'|` per noise field.
+    /// `sup |U eta_k' + r_k'|` per noise field.
     pub noise_residuals: Vec<Float>,
     /// The formula.
     pub noise_residual_formula: String,
     /// Which noise is compatible.
     pub compatible_noise: String,
-    /// Shifts `c` with `|U + c| < c_s` (null: none).
+    /// When some noise field is incompatible: the spec's noise list with
+    /// each such field completed by its compatible potential, ready to paste
+    /// as `fluid.noise`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compatible_completion: Option<Vec<Value>>,
+    /// The ends `[c_lo, c_hi]` of the admissible shifts (null: none); the
+    /// sonic end (`|U + c| = c_s` somewhere) is excluded, the other included.
     pub galilean_shift_interval: Option<Vec<Float>>,
     /// The incompressible verdict of the same flow.
     pub incompressible_verdict: Verdict,

@@ -2,16 +2,23 @@
 //! the structural `Sigma^2 = 0` with the shifted energy–Casimir form.
 
 use super::*;
+use crate::profile::Potential;
 
 /// The compressible model (see `docs/fluids.md`): the coadjoint action of
-/// the noise `(eta(y), 0)` on the momentum `m = rho u` contains
-/// `(grad sigma)^T m = (0, U eta')`, a y-momentum source at the equilibrium
-/// that no pressure can absorb (the density is not constrained), so the
-/// equilibrium is kept only by noise with `U eta' = 0`, i.e. constant
-/// `eta` where the flow is non-zero. For such noise `B_k = -ik eta_k I`
-/// commutes with the drift and with the form, so `Sigma^2 = 0`; the form
+/// the noise element `((eta(y), 0), r(y))` on the equilibrium momentum
+/// `m = rho u` is `-(0, U eta' + r')`: the transport part alone puts the
+/// y-momentum `U eta'` into the equilibrium, which no pressure can absorb
+/// (the density is not constrained), and the potential part `r` adds
+/// `rho_e r'`. So the equilibrium is kept by constant `eta` where the flow
+/// is non-zero (no potential needed), or by any `eta` with its compatible
+/// completion `r' = -U eta'` (`"potential": "compatible"`). For constant
+/// `eta` without potential, `B_k = -ik eta_k I` commutes with the drift and
+/// with the form, so `Sigma^2 = 0`; the form
 /// `|du|^2 + 2(U + c) drho du_x + c_s^2 drho^2 + w (curl du + U' drho)^2`
 /// is positive definite iff `w >= 0` and `|U + c| < c_s` on the interval.
+/// Compatible noise with non-constant `eta` needs the discretised
+/// compressible generator, which this engine does not have: such noise is
+/// `inconclusive`, with no `Sigma^2` claimed.
 ///
 /// What `stable` rests on is proved, not sampled: every `eta_k'` vanishes
 /// identically (interval arithmetic, [`crate::expr::Derivative::sign_on`]),
@@ -19,9 +26,9 @@ use super::*;
 /// that `|U + c| < c_s` holds everywhere for the chosen `c`. The weight's
 /// sign is proved for the pseudomomentum and the uniform flow (level
 /// `exact_structure`) and only sampled for a forced shift (level `float`).
-/// Noise whose residual `sup |U eta'|` is far above rounding on the samples
-/// is `noise_incompatible` (level `float`); noise in between, neither proved
-/// compatible nor clearly not, is `inconclusive`.
+/// Noise whose residual `sup |U eta' + r'|` is far above rounding on the
+/// samples is `noise_incompatible` (level `float`); noise in between,
+/// neither proved compatible nor clearly not, is `inconclusive`.
 pub(super) fn analyse_compressible(
     problem: &FluidProblem,
     settings: &FluidSettings,
@@ -33,16 +40,38 @@ pub(super) fn analyse_compressible(
     let ys = profile.samples(crate::constants::FINE_SAMPLES);
     let us: Vec<f64> = ys.iter().map(|y| profile.u[0].eval(*y)).collect();
     let u_abs = us.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+    // The compatible completion makes the residual zero by construction
+    // (r' = -U eta' exactly), so it is not sampled.
     let noise_residuals: Vec<f64> = profile
         .eta
         .iter()
-        .map(|[_, d]| ys.iter().zip(&us).map(|(y, u)| (u * d.eval(*y)).abs()).fold(0.0, f64::max))
+        .zip(&profile.potential)
+        .map(|([_, d], p)| match p {
+            Potential::Compatible => 0.0,
+            _ => ys
+                .iter()
+                .zip(&us)
+                .map(|(y, u)| {
+                    let ep = d.eval(*y);
+                    (u * ep + p.gradient(*y, *u, ep)).abs()
+                })
+                .fold(0.0, f64::max),
+        })
         .collect();
+    let proved_zero = |d: &crate::expr::Derivative| {
+        d.expr().constant().is_some() || d.sign_on(a, b, crate::choice::SIGN_PROOF_BUDGET) == SignProof::Zero
+    };
+    // Constant eta and no potential force (r' = 0 proved, or r' = -U eta' = 0).
     let constant_noise: Vec<bool> = profile
         .eta
         .iter()
-        .map(|[_, d]| {
-            d.expr().constant().is_some() || d.sign_on(a, b, crate::choice::SIGN_PROOF_BUDGET) == SignProof::Zero
+        .zip(&profile.potential)
+        .map(|([_, d], p)| {
+            proved_zero(d)
+                && match p {
+                    Potential::None | Potential::Compatible => true,
+                    Potential::Given([_, rp]) => proved_zero(rp),
+                }
         })
         .collect();
     let incompressible = analyse(&FluidProblem { model: FluidModel::Incompressible, ..problem.clone() }, settings).ok();
@@ -84,9 +113,13 @@ pub(super) fn analyse_compressible(
         }
     };
     let mut summary = form_summary(&choice);
+    let scale = u_abs.max(f64::MIN_POSITIVE);
+    let incompatible: Vec<usize> =
+        (0..noise_residuals.len()).filter(|&i| !constant_noise[i] && noise_residuals[i] > 1e-12 * scale).collect();
     let compressible = CompressibleReport {
         sound_speed,
         noise_residuals: noise_residuals.clone(),
+        incompatible: incompatible.clone(),
         shift_interval,
         incompressible_verdict,
         incompressible_sigma2,
@@ -95,13 +128,23 @@ pub(super) fn analyse_compressible(
         compressible: Some(compressible),
         ..FluidAnalysis::without_certificate(Verdict::Inconclusive, String::new(), summary.clone(), paper_bound)
     };
-    let scale = u_abs.max(f64::MIN_POSITIVE);
-    if let Some(i) = (0..noise_residuals.len()).find(|&i| !constant_noise[i] && noise_residuals[i] > 1e-12 * scale) {
+    if let Some(&i) = incompatible.first() {
         return FluidAnalysis {
             verdict: Verdict::NoiseIncompatible,
             verification: Some(VerificationLevel::Float),
             reason: format!(
-                "the coadjoint action of noise[{i}] on the momentum rho u contains (grad sigma)^T m = (0, U eta'), which is not zero at the equilibrium (compressible.noise_residuals gives sup |U eta'|): in compressible flow no pressure absorbs it (in incompressible flow it is a gradient), so the noise moves the shear flow; compatible noise has U eta' = 0 (constant eta where U != 0)"
+                "the coadjoint action of noise[{i}] on the momentum rho u contains (grad sigma)^T m + rho grad r = (0, U eta' + r'), which is not zero at the equilibrium (compressible.noise_residuals gives sup |U eta' + r'|): in compressible flow no pressure absorbs it (in incompressible flow it is a gradient), so the noise moves the shear flow; it is compatible with the potential part r' = -U eta', i.e. r = -int U eta' dy (compressible.compatible_completion: the noise list with {{\"transport\": eta, \"potential\": \"compatible\"}} where needed)"
+            ),
+            ..base
+        };
+    }
+    let by_potential: Vec<usize> = (0..constant_noise.len())
+        .filter(|&i| !constant_noise[i] && matches!(profile.potential[i], Potential::Compatible))
+        .collect();
+    if let Some(&i) = by_potential.first() {
+        return FluidAnalysis {
+            reason: format!(
+                "noise[{i}] is compatible through its potential part (r' = -U eta' exactly, so the equilibrium is kept), but its transport eta is not constant, so B_k is not a multiple of the identity and Sigma^2 needs the discretised compressible generator, which this engine does not have yet: no Sigma^2 is claimed"
             ),
             ..base
         };
@@ -109,7 +152,7 @@ pub(super) fn analyse_compressible(
     if let Some(i) = constant_noise.iter().position(|c| !c) {
         return FluidAnalysis {
             reason: format!(
-                "noise[{i}]: U eta' is below 1e-12 of max|U| on every sample, but eta' could not be proved identically zero, so neither compatibility (B_k a multiple of the identity) nor incompatibility is established"
+                "noise[{i}]: U eta' + r' is below 1e-12 of max|U| on every sample, but eta' (and r') could not be proved identically zero, so neither compatibility with B_k a multiple of the identity nor incompatibility is established"
             ),
             ..base
         };
@@ -130,6 +173,21 @@ pub(super) fn analyse_compressible(
     summary.galilean_shift = Some(c);
     summary.sign = Some(Sign::Positive);
     summary.kind = "energy_casimir_momentum";
+    summary.casimir_weight = if uniform {
+        format!("none needed: U is uniform and the shift c = {c:.6} brings it to rest (energy coefficient 1, plus momentum and mass)")
+    } else {
+        format!("Phi''(q_e) = (U + c)/U'' with c = {c:.6} (energy coefficient 1, plus momentum and mass)")
+    };
+    // Which ends of the admissible interval are admissible: the sonic end
+    // |U + c| = c_s never (the acoustic part is then only semidefinite), the
+    // end where the weight (U + c)/U'' touches 0 always (w >= 0 suffices).
+    let shown = match &choice {
+        _ if lo == hi => format!("c = {lo:.6} is the only admissible shift"),
+        Choice::Pseudomomentum { sign } if sign.is_positive() => {
+            format!("admissible c in [{lo:.6}, {hi:.6}), the sonic end excluded")
+        }
+        _ => format!("admissible c in ({lo:.6}, {hi:.6}], the sonic end excluded"),
+    };
     let worst = Interval::point(c) + range;
     let worst = worst.hi.abs().max(worst.lo.abs());
     let ks = wavenumbers(problem);
@@ -140,7 +198,7 @@ pub(super) fn analyse_compressible(
     FluidAnalysis {
         verdict: Verdict::Stable,
         reason: format!(
-            "every noise field is constant (eta' = 0 proved), so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} (admissible c in [{lo:.6}, {hi:.6}]) is positive definite because |U + c| <= {worst:.6} < c_s = {sound_speed} on the whole interval (a rigorous enclosure of U){}",
+            "every noise field is constant (eta' = 0 proved), so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} ({shown}) is positive definite because |U + c| <= {worst:.6} < c_s = {sound_speed} on the whole interval (a rigorous enclosure of U){}",
             if proved_weight { "" } else { ", with the Casimir weight (U + c)/U'' non-negative on a fine sample (not proved: level float)" }
         ),
         form: summary,

@@ -148,10 +148,17 @@ pub struct UnstableMode {
 pub struct CompressibleReport {
     /// `c_s`.
     pub sound_speed: f64,
-    /// `sup_y |U eta_k'|` per noise field: the y-momentum the noise puts into
-    /// the equilibrium (zero iff compatible).
+    /// `sup_y |U eta_k' + r_k'|` per noise field (`r_k` its potential part):
+    /// the y-momentum the noise puts into the equilibrium (zero iff
+    /// compatible; exactly zero for the compatible completion).
     pub noise_residuals: Vec<f64>,
-    /// The admissible Galilean shifts `(c_lo, c_hi)` making the form definite, if any.
+    /// The noise fields whose residual is clearly above rounding: they move
+    /// the equilibrium; `{"transport": eta, "potential": "compatible"}`
+    /// would not.
+    pub incompatible: Vec<usize>,
+    /// The admissible Galilean shifts making the form definite, if any: the
+    /// ends `(c_lo, c_hi)`, of which the sonic end (`|U + c| = c_s`
+    /// somewhere) is excluded and the other included.
     pub shift_interval: Option<(f64, f64)>,
     /// The verdict of the same profile and noise in the incompressible model.
     pub incompressible_verdict: Verdict,
