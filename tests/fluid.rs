@@ -386,3 +386,21 @@ fn compressible_noise_residual_and_admissible_shifts_match_closed_forms() {
         }
     }
 }
+
+/// The tanh mixing layer at the spec's ny = 128 has a critical layer about
+/// 0.02 wide that 128 points do not resolve; the instability search refines
+/// past the user's grid until the growth rate converges. The reference
+/// 0.02189 at k = 0.952 is the independent Legendre-Galerkin value reported
+/// with issue 13.
+#[test]
+fn the_instability_search_refines_past_the_users_grid() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/fluids/tanh-mixing-layer.json");
+    let spec = spec::parse_fluid_spec(&std::fs::read_to_string(path).unwrap()).unwrap();
+    assert_eq!(spec.problem.ny, 128);
+    let cert = spec::certify_fluid(&spec);
+    assert_eq!(cert["verdict"], "linearly_unstable");
+    let inst = &cert["instability"];
+    assert!(inst["ny"].as_u64().unwrap() > 128, "{inst}");
+    assert!((inst["k"].as_f64().unwrap() - 0.952).abs() < 1e-3);
+    assert!((inst["growth_rate"].as_f64().unwrap() - 0.02189).abs() < 1e-5, "{inst}");
+}

@@ -25,6 +25,10 @@ pub const VERIFY_RITZ_WEIGHT: f64 = 1e-3;
 pub const INSTABILITY_FLOOR: f64 = 1e-6;
 /// ... and when the rates on two grids agree to this, relative.
 pub const INSTABILITY_AGREEMENT: f64 = 1e-3;
+/// The finest grid of the instability search: a rate that has not
+/// converged at `instability_ny` is refined by doubling up to this (a
+/// critical layer can be far thinner than the user's grid).
+pub const INSTABILITY_MAX_NY: f64 = 1024.0;
 /// A zero of `U''` is multiple (no forced shift) when `|U'''|` there is below
 /// this times `max |U''| / length`.
 pub const MULTIPLE_ZERO: f64 = 1e-8;
@@ -46,6 +50,7 @@ pub fn all() -> Vec<(&'static str, f64)> {
         ("verify_ritz_weight", VERIFY_RITZ_WEIGHT),
         ("instability_floor", INSTABILITY_FLOOR),
         ("instability_agreement", INSTABILITY_AGREEMENT),
+        ("instability_max_ny", INSTABILITY_MAX_NY),
         ("multiple_zero", MULTIPLE_ZERO),
     ]
 }

@@ -1,5 +1,7 @@
 //! The linear-instability test of a profile that admits no definite form:
-//! growth rates of the drift at two resolutions.
+//! growth rates of the drift at two resolutions, refined by doubling where
+//! they have not converged (a critical layer thinner than the grid), up to
+//! [`crate::constants::INSTABILITY_MAX_NY`], whatever the spec's `ny`.
 
 use super::*;
 
@@ -29,11 +31,9 @@ pub(super) fn inconclusive_or_unstable(
     shift_curve: Vec<(f64, f64)>,
 ) -> FluidAnalysis {
     let profile = &problem.profile;
-    let mut ny = settings.instability_ny.min(problem.ny);
-    if profile.boundary == Boundary::Walls {
-        ny -= ny % crate::grid::ELEMENT_DEGREE;
-    }
-    let coarse = ny / 2 - (ny / 2) % if profile.boundary == Boundary::Walls { crate::grid::ELEMENT_DEGREE } else { 1 };
+    let step = if profile.boundary == Boundary::Walls { crate::grid::ELEMENT_DEGREE } else { 2 };
+    let start = settings.instability_ny - settings.instability_ny % step;
+    let max_ny = (crate::constants::INSTABILITY_MAX_NY as usize).max(start);
     let ks = wavenumbers(problem);
     let u_scale = profile
         .samples(crate::constants::SCALE_SAMPLES)
@@ -44,15 +44,28 @@ pub(super) fn inconclusive_or_unstable(
     let rates: Vec<Option<UnstableMode>> = ks
         .par_iter()
         .map(|&(m, k)| {
-            let fine = growth_rate(profile, ny, k)?;
-            let coarse_rate = growth_rate(profile, coarse.max(16), k)?;
             // A growth rate is evidence when it is far above rounding
-            // (relative to k max|U|) and converged between the two grids.
+            // (relative to k max|U|) and converged between two grids, the
+            // finer twice the coarser. Start at instability_ny and its half;
+            // double while a rate above the floor has not converged.
             let floor = crate::constants::INSTABILITY_FLOOR * k * u_scale;
-            (fine > floor
-                && coarse_rate > floor
-                && (fine - coarse_rate).abs() <= crate::constants::INSTABILITY_AGREEMENT * fine)
-                .then_some(UnstableMode { m, k, growth_rate: fine, growth_rate_coarse: coarse_rate, ny })
+            let half = (start / 2 - (start / 2) % step).max(16);
+            let mut coarse_rate = growth_rate(profile, half, k)?;
+            let mut ny = start;
+            loop {
+                let fine = growth_rate(profile, ny, k)?;
+                if fine > floor
+                    && coarse_rate > floor
+                    && (fine - coarse_rate).abs() <= crate::constants::INSTABILITY_AGREEMENT * fine
+                {
+                    return Some(UnstableMode { m, k, growth_rate: fine, growth_rate_coarse: coarse_rate, ny });
+                }
+                if fine <= floor && coarse_rate <= floor || 2 * ny > max_ny {
+                    return None;
+                }
+                coarse_rate = fine;
+                ny *= 2;
+            }
         })
         .collect();
     let instability = rates.into_iter().flatten().max_by(|a, b| a.growth_rate.total_cmp(&b.growth_rate));
