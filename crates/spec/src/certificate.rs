@@ -1,11 +1,10 @@
 //! Certificates: the verdict, the evidence, the settings and the spec, as JSON.
 
-use crate::document::Literal;
 use crate::parse::Spec;
 use crate::record::{
     CertificateDocument, ChoiceRecord, ComplexRecord, ConservedRecord, DiscoveryRecord, Engine, EquilibriumRecord,
-    Float, GrowthRecord, InstabilityRecord, LinearisationRecord, MultipliersRecord, NoiseRecord, OptimisationRecord,
-    RationalMatrix, ResidualsRecord, SearchRecord, StoppingRecord,
+    ExactRational, Float, GrowthRecord, InstabilityRecord, LinearisationRecord, MultipliersRecord, NoiseRecord,
+    OptimisationRecord, RationalMatrix, ResidualsRecord, SearchRecord, StoppingRecord,
 };
 use exact::{Matrix, Rational};
 use generator::{analyse, Analysis, StoppingTime, Verdict};
@@ -31,12 +30,12 @@ pub struct Certificate {
     pub analysis: Analysis,
 }
 
-fn rationals(v: &[Rational]) -> Vec<Literal> {
-    v.iter().map(|r| Literal(r.clone())).collect()
+fn rationals(v: &[Rational]) -> Vec<ExactRational> {
+    v.iter().map(|r| ExactRational(r.clone())).collect()
 }
 
 fn matrix(m: &Matrix) -> RationalMatrix {
-    (0..m.nrows()).map(|i| (0..m.ncols()).map(|j| Literal(m[(i, j)].clone())).collect()).collect()
+    (0..m.nrows()).map(|i| (0..m.ncols()).map(|j| ExactRational(m[(i, j)].clone())).collect()).collect()
 }
 
 /// A float as JSON (non-finite values as strings).

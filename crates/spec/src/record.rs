@@ -17,7 +17,7 @@
 //! assert_eq!(doc.p.unwrap().len(), 3);
 //! ```
 
-use crate::document::{Literal, SettingsDoc};
+use crate::document::SettingsDoc;
 use outcome::{Verdict, VerificationLevel};
 use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
 use serde::de::{self, Deserializer};
@@ -61,8 +61,49 @@ impl JsonSchema for Float {
     }
 }
 
+/// An exact rational as the engine writes it into certificates: `p/q` with
+/// integers of any size up to [`exact::MAX_CERTIFICATE_DIGITS`] digits
+/// (exact arithmetic produces entries such as `1/10^600` that no double
+/// holds), or a number as a spec writes it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ExactRational(pub exact::Rational);
+
+impl Serialize for ExactRational {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.0.to_string())
+    }
+}
+
+impl<'de> Deserialize<'de> for ExactRational {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = match Value::deserialize(d)? {
+            Value::String(s) => s,
+            Value::Number(n) => n.to_string(),
+            other => {
+                return Err(de::Error::custom(format!("expected a rational, found {}", crate::json::type_name(&other))))
+            }
+        };
+        exact::parse_certificate_rational(&text)
+            .or_else(|_| exact::parse_number(&text))
+            .map(ExactRational)
+            .map_err(de::Error::custom)
+    }
+}
+
+impl JsonSchema for ExactRational {
+    fn schema_name() -> Cow<'static, str> {
+        "ExactRational".into()
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "description": "An exact rational written by the engine: an integer or p/q of integers (any size), as a string.",
+            "type": ["string", "number"]
+        })
+    }
+}
+
 /// A matrix of exact rationals, by rows.
-pub type RationalMatrix = Vec<Vec<Literal>>;
+pub type RationalMatrix = Vec<Vec<ExactRational>>;
 
 /// The certificate of a finite-dimensional spec (DESIGN.md §5). Optional
 /// parts are present when the verdict has them: `casimir_choice`, `P`, `Q`,
@@ -185,9 +226,9 @@ pub struct StoppingRecord {
 #[serde(deny_unknown_fields)]
 pub struct EquilibriumRecord {
     /// The point.
-    pub point: Vec<Literal>,
+    pub point: Vec<ExactRational>,
     /// The residual (zero at an equilibrium).
-    pub residual: Vec<Literal>,
+    pub residual: Vec<ExactRational>,
 }
 
 /// The noise fields, `ad*_{xi_k} mu_e`, and the isotropy algebra of `mu_e`.
@@ -195,11 +236,11 @@ pub struct EquilibriumRecord {
 #[serde(deny_unknown_fields)]
 pub struct NoiseRecord {
     /// The fields `xi_k`.
-    pub fields: Vec<Vec<Literal>>,
+    pub fields: Vec<Vec<ExactRational>>,
     /// `ad*_{xi_k} mu_e` (zero for compatible noise).
-    pub residuals: Vec<Vec<Literal>>,
+    pub residuals: Vec<Vec<ExactRational>>,
     /// A basis of the noise that would be compatible.
-    pub isotropy_basis: Vec<Vec<Literal>>,
+    pub isotropy_basis: Vec<Vec<ExactRational>>,
 }
 
 /// A conserved quantity.
@@ -231,9 +272,9 @@ pub struct DiscoveryRecord {
 #[serde(deny_unknown_fields)]
 pub struct MultipliersRecord {
     /// A particular solution.
-    pub particular: Vec<Literal>,
+    pub particular: Vec<ExactRational>,
     /// Free directions.
-    pub directions: Vec<Vec<Literal>>,
+    pub directions: Vec<Vec<ExactRational>>,
 }
 
 /// The linearisation at the equilibrium.
@@ -291,9 +332,9 @@ pub struct ChoiceRecord {
     /// The sign of `P` (+1 or -1).
     pub sign: i64,
     /// Coordinates along the free multiplier directions.
-    pub family_parameters: Vec<Literal>,
+    pub family_parameters: Vec<ExactRational>,
     /// The multipliers.
-    pub multipliers: Vec<Literal>,
+    pub multipliers: Vec<ExactRational>,
     /// The symmetric matrix of the quadratic Casimir terms.
     #[serde(rename = "M")]
     pub m: RationalMatrix,
@@ -319,7 +360,7 @@ pub struct OptimisationRecord {
     pub infimum_lower_bound: Option<String>,
     /// The vector that certifies the lower bound.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub infimum_witness: Option<Vec<Literal>>,
+    pub infimum_witness: Option<Vec<ExactRational>>,
     /// The matrix that certifies the lower bound (free multipliers).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub infimum_witness_matrix: Option<RationalMatrix>,
