@@ -206,6 +206,69 @@ impl JsonSchema for Real {
     }
 }
 
+/// Objects only. serde's derived structs also accept a JSON array, read
+/// positionally (`"stopping": [0.1, 0.001]` would be epsilon and delta);
+/// the spec format is objects with named fields, so every struct-valued
+/// field is read through these.
+mod objects {
+    use super::*;
+    use std::marker::PhantomData;
+
+    struct ObjectVisitor<T>(PhantomData<T>);
+
+    impl<'de, T: Deserialize<'de>> Visitor<'de> for ObjectVisitor<T> {
+        type Value = T;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("an object")
+        }
+        fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+            T::deserialize(de::value::MapAccessDeserializer::new(map))
+        }
+    }
+
+    /// A struct from a JSON object (not an array).
+    pub fn object<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
+        d.deserialize_map(ObjectVisitor(PhantomData))
+    }
+
+    struct OptionVisitor<T>(PhantomData<T>);
+
+    impl<'de, T: Deserialize<'de>> Visitor<'de> for OptionVisitor<T> {
+        type Value = Option<T>;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("an object")
+        }
+        fn visit_none<E: de::Error>(self) -> Result<Option<T>, E> {
+            Ok(None)
+        }
+        fn visit_unit<E: de::Error>(self) -> Result<Option<T>, E> {
+            Ok(None)
+        }
+        fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<Option<T>, D::Error> {
+            object(d).map(Some)
+        }
+    }
+
+    /// An optional struct: absent or `null`, or a JSON object.
+    pub fn optional_object<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<T>, D::Error> {
+        d.deserialize_option(OptionVisitor(PhantomData))
+    }
+
+    struct Object<T>(T);
+
+    impl<'de, T: Deserialize<'de>> Deserialize<'de> for Object<T> {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            object(d).map(Object)
+        }
+    }
+
+    /// An optional list of structs, each a JSON object.
+    pub fn optional_objects<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<Vec<T>>, D::Error> {
+        let list: Option<Vec<Object<T>>> = Deserialize::deserialize(d)?;
+        Ok(list.map(|v| v.into_iter().map(|o| o.0).collect()))
+    }
+}
+
 /// A finite-dimensional spec: a Lie–Poisson system with its equilibrium and
 /// noise (DESIGN.md §5). Required: `name`, `algebra`, `hamiltonian`,
 /// `equilibrium`, `noise`.
@@ -241,13 +304,13 @@ pub struct SpecDocument {
     /// each (at most 256 fields).
     pub noise: Vec<Vec<Expression>>,
     /// The stopping question.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
     pub stopping: Option<StoppingDoc>,
     /// Engine settings; absent keys take their defaults (in the schema).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
     pub settings: Option<SettingsDoc>,
     /// Sweep annotations: ranges, boundaries, reference constants, domain.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
     pub sweep: Option<SweepDoc>,
 }
 
@@ -443,10 +506,10 @@ pub struct SweepDoc {
     pub ranges: Option<Vec<String>>,
     /// Curves where the verdict is expected to change (polynomials in the
     /// parameters, zero on the curve).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_objects")]
     pub boundaries: Option<Vec<Annotation>>,
     /// Closed forms of `Sigma^2` to compare against.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_objects")]
     pub reference_sigma2: Option<Vec<Annotation>>,
     /// Polynomials that must be non-negative for a point to be physical.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -484,15 +547,16 @@ pub struct FluidSpecDocument {
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub parameters: BTreeMap<String, Expression>,
     /// The flow.
+    #[serde(deserialize_with = "objects::object")]
     pub fluid: FluidDoc,
     /// The stopping question.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
     pub stopping: Option<StoppingDoc>,
     /// Numerical settings; absent keys take their defaults.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
     pub settings: Option<FluidSettingsDoc>,
     /// Sweep annotations.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
     pub sweep: Option<SweepDoc>,
 }
 
@@ -907,6 +971,30 @@ mod tests {
             assert_eq!(e.path, path, "{e}");
             assert!(e.message.contains(words), "{e}");
         }
+    }
+
+    /// Structs are objects: serde alone would read an array positionally.
+    #[test]
+    fn structs_must_be_objects_not_arrays() {
+        let cases: Vec<(&str, Value, &str)> = vec![
+            ("stopping", json!([0.1, 0.001]), "$.stopping"),
+            ("settings", json!([]), "$.settings"),
+            ("settings", json!(3), "$.settings"),
+            ("sweep", json!({"boundaries": [["p", "q"]]}), "$.sweep.boundaries[0]"),
+            ("sweep", json!([[]]), "$.sweep"),
+        ];
+        for (key, value, path) in cases {
+            let mut v = base();
+            v[key] = value;
+            let e = from_value::<SpecDocument>(&v).unwrap_err();
+            assert_eq!(e.path, path, "{e}");
+            assert!(e.message.starts_with("expected an object, found"), "{e}");
+        }
+        let mut v = base();
+        v["stopping"] = Value::Null;
+        assert_eq!(from_value::<SpecDocument>(&v).unwrap().stopping, None);
+        let fluid = json!({"name": "f", "fluid": []});
+        assert_eq!(from_value::<FluidSpecDocument>(&fluid).unwrap_err().path, "$.fluid");
     }
 
     #[test]
