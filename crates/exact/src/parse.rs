@@ -97,15 +97,9 @@ impl Symbols {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ParseErrorKind {
-    /// A character that is not part of the grammar.
-    #[error("unexpected character '{0}'")]
-    UnexpectedChar(char),
-    /// The text ended where more was expected.
-    #[error("unexpected end of expression")]
-    UnexpectedEnd,
-    /// A token in the wrong place.
-    #[error("unexpected '{0}'")]
-    UnexpectedToken(String),
+    /// A syntax error, found by the shared front end ([`crate::syntax`]).
+    #[error(transparent)]
+    Syntax(#[from] SyntaxErrorKind),
     /// An identifier that is neither a coordinate nor a parameter.
     #[error("unknown symbol '{name}' (known: {})", known.join(", "))]
     UnknownSymbol {
@@ -160,15 +154,6 @@ pub enum ParseErrorKind {
         /// The limit.
         limit: u64,
     },
-    /// Nesting beyond the depth limit.
-    #[error("expression nested too deeply (limit {0})")]
-    TooDeep(usize),
-    /// Text beyond the length limit.
-    #[error("expression longer than {0} bytes")]
-    TooLong(usize),
-    /// An empty expression.
-    #[error("empty expression")]
-    Empty,
 }
 
 /// An expression error with the character position where it was found.
@@ -264,15 +249,7 @@ impl Semantics for Polynomials<'_> {
     type Error = ParseError;
 
     fn syntax(&self, e: SyntaxError) -> ParseError {
-        let kind = match e.kind {
-            SyntaxErrorKind::UnexpectedChar(c) => ParseErrorKind::UnexpectedChar(c),
-            SyntaxErrorKind::UnexpectedEnd => ParseErrorKind::UnexpectedEnd,
-            SyntaxErrorKind::UnexpectedToken(t) => ParseErrorKind::UnexpectedToken(t),
-            SyntaxErrorKind::TooDeep(d) => ParseErrorKind::TooDeep(d),
-            SyntaxErrorKind::TooLong(n) => ParseErrorKind::TooLong(n),
-            _ => ParseErrorKind::Empty,
-        };
-        ParseError { kind, position: e.position }
+        ParseError { kind: ParseErrorKind::Syntax(e.kind), position: e.position }
     }
 
     fn number(&mut self, text: &str, at: usize) -> Result<Poly, ParseError> {
@@ -437,15 +414,15 @@ mod tests {
         assert!(matches!(kind("sin(x)"), ParseErrorKind::FunctionCall(_)));
         assert!(matches!(kind("x^100"), ParseErrorKind::ExponentTooLarge(..)));
         assert!(matches!(kind("(x+y)^40*(x+y)^40"), ParseErrorKind::TooLarge { .. }));
-        assert_eq!(kind("(x"), ParseErrorKind::UnexpectedEnd);
-        assert!(matches!(kind("x y"), ParseErrorKind::UnexpectedToken(_)));
-        assert!(matches!(kind("x $ y"), ParseErrorKind::UnexpectedChar('$')));
-        assert_eq!(kind("   "), ParseErrorKind::Empty);
+        assert_eq!(kind("(x"), ParseErrorKind::Syntax(SyntaxErrorKind::UnexpectedEnd));
+        assert!(matches!(kind("x y"), ParseErrorKind::Syntax(SyntaxErrorKind::UnexpectedToken(_))));
+        assert!(matches!(kind("x $ y"), ParseErrorKind::Syntax(SyntaxErrorKind::UnexpectedChar('$'))));
+        assert_eq!(kind("   "), ParseErrorKind::Syntax(SyntaxErrorKind::Empty));
         assert_eq!(kind("0^-1"), ParseErrorKind::ZeroToNegativePower);
         let deep = "(".repeat(500) + "x" + &")".repeat(500);
-        assert!(matches!(kind(&deep), ParseErrorKind::TooDeep(_)));
+        assert!(matches!(kind(&deep), ParseErrorKind::Syntax(SyntaxErrorKind::TooDeep(_))));
         let minus = "-".repeat(500) + "x";
-        assert!(matches!(kind(&minus), ParseErrorKind::TooDeep(_)));
+        assert!(matches!(kind(&minus), ParseErrorKind::Syntax(SyntaxErrorKind::TooDeep(_))));
     }
 
     #[test]

@@ -122,6 +122,18 @@ fn choice_record(ch: &casimir::CasimirChoice) -> ChoiceRecord {
     }
 }
 
+/// The stopping-time record of a certificate, when the spec asks and there
+/// is an upper bound `sigma2_bound` of `Sigma^2` to give a guaranteed `T`.
+pub(crate) fn stopping_record(
+    stopping: Option<crate::parse::Stopping>,
+    sigma2_bound: Option<f64>,
+    bound: &str,
+) -> Option<StoppingRecord> {
+    let (stop, s2) = (stopping?, sigma2_bound?);
+    let t = StoppingTime::new(stop.epsilon, stop.delta, s2).time().unwrap_or(f64::INFINITY);
+    Some(StoppingRecord { epsilon: Float(stop.epsilon), delta: Float(stop.delta), t: Float(t), bound: bound.into() })
+}
+
 /// SHA-256 of the spec's compact JSON (keys sorted), in hex: any edit of the
 /// embedded spec changes it, so `check` notices a spec that was altered even
 /// where the altered spec would make the same claims true.
@@ -151,18 +163,11 @@ pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
     let rows = |v: &[Vec<Rational>]| v.iter().map(|r| rationals(r)).collect::<Vec<_>>();
     // T is a guarantee: computed from Sigma^2 rounded up (the exact rational
     // when there is one), and rounded down itself (see StoppingTime::time).
-    let stopping = match (spec.stopping, a.sigma2_bound()) {
-        (Some(stop), Some(s2)) => {
-            let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
-            Some(StoppingRecord {
-                epsilon: Float(stop.epsilon),
-                delta: Float(stop.delta),
-                t: Float(st.time().unwrap_or(f64::INFINITY)),
-                bound: "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta".into(),
-            })
-        }
-        _ => None,
-    };
+    let stopping = stopping_record(
+        spec.stopping,
+        a.sigma2_bound(),
+        "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta",
+    );
     let conserved = system
         .conserved()
         .iter()

@@ -100,18 +100,20 @@ impl Serialize for Literal {
     }
 }
 
+/// The text of a number given as a JSON number or a string (read through
+/// `Value`: with serde_json's arbitrary_precision a number does not reach an
+/// ordinary visitor as a number).
+pub(crate) fn number_text<'de, D: Deserializer<'de>>(d: D, expected: &str) -> Result<String, D::Error> {
+    match Value::deserialize(d)? {
+        Value::Number(n) => Ok(n.to_string()),
+        Value::String(s) => Ok(s),
+        other => Err(de::Error::custom(format!("expected {expected}, found {}", crate::json::type_name(&other)))),
+    }
+}
+
 impl<'de> Deserialize<'de> for Literal {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let text = match Value::deserialize(d)? {
-            Value::Number(n) => n.to_string(),
-            Value::String(s) => s,
-            other => {
-                return Err(de::Error::custom(format!(
-                    "expected a number or a rational string, found {}",
-                    crate::json::type_name(&other)
-                )))
-            }
-        };
+        let text = number_text(d, "a number or a rational string")?;
         parse_number(&text).map(Literal).map_err(de::Error::custom)
     }
 }

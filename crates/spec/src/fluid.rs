@@ -25,8 +25,7 @@ use crate::json::{as_object, child, index, required, type_name, Result, SpecErro
 use crate::parse::Stopping;
 use crate::record::{
     CompressibleRecord, ConvergenceRecord, DiscretisationRecord, Engine, Float, FluidCertificateDocument,
-    FluidFormRecord, FluidOptimisationRecord, LevelOrNone, ModeRecord, PaperRecord, ShiftPoint, StoppingRecord,
-    UnstableModeRecord,
+    FluidFormRecord, FluidOptimisationRecord, LevelOrNone, ModeRecord, PaperRecord, ShiftPoint, UnstableModeRecord,
 };
 use fluid::analysis::{
     analyse, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
@@ -545,18 +544,11 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
     .collect();
     // T is a guarantee: only a proved upper bound of Sigma^2 gives one (the
     // Lanczos value is a lower estimate).
-    let stopping = match (spec.stopping, a.sigma2_upper) {
-        (Some(stop), Some(s2)) => {
-            let st = StoppingTime::new(stop.epsilon, stop.delta, s2);
-            Some(StoppingRecord {
-                epsilon: Float(stop.epsilon),
-                delta: Float(stop.delta),
-                t: Float(st.time().unwrap_or(f64::INFINITY)),
-                bound: "P(|dw_t|_V^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dw_0|_V^2 = delta, with Sigma^2 = sigma2_upper".into(),
-            })
-        }
-        _ => None,
-    };
+    let stopping = crate::certificate::stopping_record(
+        spec.stopping,
+        a.sigma2_upper,
+        "P(|dw_t|_V^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dw_0|_V^2 = delta, with Sigma^2 = sigma2_upper",
+    );
     let formulation = match p.model {
         FluidModel::Incompressible => "vorticity: dw = -ik (U + U'' L^-1) w dt - sum_j ik eta_j w o dW^j per x-mode exp(ikx), L = k^2 - d^2/dy^2 with psi = 0 at walls",
         FluidModel::Compressible { .. } => "momentum-density m = rho u and density rho, noise acting by the coadjoint action (Lie derivative) of (eta_j(y), 0)",

@@ -76,13 +76,7 @@ impl Serialize for ExactRational {
 
 impl<'de> Deserialize<'de> for ExactRational {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let text = match Value::deserialize(d)? {
-            Value::String(s) => s,
-            Value::Number(n) => n.to_string(),
-            other => {
-                return Err(de::Error::custom(format!("expected a rational, found {}", crate::json::type_name(&other))))
-            }
-        };
+        let text = crate::document::number_text(d, "a rational")?;
         exact::parse_certificate_rational(&text)
             .or_else(|_| exact::parse_number(&text))
             .map(ExactRational)
