@@ -187,3 +187,20 @@ fn certificates_with_huge_exact_entries_read_into_the_type_and_check() {
     assert_eq!(serde_json::to_value(&doc).unwrap(), cert.json);
     spec::check_certificate(&cert.json.to_string()).unwrap();
 }
+
+/// Every committed certificate embeds exactly the spec file beside it: an
+/// edited spec whose certificate was not rewritten (`verify --write`) would
+/// otherwise still pass `verify check`, which re-derives from the embedded
+/// copy.
+#[test]
+fn committed_certificates_embed_the_spec_beside_them() {
+    let mut seen = 0;
+    for (path, spec) in fixtures() {
+        let cert_path = path.with_extension("cert.json");
+        let Ok(text) = std::fs::read_to_string(&cert_path) else { continue };
+        let cert: Value = serde_json::from_str(&text).unwrap();
+        assert!(cert["spec"] == spec, "{}: re-run verify --write", cert_path.display());
+        seen += 1;
+    }
+    assert!(seen >= 20, "{seen} certificates");
+}
