@@ -40,9 +40,15 @@ fn the_completion_pasted_back_keeps_the_equilibrium() {
     assert_ne!(again["verdict"], "noise_incompatible");
     assert_eq!(again["compressible"]["noise_residuals"][0].as_f64(), Some(0.0));
     assert!(again["compressible"].get("compatible_completion").is_none());
-    // No Sigma^2 is claimed without the compressible generator.
-    assert_eq!(again["verdict"], "inconclusive");
-    assert!(again.get("sigma2").is_none());
+    // The compressible generator certifies it (tests/barotropic.rs checks
+    // its numbers against an independent computation). Its continuum bound
+    // S(c) = sup eta'^2 c_s^2/(c_s^2 - (U + c)^2) is at least the value at
+    // y = 0, 0.09 c_s^2/(c_s^2 - (c - 1)^2) >= 0.09, and above Sigma^2.
+    assert_eq!(again["verdict"], "stable");
+    assert_eq!(again["level"], "verified_float");
+    let sigma2 = again["sigma2"].as_f64().unwrap();
+    let bound = again["compressible"]["generator"]["continuum_bound"].as_f64().unwrap();
+    assert!(sigma2 > 0.0 && sigma2 < bound && bound >= 0.09, "{sigma2} {bound}");
 }
 
 /// An explicit potential: the residual is sup |U eta' + r'|, computed here
@@ -105,4 +111,37 @@ fn malformed_noise_entries_name_the_field() {
     let mut v = spec("compressible", json!(["1"]));
     v["parameters"] = json!({"compatible": 1});
     assert_eq!(spec::fluid_spec_from_value(v).unwrap_err().path, "$.parameters.compatible");
+}
+
+/// The compressible generator is built for walls: compatible noise with
+/// non-constant transport in a periodic channel is `inconclusive`, with no
+/// Sigma^2 claimed, and says why.
+#[test]
+fn a_periodic_compressible_generator_is_not_claimed() {
+    let mut v = spec("compressible", json!([{"transport": "0.3*sin(y)", "potential": "compatible"}]));
+    v["fluid"]["y_interval"] = json!([0, "2*pi"]);
+    v["fluid"]["boundary"] = json!("periodic");
+    v["fluid"]["shear_flow"] = json!("2"); // uniform (a periodic U'' integrates to 0, so it changes sign)
+    let cert = certify(&v);
+    assert_eq!(cert["verdict"], "inconclusive");
+    assert!(cert.get("sigma2").is_none());
+    assert!(cert["reason"].as_str().unwrap().contains("walls only"), "{}", cert["reason"]);
+}
+
+/// Uniform flow between walls with compatible noise: the shift c = -U brings
+/// the flow to rest, no Casimir is needed (w = 0), and K and Q are both
+/// pointwise, so Sigma^2 = max over the nodes of eta'^2 c_s^2/(c_s^2 - 0) =
+/// max eta'^2 = 0.09 (eta' = 0.3 cos y, attained at the node y = 0), for
+/// every x-mode; the continuum bound is the same number.
+#[test]
+fn uniform_flow_with_compatible_noise_has_the_pointwise_sigma2() {
+    let mut v = spec("compressible", json!([{"transport": "0.3*sin(y)", "potential": "compatible"}]));
+    v["fluid"]["shear_flow"] = json!("0.5");
+    let cert = certify(&v);
+    assert_eq!(cert["verdict"], "stable");
+    let sigma2 = cert["sigma2"].as_f64().unwrap();
+    assert!((sigma2 - 0.09).abs() < 1e-12, "{sigma2}");
+    let bound = cert["compressible"]["generator"]["continuum_bound"].as_f64().unwrap();
+    assert!((0.09..0.09 * (1.0 + 1e-9)).contains(&bound), "{bound}");
+    assert_eq!(cert["form"]["galilean_shift"].as_f64(), Some(-0.5));
 }

@@ -658,6 +658,42 @@ pub struct CompressibleRecord {
     pub incompressible_verdict: Verdict,
     /// Its `Sigma^2`.
     pub incompressible_sigma2: Option<Float>,
+    /// The discretised compressible generator, when compatible noise with
+    /// non-constant transport needed it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generator: Option<GeneratorRecord>,
+}
+
+/// The compressible generator's evidence (docs/fluids.md §1b).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GeneratorRecord {
+    /// The formulation and the generator form.
+    pub formulation: String,
+    /// The Galilean shift `c` of the form.
+    pub galilean_shift: Float,
+    /// A rigorous upper bound of the continuum `Sigma^2` of every x-mode
+    /// (null: not enclosed).
+    pub continuum_bound: Option<Float>,
+    /// Its formula.
+    pub continuum_bound_formula: String,
+    /// What the Casimir defect measures.
+    pub casimir_defect_meaning: String,
+    /// The Casimir defect of the gravest mode at each resolution of the table.
+    pub casimir_defect: Vec<DefectPoint>,
+    /// `|K A + A^H K| / (|K| |A|)` of the gravest mode (dense, at the coarsest
+    /// grid of at most 64).
+    pub drift_residual: Option<Float>,
+}
+
+/// The Casimir defect at one resolution.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DefectPoint {
+    /// Resolution.
+    pub ny: u64,
+    /// `|lambda|_max(Q_B - Q, K)`.
+    pub defect: Float,
 }
 
 /// The JSON Schema of fluid certificates (committed as

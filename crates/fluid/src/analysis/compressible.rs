@@ -16,9 +16,8 @@ use crate::profile::Potential;
 /// with the form, so `Sigma^2 = 0`; the form
 /// `|du|^2 + 2(U + c) drho du_x + c_s^2 drho^2 + w (curl du + U' drho)^2`
 /// is positive definite iff `w >= 0` and `|U + c| < c_s` on the interval.
-/// Compatible noise with non-constant `eta` needs the discretised
-/// compressible generator, which this engine does not have: such noise is
-/// `inconclusive`, with no `Sigma^2` claimed.
+/// Compatible noise with non-constant `eta` goes to the discretised
+/// compressible generator ([`crate::barotropic`], walls only).
 ///
 /// What `stable` rests on is proved, not sampled: every `eta_k'` vanishes
 /// identically (interval arithmetic, [`crate::expr::Derivative::sign_on`]),
@@ -123,6 +122,7 @@ pub(super) fn analyse_compressible(
         shift_interval,
         incompressible_verdict,
         incompressible_sigma2,
+        generator: None,
     };
     let base = FluidAnalysis {
         compressible: Some(compressible),
@@ -138,25 +138,19 @@ pub(super) fn analyse_compressible(
             ..base
         };
     }
-    let by_potential: Vec<usize> = (0..constant_noise.len())
-        .filter(|&i| !constant_noise[i] && matches!(profile.potential[i], Potential::Compatible))
-        .collect();
-    if let Some(&i) = by_potential.first() {
+    // Noise neither constant nor carrying the compatible completion: its
+    // residual is below rounding but nothing is proved.
+    let unproved = (0..constant_noise.len())
+        .find(|&i| !constant_noise[i] && !matches!(profile.potential[i], Potential::Compatible));
+    if let Some(i) = unproved {
         return FluidAnalysis {
             reason: format!(
-                "noise[{i}] is compatible through its potential part (r' = -U eta' exactly, so the equilibrium is kept), but its transport eta is not constant, so B_k is not a multiple of the identity and Sigma^2 needs the discretised compressible generator, which this engine does not have yet: no Sigma^2 is claimed"
+                "noise[{i}]: U eta' + r' is below 1e-12 of max|U| on every sample, but eta' (and r') could not be proved identically zero, so neither compatibility with B_k a multiple of the identity nor incompatibility is established (write the potential as \"compatible\" to have r' = -U eta' exactly)"
             ),
             ..base
         };
     }
-    if let Some(i) = constant_noise.iter().position(|c| !c) {
-        return FluidAnalysis {
-            reason: format!(
-                "noise[{i}]: U eta' + r' is below 1e-12 of max|U| on every sample, but eta' (and r') could not be proved identically zero, so neither compatibility with B_k a multiple of the identity nor incompatibility is established"
-            ),
-            ..base
-        };
-    }
+    let needs_generator = constant_noise.iter().any(|c| !c);
     let Some((lo, hi)) = shift_interval else {
         let reason = match &choice {
             Choice::NoForm { reason } => reason.clone(),
@@ -168,6 +162,26 @@ pub(super) fn analyse_compressible(
         };
         return FluidAnalysis { reason, ..base };
     };
+    if needs_generator {
+        if profile.boundary != Boundary::Walls {
+            return FluidAnalysis {
+                reason: "the noise is compatible through its potential part, but the discretised compressible generator is built for walls only (a periodic y is not implemented): no Sigma^2 is claimed".into(),
+                ..base
+            };
+        }
+        let sonic_at_hi = !matches!(&choice, Choice::Pseudomomentum { sign } if !sign.is_positive());
+        return analyse_generator(
+            problem,
+            settings,
+            sound_speed,
+            &choice,
+            uniform,
+            ShiftFreedom { lo, hi, sonic_at_hi },
+            proved_weight,
+            summary,
+            base,
+        );
+    }
     let c = if lo == hi { lo } else { 0.5 * lo + 0.5 * hi };
     summary.energy = 1.0;
     summary.galilean_shift = Some(c);

@@ -8,13 +8,21 @@ use super::*;
 /// Cholesky test for each `(m, bound)`: x-mode `m` of the finest grid, with
 /// the matrices built exactly as [`analyse`] builds them (the same noise
 /// normalisation, choice of functional and form). `false` for a mode that
-/// does not exist, for a profile that admits no form, and for the
-/// compressible model (which has no matrices: its `Sigma^2 = 0` is
-/// structural). This is what `verify check` runs on a stated bound below the
-/// one it re-derives: a stated number is accepted only when it is proved.
-pub fn prove_mode_bounds(problem: &FluidProblem, bounds: &[(usize, f64)]) -> Vec<bool> {
-    if matches!(problem.model, FluidModel::Compressible { .. }) || bounds.is_empty() {
-        return vec![false; bounds.len()];
+/// does not exist and for a profile that admits no form. In the
+/// compressible model the matrices are the generator's
+/// ([`crate::barotropic`]) at the Galilean shift `shift` (the analysis's
+/// `form.galilean_shift`; `None`: nothing is proved). This is what
+/// `verify check` runs on a stated bound below the one it re-derives: a
+/// stated number is accepted only when it is proved.
+pub fn prove_mode_bounds(problem: &FluidProblem, shift: Option<f64>, bounds: &[(usize, f64)]) -> Vec<bool> {
+    if bounds.is_empty() {
+        return vec![];
+    }
+    if matches!(problem.model, FluidModel::Compressible { .. }) {
+        return match shift {
+            Some(c) => prove_generator_bounds(problem, c, bounds),
+            None => vec![false; bounds.len()],
+        };
     }
     let p = &problem.profile;
     let fine = YGrid::new(p.boundary, p.interval.0, p.interval.1, problem.ny);
@@ -23,15 +31,11 @@ pub fn prove_mode_bounds(problem: &FluidProblem, bounds: &[(usize, f64)]) -> Vec
     let coef = profile.coefficients(&fine);
     let Some(form) = form_for(&choose(&profile), &profile, &coef, &fine) else { return vec![false; bounds.len()] };
     let ks = wavenumbers(problem);
-    let f = pow2(-e);
     bounds
         .par_iter()
         .map(|&(m, bound)| {
             let Some(&(_, k)) = ks.iter().find(|(mm, _)| *mm == m) else { return false };
-            // bound / 4^e, rounded down if it underflows: proving a smaller
-            // bound proves the larger one (V ≻ 0).
-            let normalised = bound * f * f;
-            let normalised = if normalised < f64::MIN_POSITIVE { normalised.next_down().max(0.0) } else { normalised };
+            let normalised = normalised_bound(bound, e);
             Mode::new(&fine, k).verify(&form, &coef, normalised) == (true, true)
         })
         .collect()
@@ -102,22 +106,7 @@ pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSetting
             // Mode::sigma2 never returns a non-finite value; flooring NaN at 0
             // would round towards "stable".
             let sigma2 = s.lambda_max.max(0.0);
-            let mut upper = None;
-            let mut form_verified = false;
-            let mut margin = VERIFY_MARGIN_START;
-            for _ in 0..VERIFY_ATTEMPTS {
-                let bar = sigma2 * (1.0 + margin) + margin * VERIFY_RITZ_WEIGHT * s.ritz.scale + s.ritz.residual;
-                let (def, ineq) = mode.verify(&form, &coef, bar);
-                form_verified = def;
-                if !def {
-                    break;
-                }
-                if ineq {
-                    upper = Some(bar);
-                    break;
-                }
-                margin *= VERIFY_MARGIN_GROWTH;
-            }
+            let (upper, form_verified) = verified_upper(sigma2, &s.ritz, |bar| mode.verify(&form, &coef, bar));
             Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
         })
         .collect();

@@ -14,12 +14,14 @@ use rayon::prelude::*;
 
 mod compressible;
 mod forms;
+mod generator;
 mod incompressible;
 mod instability;
 mod scaling;
 
 use compressible::*;
 use forms::*;
+use generator::*;
 use incompressible::*;
 use instability::*;
 use scaling::*;
@@ -164,6 +166,26 @@ pub struct CompressibleReport {
     pub incompressible_verdict: Verdict,
     /// Its Sigma^2.
     pub incompressible_sigma2: Option<f64>,
+    /// The discretised compressible generator, when compatible noise with
+    /// non-constant transport needed it.
+    pub generator: Option<GeneratorReport>,
+}
+
+/// What the compressible generator found (module [`crate::barotropic`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeneratorReport {
+    /// The Galilean shift `c` used (the best of the scan at the coarsest grid).
+    pub shift: f64,
+    /// A rigorous upper bound of the continuum `Sigma^2` over every x-mode:
+    /// `sup_y sum_j eta_j'(y)^2 c_s^2 / (c_s^2 - (U + c)^2)` by interval
+    /// arithmetic (`None` if not enclosed).
+    pub continuum_bound: Option<f64>,
+    /// `(ny, |lambda|_max(Q_B - Q, K))` of the gravest mode at each resolution
+    /// of the table: the pointwise noise's discrete defect (zero in the continuum).
+    pub casimir_defect: Vec<(usize, f64)>,
+    /// `|K A + A^H K| / (|K| |A|)` of the gravest mode at the coarsest grid
+    /// of at most 64 (dense).
+    pub drift_residual: Option<f64>,
 }
 
 /// Everything the fluid pipeline found.
@@ -235,6 +257,46 @@ pub enum FluidError {
 /// The wavenumbers `k_m = 2 pi m / x_period`, `m = 1..=x_modes`.
 pub fn wavenumbers(problem: &FluidProblem) -> Vec<(usize, f64)> {
     (1..=problem.x_modes).map(|m| (m, 2.0 * std::f64::consts::PI * m as f64 / problem.x_period)).collect()
+}
+
+/// The verified bound of one mode: try `bar = sigma2 (1 + m) + m w |T| + residual`
+/// for a margin `m` growing from [`VERIFY_MARGIN_START`] by
+/// [`VERIFY_MARGIN_GROWTH`], at most [`VERIFY_ATTEMPTS`] times, with
+/// `verify(bar) = (form definite, bar V - Q definite)`. Returns
+/// `(sigma2_upper, form_verified)`.
+pub(super) fn verified_upper(
+    sigma2: f64,
+    ritz: &crate::lanczos::Ritz,
+    verify: impl Fn(f64) -> (bool, bool),
+) -> (Option<f64>, bool) {
+    let mut margin = VERIFY_MARGIN_START;
+    let mut form_verified = false;
+    for _ in 0..VERIFY_ATTEMPTS {
+        let bar = sigma2 * (1.0 + margin) + margin * VERIFY_RITZ_WEIGHT * ritz.scale + ritz.residual;
+        let (def, ineq) = verify(bar);
+        form_verified = def;
+        if !def {
+            break;
+        }
+        if ineq {
+            return (Some(bar), true);
+        }
+        margin *= VERIFY_MARGIN_GROWTH;
+    }
+    (None, form_verified)
+}
+
+/// A stated bound in the units of the normalised noise (divided by `4^e`),
+/// rounded down if it underflows: proving a smaller bound proves the larger
+/// one (`V ≻ 0`).
+pub(super) fn normalised_bound(bound: f64, e: i32) -> f64 {
+    let f = pow2(-e);
+    let normalised = bound * f * f;
+    if normalised < f64::MIN_POSITIVE {
+        normalised.next_down().max(0.0)
+    } else {
+        normalised
+    }
 }
 
 /// The resolutions of the convergence table: `from, 2 from, ...` below `ny`, then `ny`.

@@ -98,6 +98,11 @@ pub(super) fn rescale(a: FluidAnalysis, e: i32) -> FluidAnalysis {
         compressible: a.compressible.map(|c| CompressibleReport {
             noise_residuals: c.noise_residuals.iter().map(|r| r * f).collect(),
             incompressible_sigma2: sq_opt(c.incompressible_sigma2),
+            generator: c.generator.map(|g| GeneratorReport {
+                continuum_bound: g.continuum_bound.map(sq_up),
+                casimir_defect: g.casimir_defect.into_iter().map(|(n, d)| (n, sq(d))).collect(),
+                ..g
+            }),
             ..c
         }),
         ..a
