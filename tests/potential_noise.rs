@@ -145,3 +145,63 @@ fn uniform_flow_with_compatible_noise_has_the_pointwise_sigma2() {
     assert!((0.09..0.09 * (1.0 + 1e-9)).contains(&bound), "{bound}");
     assert_eq!(cert["form"]["galilean_shift"].as_f64(), Some(-0.5));
 }
+
+fn compatible_channel() -> Value {
+    spec("compressible", json!([{"transport": "0.3*sin(y)", "potential": "compatible"}]))
+}
+
+/// A compressible generator certificate whose per-mode bound is lowered by
+/// 1e-7 (relative) is refused: the stated number is below the Ritz value,
+/// so `bound K - Q` is not positive definite and the check cannot prove it.
+#[test]
+fn a_generator_bound_edited_down_by_1e_7_is_refused() {
+    let cert = certify(&compatible_channel());
+    let mut edited = cert.clone();
+    let upper = cert["modes"][0]["sigma2_upper"].as_f64().unwrap();
+    edited["modes"][0]["sigma2_upper"] = json!(upper * (1.0 - 1e-7));
+    let err = spec::check_fluid_certificate(&edited).unwrap_err();
+    assert!(format!("{err:?}").contains("modes[0].sigma2_upper"), "{err:?}");
+}
+
+/// Sigma^2 is quadratic in the noise: the noise times 1e3 gives Sigma^2
+/// times 1e6, and the same shift (the form does not see the noise).
+#[test]
+fn generator_sigma2_scales_with_the_square_of_the_noise() {
+    let base = certify(&compatible_channel());
+    let loud = certify(&spec("compressible", json!([{"transport": "300*sin(y)", "potential": "compatible"}])));
+    let (s0, s1) = (base["sigma2"].as_f64().unwrap(), loud["sigma2"].as_f64().unwrap());
+    assert!((s1 / s0 / 1e6 - 1.0).abs() < 1e-9, "{s0} {s1}");
+    assert_eq!(base["form"]["galilean_shift"], loud["form"]["galilean_shift"]);
+}
+
+/// Units of velocity: U -> lambda U, c_s -> lambda c_s (with drho -> drho /
+/// lambda and c -> lambda c) leaves the quotient Q/K unchanged, since w =
+/// (U + c)/U'' and dq = ik du2 - du1' + U' drho are invariant
+/// (docs/fluids.md §1b). So Sigma^2 must not move, whatever lambda; the
+/// scan's shifts scale with lambda exactly (powers of two here).
+#[test]
+fn generator_sigma2_does_not_depend_on_the_units_of_velocity() {
+    let base = certify(&compatible_channel());
+    for lambda in [1024.0, 1.0 / 1024.0] {
+        let mut v = compatible_channel();
+        v["fluid"]["shear_flow"] = json!(format!("-{lambda}*cos(y)"));
+        v["fluid"]["sound_speed"] = json!(2.0 * lambda);
+        v["fluid"]["noise"] = json!([{"transport": "0.3*sin(y)", "potential": "compatible"}]);
+        let scaled = certify(&v);
+        let (s0, s1) = (base["sigma2"].as_f64().unwrap(), scaled["sigma2"].as_f64().unwrap());
+        assert!((s1 / s0 - 1.0).abs() < 1e-8, "lambda {lambda}: {s0} {s1}");
+    }
+}
+
+/// Sound speeds at the ends of the doubles: never `stable` by overflow, and
+/// a reason that says what happened.
+#[test]
+fn extreme_sound_speeds_are_inconclusive_with_their_reason() {
+    for (cs, says) in [(1e308, "overflows"), (1e-308, "c_s = 1e-308")] {
+        let mut v = compatible_channel();
+        v["fluid"]["sound_speed"] = json!(cs);
+        let cert = certify(&v);
+        assert_eq!(cert["verdict"], "inconclusive", "{cs}");
+        assert!(cert["reason"].as_str().unwrap().contains(says), "{}", cert["reason"]);
+    }
+}

@@ -50,7 +50,7 @@
 //! to zero under refinement at fixed `k` and is reported, not used.
 
 use crate::banded::SymBanded;
-use crate::grid::{gll, gll_derivative, ELEMENT_DEGREE};
+use crate::grid::{element_nodes, gll, gll_derivative, ELEMENT_DEGREE};
 use crate::lanczos::{largest_generalized_eigenvalue, Ritz};
 use nalgebra::{Complex, DMatrix};
 
@@ -79,15 +79,7 @@ impl WallGrid {
         let h = (b - a) / elements as f64;
         let (xi, wi) = gll(p);
         let derivative = gll_derivative(p, &xi) * (2.0 / h);
-        let mut nodes = vec![0.0; ny + 1];
-        let mut weights = vec![0.0; ny + 1];
-        for e in 0..elements {
-            for i in 0..=p {
-                nodes[e * p + i] = a + h * e as f64 + (xi[i] + 1.0) * h / 2.0;
-                weights[e * p + i] += wi[i] * h / 2.0;
-            }
-        }
-        nodes[ny] = b;
+        let (nodes, weights) = element_nodes(a, b, elements, &xi, &wi);
         WallGrid { nodes, weights, elements, derivative, element_weights: wi.iter().map(|w| w * h / 2.0).collect() }
     }
 
@@ -322,28 +314,30 @@ impl<'g> BarotropicMode<'g> {
     /// `x -> (Q_B - Q) x`, where `Q_B = sum_j R_j^T K R_j - (K R_j^2 + R_j^2T K)/2`
     /// is the generator form of the pointwise noise on the discrete `K`: the
     /// discrete defect of `B dq = -ik eta dq` (zero in the continuum).
-    pub fn casimir_defect_apply(&self, kf: &SymBanded, q: &SymBanded) -> impl Fn(&[f64], &mut [f64]) + '_ {
-        let (kf, q) = (kf.clone(), q.clone());
+    pub fn casimir_defect_apply<'a>(&'a self, kf: &'a SymBanded, q: &'a SymBanded) -> impl Fn(&[f64], &mut [f64]) + 'a {
+        // Scratch vectors made once, not per product (Lanczos calls this
+        // hundreds of times).
+        let scratch = std::cell::RefCell::new([vec![0.0; kf.n()], vec![0.0; kf.n()], vec![0.0; kf.n()]]);
         move |x: &[f64], out: &mut [f64]| {
-            let n = x.len();
-            let (mut t1, mut t2, mut t3) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let mut scratch = scratch.borrow_mut();
+            let [t1, t2, t3] = &mut *scratch;
             q.mul_vec(x, out);
             out.iter_mut().for_each(|v| *v = -*v);
             for j in 0..self.coef.eta.len() {
                 // R^T K R x
-                self.noise_apply(j, x, &mut t1, false);
-                kf.mul_vec(&t1, &mut t2);
-                self.noise_apply(j, &t2, &mut t3, true);
-                out.iter_mut().zip(&t3).for_each(|(o, v)| *o += v);
+                self.noise_apply(j, x, t1, false);
+                kf.mul_vec(t1, t2);
+                self.noise_apply(j, t2, t3, true);
+                out.iter_mut().zip(t3.iter()).for_each(|(o, v)| *o += v);
                 // -(1/2) K R R x
-                self.noise_apply(j, &t1, &mut t2, false);
-                kf.mul_vec(&t2, &mut t3);
-                out.iter_mut().zip(&t3).for_each(|(o, v)| *o -= 0.5 * v);
+                self.noise_apply(j, t1, t2, false);
+                kf.mul_vec(t2, t3);
+                out.iter_mut().zip(t3.iter()).for_each(|(o, v)| *o -= 0.5 * v);
                 // -(1/2) R^T R^T K x
-                kf.mul_vec(x, &mut t1);
-                self.noise_apply(j, &t1, &mut t2, true);
-                self.noise_apply(j, &t2, &mut t3, true);
-                out.iter_mut().zip(&t3).for_each(|(o, v)| *o -= 0.5 * v);
+                kf.mul_vec(x, t1);
+                self.noise_apply(j, t1, t2, true);
+                self.noise_apply(j, t2, t3, true);
+                out.iter_mut().zip(t3.iter()).for_each(|(o, v)| *o -= 0.5 * v);
             }
         }
     }

@@ -91,6 +91,25 @@ pub fn gll(p: usize) -> (Vec<f64>, Vec<f64>) {
     (x, w)
 }
 
+/// All nodes (walls included) and assembled GLL weights of `elements`
+/// equal elements on `[a, b]` with reference nodes `xi` and weights `wi`
+/// (`elements * p + 1` nodes, the last exactly `b`).
+pub fn element_nodes(a: f64, b: f64, elements: usize, xi: &[f64], wi: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let p = xi.len() - 1;
+    let h = (b - a) / elements as f64;
+    let mut nodes = vec![0.0; elements * p + 1];
+    let mut weights = vec![0.0; elements * p + 1];
+    for e in 0..elements {
+        let y0 = a + h * e as f64;
+        for i in 0..=p {
+            nodes[e * p + i] = y0 + (xi[i] + 1.0) * h / 2.0;
+            weights[e * p + i] += wi[i] * h / 2.0;
+        }
+    }
+    nodes[elements * p] = b;
+    (nodes, weights)
+}
+
 /// `(P_n(x), P_n'(x))` by the three-term recurrence.
 fn legendre(n: usize, x: f64) -> (f64, f64) {
     if n == 0 {
@@ -156,18 +175,8 @@ impl YGrid {
                 let ke = DMatrix::from_fn(p + 1, p + 1, |i, j| {
                     (0..=p).map(|q| wi[q] * d[(q, i)] * d[(q, j)]).sum::<f64>() * 2.0 / he
                 });
-                let nglob = ne * p + 1;
-                let mut nodes = vec![0.0; nglob];
-                let mut weights = vec![0.0; nglob];
-                for e in 0..ne {
-                    let y0 = a + he * e as f64;
-                    for i in 0..=p {
-                        let g = e * p + i;
-                        nodes[g] = y0 + (xi[i] + 1.0) * he / 2.0;
-                        weights[g] += wi[i] * he / 2.0;
-                    }
-                }
-                nodes[nglob - 1] = b;
+                let (nodes, weights) = element_nodes(a, b, ne, &xi, &wi);
+                let nglob = nodes.len();
                 // interior unknowns: global nodes 1..nglob-1
                 let n = nglob - 2;
                 let mut s = SymBanded::zeros(n, p);

@@ -156,7 +156,8 @@ pub(super) fn analyse_compressible(
             Choice::NoForm { reason } => reason.clone(),
             Choice::Forced { sign, .. } if !sign.is_positive() => "the forced Casimir weight is negative, and a compressible form cannot be negative definite (the acoustic energy is positive)".into(),
             _ => format!(
-                "no Galilean shift c makes the form definite: it needs |U + c| < c_s = {sound_speed} and (U + c)/U'' >= 0 on the whole interval, but U ranges over [{:.6}, {:.6}] (a rigorous enclosure)",
+                "no Galilean shift c makes the form definite: it needs |U + c| < c_s = {} and (U + c)/U'' >= 0 on the whole interval, but U ranges over [{:.6}, {:.6}] (a rigorous enclosure)",
+                readable(sound_speed),
                 range.lo, range.hi
             ),
         };
@@ -212,7 +213,8 @@ pub(super) fn analyse_compressible(
     FluidAnalysis {
         verdict: Verdict::Stable,
         reason: format!(
-            "every noise field is constant (eta' = 0 proved), so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} ({shown}) is positive definite because |U + c| <= {worst:.6} < c_s = {sound_speed} on the whole interval (a rigorous enclosure of U){}",
+            "every noise field is constant (eta' = 0 proved), so B_k = -ik eta_k I commutes with the drift and the form and Sigma^2 = 0; the form with Galilean shift c = {c:.6} ({shown}) is positive definite because |U + c| <= {worst:.6} < c_s = {} on the whole interval (a rigorous enclosure of U){}",
+            readable(sound_speed),
             if proved_weight { "" } else { ", with the Casimir weight (U + c)/U'' non-negative on a fine sample (not proved: level float)" }
         ),
         form: summary,
@@ -221,5 +223,15 @@ pub(super) fn analyse_compressible(
         verification: Some(if proved_weight { VerificationLevel::ExactStructure } else { VerificationLevel::Float }),
         modes,
         ..base
+    }
+}
+
+/// `x` as Rust prints it where that is short (`2`, `0.35`), in exponent
+/// form outside `[1e-4, 1e15)` (`1e-308`, not 308 zeros).
+fn readable(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
     }
 }

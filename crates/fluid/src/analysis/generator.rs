@@ -115,6 +115,18 @@ pub(super) fn analyse_generator(
     let coarse_ny = resolutions[0];
     let coarse = WallGrid::new(a, b, coarse_ny);
     let at = |grid: &WallGrid, c: f64| coefficients(profile, choice, uniform, grid, c);
+    // c_s^2 enters K: beyond sqrt(f64::MAX) it overflows, and the form would
+    // look indefinite for a reason that is not the physics.
+    let largest = profile.u[0].range_on(a, b, 64);
+    let speed = sound_speed.max(largest.lo.abs()).max(largest.hi.abs()).max(freedom.lo.abs()).max(freedom.hi.abs());
+    if !(speed * speed * 4.0).is_finite() {
+        return FluidAnalysis {
+            reason: format!(
+                "the sound speed or the flow ({speed:e}) squared overflows a double, so the compressible form cannot be assembled: rescale the units of velocity"
+            ),
+            ..base
+        };
+    }
 
     // The shift: a scan of the admissible interval at the coarsest grid
     // (the sonic end kept 1e-3 of the width away), then golden-section
