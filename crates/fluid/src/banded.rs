@@ -7,6 +7,11 @@
 //! no symbolic phase) is twenty lines. The dense cross-checks in the tests
 //! compare against nalgebra.
 
+/// `2^e` for `-1022 <= e <= 1023` (clamped), exactly.
+pub(crate) fn pow2(e: i32) -> f64 {
+    f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
+}
+
 /// A symmetric `n x n` matrix with `a[i][j] = 0` for `|i - j| > bandwidth`,
 /// stored by its lower band: `band[i * (b + 1) + d] = a[i][i - d]`.
 #[derive(Clone, Debug, PartialEq)]
@@ -276,6 +281,174 @@ impl SymBanded {
         // Both sums have at most 2b + 1 terms: inflate for their rounding.
         let worst = worst * (1.0 + 4.0 * (2 * b + 3) as f64 * u);
         Some(gamma * worst + diag_err)
+    }
+
+    /// This matrix scaled by powers of two, `D A D` with `D = diag(2^-e_i)`
+    /// and `2^e_i` the power of two nearest `sqrt |a_ii|` (1 where
+    /// `a_ii = 0`), and the 2-norm radius that an entrywise error bound
+    /// `err` (`|A_exact - A| <= err`, same pattern) becomes: the largest row
+    /// sum of `D err D`, inflated for its own rounding. Scaling by powers of
+    /// two is exact in binary floating point unless a result is subnormal,
+    /// so an entry that lands below the smallest normal number adds that
+    /// number to the radius. `D A D` is congruent to `A`: same inertia, and
+    /// definite exactly when `A` is; the verified tests are relative to the
+    /// scale of the matrix, which this equilibrates (Demmel: Cholesky is
+    /// accurate relative to the diagonally scaled condition number).
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// let mut a = SymBanded::zeros(2, 1); // diag(1e6, 1e-6), off-diagonal 1e-3
+    /// a.add(0, 0, 1e6); a.add(1, 1, 1e-6); a.add(1, 0, 1e-3);
+    /// let mut err = SymBanded::zeros(2, 1);
+    /// err.add(1, 0, 1e-10);
+    /// let (s, r) = a.power_of_two_scaled(&err);
+    /// // sqrt(1e6) = 1000 is scaled by 2^-10, sqrt(1e-6) by 2^10: the product is 1
+    /// assert_eq!(s.get(1, 0), 1e-3);
+    /// assert!(s.get(0, 0) > 0.5 && s.get(0, 0) < 2.0 && s.get(1, 1) > 0.5 && s.get(1, 1) < 2.0);
+    /// assert!(r >= 1e-10 && r < 1.01e-10);
+    /// ```
+    pub fn power_of_two_scaled(&self, err: &SymBanded) -> (SymBanded, f64) {
+        assert_eq!((self.n, self.b), (err.n, err.b), "the error bound must have the matrix's pattern");
+        let (n, b1) = (self.n, self.b + 1);
+        let d: Vec<f64> = (0..n)
+            .map(|i| {
+                let a = self.band[i * b1].abs();
+                if a > 0.0 && a.is_finite() {
+                    // 2^-round(log2 sqrt a), exact
+                    let e = (0.5 * a.log2()).round() as i32;
+                    pow2(-e)
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let mut out = SymBanded::zeros(n, self.b);
+        let mut rows = vec![0.0f64; n];
+        for i in 0..n {
+            for dd in 0..=self.b.min(i) {
+                let j = i - dd;
+                let f = d[i] * d[j];
+                let v = self.band[i * b1 + dd] * f;
+                out.band[i * b1 + dd] = v;
+                let mut e = err.band[i * b1 + dd] * f;
+                if v != 0.0 && v.abs() < f64::MIN_POSITIVE {
+                    e += f64::MIN_POSITIVE;
+                }
+                // the product d_i d_j err may itself underflow: round it up
+                e += 5e-324;
+                rows[i] += e;
+                if dd > 0 {
+                    rows[j] += e;
+                }
+            }
+        }
+        let u = f64::EPSILON / 2.0;
+        let radius = rows.iter().fold(0.0f64, |m, r| m.max(*r)) * (1.0 + 4.0 * (2 * self.b + 3) as f64 * u);
+        (out, radius)
+    }
+
+    /// The inertia `(positive, negative)` of every symmetric `A + E` with
+    /// `||E||_2 <= radius`, `A` this matrix, when a floating-point `L D L^T`
+    /// factorisation (no pivoting) proves it; `None` otherwise.
+    ///
+    /// Written here: no crate offers a verified inertia, and the argument is
+    /// short. `L` (unit lower triangular, bandwidth `b`) and `D` (diagonal,
+    /// no zero) are the computed factors, exact real numbers. The residual
+    /// `X = A - L D L^T` is computed with its rounding bounded, so
+    /// `||A + E - L D L^T||_2 <= eps`, `eps` the largest row sum of
+    /// `|X| + gamma_{2b+4} (|A| + |L| |D| |L^T|)` plus `radius`. With
+    /// `G = L |D|^{1/2}` and `J = sign(D)`, `A + E = G (J + F) G^T` where
+    /// `||F||_2 <= eps / lambda_min(G G^T)`. If the banded matrix
+    /// `G G^T = L |D| L^T` is proved to have `lambda_min > eps` (the verified
+    /// Cholesky test of [`SymBanded::verified_positive_definite_within`], its
+    /// own rounding added to the radius), `||F||_2 < 1`, the eigenvalues of
+    /// `J + F` keep the signs of `J`'s (Weyl), and by Sylvester's law of
+    /// inertia `A + E` has the inertia of `D`. Unlike a bound through
+    /// `||L^-1||^2`, this one is as sharp as the definite test: for a
+    /// definite `A`, `L |D| L^T` is `A` itself.
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// // tridiag(1, 0.5, 1) of size 3: eigenvalues 0.5 - sqrt 2, 0.5, 0.5 + sqrt 2
+    /// let mut a = SymBanded::zeros(3, 1);
+    /// for i in 0..3 { a.add(i, i, 0.5); }
+    /// for i in 1..3 { a.add(i, i - 1, 1.0); }
+    /// assert_eq!(a.verified_inertia_within(0.1), Some((2, 1)));
+    /// assert_eq!(a.verified_inertia_within(0.6), None); // 0.5 could be 0
+    /// ```
+    pub fn verified_inertia_within(&self, radius: f64) -> Option<(usize, usize)> {
+        let (n, b) = (self.n, self.b);
+        if n == 0 || !(radius.is_finite() && radius >= 0.0) || self.band.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        let b1 = b + 1;
+        // l[i * b1 + d] = L[i][i - d] for d >= 1 (L[i][i] = 1), d[i] = D[i]
+        let mut l = vec![0.0; n * b1];
+        let mut dg = vec![0.0; n];
+        let mut t = vec![0.0; b1]; // t[i - k] = L[i][k] D[k] for the current row
+        for i in 0..n {
+            let lo = i.saturating_sub(b);
+            for j in lo..i {
+                let mut s = self.band[i * b1 + (i - j)];
+                for k in lo.max(j.saturating_sub(b))..j {
+                    s -= t[i - k] * l[j * b1 + (j - k)];
+                }
+                let v = s / dg[j];
+                if !v.is_finite() {
+                    return None;
+                }
+                l[i * b1 + (i - j)] = v;
+                t[i - j] = v * dg[j];
+            }
+            let mut s = self.band[i * b1];
+            for k in lo..i {
+                s -= t[i - k] * l[i * b1 + (i - k)];
+            }
+            if !(s.is_finite() && s != 0.0) {
+                return None;
+            }
+            dg[i] = s;
+        }
+        let lij = |i: usize, k: usize| if i == k { 1.0 } else { l[i * b1 + (i - k)] };
+        // The residual and L |D| L^T, entry by entry of the band (k <= j <= i).
+        let u = f64::EPSILON / 2.0;
+        let m = (2 * b + 4) as f64;
+        let gamma = m * u / (1.0 - m * u);
+        let mut p = SymBanded::zeros(n, b);
+        let mut rows = vec![0.0f64; n];
+        let mut prow = vec![0.0f64; n];
+        for i in 0..n {
+            for j in i.saturating_sub(b)..=i {
+                let (mut prod, mut abs, mut pij) = (0.0, 0.0, 0.0);
+                for k in i.saturating_sub(b)..=j {
+                    let (li, lj) = (lij(i, k), lij(j, k));
+                    let (a, c) = (li * dg[k], li * dg[k].abs());
+                    prod += a * lj;
+                    pij += c * lj;
+                    abs += c.abs() * lj.abs();
+                }
+                let a = self.band[i * b1 + (i - j)];
+                let e = (a - prod).abs() + gamma * (a.abs() + abs) + 5e-324 * m;
+                p.band[i * b1 + (i - j)] = pij;
+                // |L| |D| |L^T| bounds the rounding of P's entries too
+                let ep = gamma * abs + 5e-324 * m;
+                rows[i] += e;
+                prow[i] += ep;
+                if j != i {
+                    rows[j] += e;
+                    prow[j] += ep;
+                }
+            }
+        }
+        let inflate = 1.0 + 4.0 * (2 * b + 3) as f64 * u;
+        let eps = rows.iter().fold(0.0f64, |a, r| a.max(*r)) * inflate + radius;
+        let formation = prow.iter().fold(0.0f64, |a, r| a.max(*r)) * inflate;
+        let total = (eps + formation) * (1.0 + 4.0 * u);
+        if !total.is_finite() || !p.verified_positive_definite_within(total) {
+            return None;
+        }
+        let pos = dg.iter().filter(|d| **d > 0.0).count();
+        Some((pos, n - pos))
     }
 
     /// Cholesky factor `A = C C^T`, `C` lower triangular with the same bandwidth.

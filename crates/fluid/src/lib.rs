@@ -37,3 +37,4 @@ pub mod lanczos;
 pub mod modes;
 pub mod profile;
 pub mod simulate;
+pub mod walls_check;

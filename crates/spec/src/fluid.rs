@@ -284,8 +284,16 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
         ));
     }
     // The dense verified check costs about n^3/3 multiply-adds per matrix,
-    // two matrices per mode: refuse work that would run for hours.
-    let n = ny as f64;
+    // two matrices per mode: refuse work that would run for hours. It runs
+    // on periodic grids, and on walls grids (incompressible) only as the
+    // fallback up to DENSE_FALLBACK_UNKNOWNS unknowns; the banded checks
+    // (walls, and the compressible generator) cost O(ny).
+    let dense_n = match (boundary, &model) {
+        (Boundary::Periodic, FluidModel::Incompressible) => ny,
+        (Boundary::Walls, FluidModel::Incompressible) if ny - 1 <= fluid::modes::DENSE_FALLBACK_UNKNOWNS => ny - 1,
+        _ => 0,
+    };
+    let n = dense_n as f64;
     let flops = 2.0 * x_modes as f64 * n * n * n / 3.0;
     if flops > MAX_DENSE_FLOPS {
         return Err(SpecError::new(

@@ -14,10 +14,7 @@ pub(super) fn normalise_noise(problem: &FluidProblem, fine: &YGrid) -> (FluidPro
     (FluidProblem { profile: problem.profile.with_noise_factor(pow2(-e)), ..problem.clone() }, e)
 }
 
-/// `2^e` for `-1022 <= e <= 1023`.
-pub(super) fn pow2(e: i32) -> f64 {
-    f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
-}
+pub(super) use crate::banded::pow2;
 
 /// The exponent `e` with `max |eta_k| / 2^e` in `[1/2, 1)` over the samples
 /// and the nodes (0 for no noise).
