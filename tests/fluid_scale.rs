@@ -33,7 +33,8 @@ fn walls_at_ny_4096_with_32_modes_are_accepted_and_periodic_ones_are_refused() {
 #[cfg(feature = "heavy-tests")]
 #[test]
 fn a_walls_certificate_at_ny_4096_is_verified_and_converged() {
-    let at = |ny: usize| -> serde_json::Value { spec::certify_fluid(&spec::parse_fluid_spec(&cubic(ny, "walls")).unwrap()) };
+    let at =
+        |ny: usize| -> serde_json::Value { spec::certify_fluid(&spec::parse_fluid_spec(&cubic(ny, "walls")).unwrap()) };
     let fine = at(4096);
     assert_eq!(fine["verdict"], "stable");
     assert_eq!(fine["level"], "verified_float", "{}", fine["checks"]);
