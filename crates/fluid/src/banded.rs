@@ -30,6 +30,14 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
+/// Higham's `gamma_m = m u / (1 - m u)`, `u = 2^-53`: the relative error
+/// bound of `m` successive roundings.
+pub(crate) fn gamma(m: usize) -> f64 {
+    let u = f64::EPSILON / 2.0;
+    let m = m as f64;
+    m * u / (1.0 - m * u)
+}
+
 /// `2^e` for `-1022 <= e <= 1023` (clamped), exactly.
 pub(crate) fn pow2(e: i32) -> f64 {
     f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
@@ -226,7 +234,7 @@ impl SymBanded {
         }
         let u = f64::EPSILON / 2.0;
         let m = (b + 2) as f64;
-        let gamma = m * u / (1.0 - m * u);
+        let gamma = gamma(b + 2);
         let max_row = (0..n)
             .map(|i| (0..n.min(i + b + 1)).skip(i.saturating_sub(b)).map(|j| self.get(i, j).abs()).sum::<f64>())
             .fold(0.0f64, f64::max);
@@ -435,7 +443,7 @@ impl SymBanded {
         // The residual and L |D| L^T, entry by entry of the band (k <= j <= i).
         let u = f64::EPSILON / 2.0;
         let m = (2 * b + 4) as f64;
-        let gamma = m * u / (1.0 - m * u);
+        let gamma = gamma(2 * b + 4);
         let mut p = SymBanded::zeros(n, b);
         let mut rows = vec![0.0f64; n];
         let mut prow = vec![0.0f64; n];

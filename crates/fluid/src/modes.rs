@@ -51,6 +51,29 @@ pub struct Coefficients {
     pub eta: Vec<Vec<f64>>,
 }
 
+impl Coefficients {
+    /// The noise fields that are not constant, each less its mean, and
+    /// `S2 = sum_j eta_j^2` at the nodes. A constant field is a multiple of
+    /// the identity and drops out of `Q = -(k^2/2) sum [E, [E, V]]` exactly,
+    /// and so does the mean of any field: subtracting it leaves `Q`
+    /// unchanged (up to the rounding of the subtraction) and avoids
+    /// cancellation.
+    pub fn centred_noise(&self) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let n = self.u.len();
+        let eta: Vec<Vec<f64>> = self
+            .eta
+            .iter()
+            .filter(|e| e.iter().any(|x| *x != e[0]))
+            .map(|e| {
+                let mean = e.iter().sum::<f64>() / n as f64;
+                e.iter().map(|x| x - mean).collect()
+            })
+            .collect();
+        let s2 = (0..n).map(|a| eta.iter().map(|e| e[a] * e[a]).sum()).collect();
+        (eta, s2)
+    }
+}
+
 /// `V = sign (energy K + M diag(w))`.
 #[derive(Clone, Debug)]
 pub struct Form {
@@ -340,20 +363,7 @@ impl WallOps {
         let w_over_m: Vec<f64> = form.w.iter().zip(&m).map(|(w, m)| w / m).collect();
         let v_psi = l.times(form.energy).plus(&l.sandwich(&w_over_m)).times(form.sign.as_f64());
         let v_factor = v_psi.cholesky().ok()?;
-        let n = grid.n();
-        // A constant noise field is a multiple of the identity and drops out
-        // of Q = -(k^2/2) sum [E, [E, V]] exactly, and so does the mean of
-        // any field: subtracting it leaves Q unchanged and avoids cancellation.
-        let eta: Vec<Vec<f64>> = coef
-            .eta
-            .iter()
-            .filter(|e| e.iter().any(|x| *x != e[0]))
-            .map(|e| {
-                let mean = e.iter().sum::<f64>() / n as f64;
-                e.iter().map(|x| x - mean).collect()
-            })
-            .collect();
-        let eta2 = (0..n).map(|a| eta.iter().map(|e| e[a] * e[a]).sum()).collect();
+        let (eta, eta2) = coef.centred_noise();
         let wm = form.w.iter().zip(&m).map(|(w, m)| w * m).collect();
         Some(WallOps {
             l,

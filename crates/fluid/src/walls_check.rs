@@ -61,11 +61,7 @@ use crate::banded::SymBanded;
 use crate::grid::YGrid;
 use crate::modes::{Coefficients, Form};
 
-fn gamma(m: usize) -> f64 {
-    let u = f64::EPSILON / 2.0;
-    let m = m as f64;
-    m * u / (1.0 - m * u)
-}
+use crate::banded::gamma;
 
 /// A banded matrix and an entrywise bound on its rounding, built entry by entry.
 struct Bounded {
@@ -158,19 +154,10 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
     }
     let rho = if rho0 < f64::MIN_POSITIVE { 0.0 } else { rho0 * (1.0 - 4.0 * u) };
 
-    // The noise fields that are not constant (a constant one commutes with
-    // everything and contributes nothing, exactly), each less its mean.
-    let eta: Vec<Vec<f64>> = coef
-        .eta
-        .iter()
-        .filter(|e| e.iter().any(|x| *x != e[0]))
-        .map(|e| {
-            let mean = e.iter().sum::<f64>() / n as f64;
-            e.iter().map(|x| x - mean).collect()
-        })
-        .collect();
+    // The noise fields that are not constant, each less its mean (its
+    // rounding is counted in the entries' bounds below).
+    let (eta, s2) = coef.centred_noise();
     let nj = eta.len();
-    let s2: Vec<f64> = (0..n).map(|a| eta.iter().map(|e| e[a] * e[a]).sum()).collect();
     if s2.iter().any(|x| !x.is_finite()) {
         return (true, false);
     }
@@ -184,8 +171,8 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
     // unknowns per node: omega, y0, y+, y-, y1..yJ (y+ and y- only with noise)
     let pm = if nj > 0 { 2 } else { 0 };
     let stride = 2 + pm + nj;
-    // omega last within each node: the L blocks are eliminated first, so an
-    // omega pivot is a diagonal entry of the Schur complement (no growth seen)
+    // omega last within each node: the lifted unknowns are eliminated first
+    // (with omega first, s = -1 showed the same growth; module docs)
     let idx = |a: usize, c: usize| a * stride + if c == 0 { stride - 1 } else { c - 1 };
     let mut big = Bounded::new(n * stride, stride * (p + 1) - 1);
     for a in 0..n {
