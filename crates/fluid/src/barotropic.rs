@@ -370,6 +370,30 @@ impl<'g> BarotropicMode<'g> {
         v.is_finite().then_some(v)
     }
 
+    /// `lambda_max(Q_B, K)`, `Q_B` the generator form of the pointwise noise
+    /// on the discrete `K` (see [`Self::casimir_defect_apply`]): the growth
+    /// constant of the discretised linear SDE itself, `d E V/dt = E X^H Q_B X`
+    /// (docs/fluids.md §1b). A Lanczos estimate (a Ritz value, so from below).
+    pub fn pointwise_noise_sigma2(&self, tol: f64) -> Option<f64> {
+        let kf = self.form();
+        let q = self.generator();
+        let chol = kf.cholesky().ok()?;
+        let defect = self.casimir_defect_apply(&kf, &q);
+        let n = kf.n();
+        let mut qx = vec![0.0; n];
+        let apply = |x: &[f64], o: &mut [f64]| {
+            defect(x, o);
+            q.mul_vec(x, &mut qx);
+            o.iter_mut().zip(&qx).for_each(|(o, v)| *o += v);
+        };
+        let solve = |b: &[f64], x: &mut [f64]| {
+            x.copy_from_slice(b);
+            chol.solve(x)
+        };
+        let top = largest_generalized_eigenvalue(n, apply, |x, o| kf.mul_vec(x, o), solve, tol, 300);
+        (top.value.is_finite() && top.residual.is_finite()).then_some(top.value)
+    }
+
     /// The phase `S = diag(1, i, 1)` per node: `(dm1, dm2, drho) = S (a1, a2, a3)`.
     fn phase(&self) -> Vec<Complex<f64>> {
         let g = self.grid;
@@ -461,6 +485,11 @@ impl<'g> BarotropicMode<'g> {
         let kr = self.form().to_dense();
         let n = kr.nrows();
         DMatrix::from_fn(n, n, |i, j| s[i] * kr[(i, j)] * s[j].conj())
+    }
+
+    /// Number of noise fields.
+    pub fn noise_fields(&self) -> usize {
+        self.coef.eta.len()
     }
 
     /// Wavenumber.

@@ -28,6 +28,7 @@ pub use outcome::{Sign, Verdict, VerificationLevel};
 pub mod analysis;
 pub mod banded;
 pub mod barotropic;
+pub mod barotropic_sde;
 pub mod choice;
 pub mod constants;
 pub mod expr;

@@ -24,9 +24,9 @@ use crate::document::{
 use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
 use crate::parse::Stopping;
 use crate::record::{
-    CompressibleRecord, ConvergenceRecord, DefectPoint, DiscretisationRecord, Engine, Float, FluidCertificateDocument,
-    FluidFormRecord, FluidOptimisationRecord, GeneratorRecord, LevelOrNone, ModeRecord, PaperRecord, ShiftPoint,
-    UnstableModeRecord,
+    CompressibleRecord, ConvergenceRecord, DefectPoint, DiscreteSdeRecord, DiscretisationRecord, Engine, Float,
+    FluidCertificateDocument, FluidFormRecord, FluidOptimisationRecord, GeneratorRecord, LevelOrNone, ModeRecord,
+    PaperRecord, ShiftPoint, UnstableModeRecord,
 };
 use fluid::analysis::{
     analyse, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
@@ -650,6 +650,12 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
             continuum_bound_formula: "sup_y sum_j eta_j'(y)^2 c_s^2 / (c_s^2 - (U(y) + c)^2), enclosed by interval arithmetic: Q <= that times the acoustic part of K, and the Casimir part is >= 0".into(),
             casimir_defect_meaning: "|lambda|_max(Q_B - Q, K) of the gravest mode, Q_B the generator form of the pointwise noise on the discrete K: the discrete error of B dq = -ik eta dq, zero in the continuum".into(),
             casimir_defect: g.casimir_defect.iter().map(|(ny, d)| DefectPoint { ny: *ny as u64, defect: Float(*d) }).collect(),
+            discrete_sde: g.discrete_sde.map(|(m, s)| DiscreteSdeRecord {
+                meaning: "the discretised linear SDE dX = A X dt + sum_j B_j X o dW_j with the pointwise noise B_j: d E V/dt = E X^H Q_B X (Ito), Q_B = K A~ + A~^H K + sum_j B_j^H K B_j, so E V(t) <= exp(sigma2 t) V(0) for every x-mode at this ny and every start, with sigma2 = max over the modes of lambda_max(Q_B, K) (a Lanczos estimate, float, not verified). Q_B - Q is the Casimir defect: it tends to 0 under refinement at fixed k and grows with k, so on a given grid the shortest waves of the discrete SDE can outgrow the certified Sigma^2 (docs/fluids.md §1b)".into(),
+                ny: spec.problem.ny as u64,
+                m: m as u64,
+                sigma2: Float(s),
+            }),
             drift_residual: opt(g.drift_residual),
         }),
     });

@@ -681,9 +681,26 @@ pub struct GeneratorRecord {
     pub casimir_defect_meaning: String,
     /// The Casimir defect of the gravest mode at each resolution of the table.
     pub casimir_defect: Vec<DefectPoint>,
+    /// The discretised linear SDE itself, with the pointwise noise (null:
+    /// a defect could not be computed).
+    pub discrete_sde: Option<DiscreteSdeRecord>,
     /// `|K A + A^H K| / (|K| |A|)` of the gravest mode (dense, at the coarsest
     /// grid of at most 64).
     pub drift_residual: Option<Float>,
+}
+
+/// What the certificate gives for the discretised SDE with the pointwise noise.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DiscreteSdeRecord {
+    /// What the fields mean.
+    pub meaning: String,
+    /// The resolution (the spec's `ny`).
+    pub ny: u64,
+    /// The x-mode where `sigma2` is attained.
+    pub m: u64,
+    /// The largest `lambda_max(Q_B, K)` over the certified x-modes.
+    pub sigma2: Float,
 }
 
 /// The Casimir defect at one resolution.

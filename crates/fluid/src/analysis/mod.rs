@@ -183,6 +183,12 @@ pub struct GeneratorReport {
     /// `(ny, |lambda|_max(Q_B - Q, K))` of the gravest mode at each resolution
     /// of the table: the pointwise noise's discrete defect (zero in the continuum).
     pub casimir_defect: Vec<(usize, f64)>,
+    /// `(m, sigma2_B)`: the largest `lambda_max(Q_B, K)` over the certified
+    /// x-modes at the spec's `ny` and its mode, `Q_B` the generator form of
+    /// the pointwise noise on the discrete `K` (`None` if one could not be
+    /// computed): the growth constant of the discretised SDE itself,
+    /// `E V(t) <= e^{sigma2_B t} V(0)`. A Lanczos estimate.
+    pub discrete_sde: Option<(usize, f64)>,
     /// `|K A + A^H K| / (|K| |A|)` of the gravest mode at the coarsest grid
     /// of at most 64 (dense).
     pub drift_residual: Option<f64>,

@@ -98,6 +98,7 @@ pub(super) fn rescale(a: FluidAnalysis, e: i32) -> FluidAnalysis {
             generator: c.generator.map(|g| GeneratorReport {
                 continuum_bound: g.continuum_bound.map(sq_up),
                 casimir_defect: g.casimir_defect.into_iter().map(|(n, d)| (n, sq(d))).collect(),
+                discrete_sde: g.discrete_sde.map(|(m, d)| (m, sq(d))),
                 ..g
             }),
             ..c
