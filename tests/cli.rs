@@ -523,3 +523,52 @@ fn huge_inputs_are_quoted_as_excerpts() {
         assert!(o.stderr.len() < 4000, "{args:?}: {} bytes of stderr", o.stderr.len());
     }
 }
+
+/// `check` on a spec says what it is and what to run, once.
+#[test]
+fn check_on_a_spec_says_to_certify_first() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let out = verify(&["check", spec.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(err.contains("this is a spec, not a certificate") && err.contains("verify certify"), "{err}");
+    assert_eq!(err.matches("this is a spec").count(), 1, "printed once: {err}");
+    // A file that cannot be read is reported once too, beside a good certificate.
+    let cert = fixture_path("rigid-body-major-axis.cert.json");
+    let out = verify(&["check", "/nonexistent/cert.json", cert.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert_eq!(err.matches("/nonexistent/cert.json").count(), 1, "{err}");
+    assert!(err.contains("1 of 2 file(s) could not be checked"), "{err}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("ok   "), "the good one is still checked");
+}
+
+/// The help says what the bare command does; the fixture options belong to it alone.
+#[test]
+fn help_describes_the_no_argument_run_and_subcommands_do_not_offer_fixtures() {
+    let top = String::from_utf8_lossy(&verify(&["--help"]).stdout).to_string();
+    assert!(top.contains("With no subcommand") && top.contains("--fixtures"), "{top}");
+    for sub in ["certify", "check", "simulate", "sweep", "plot-sweep", "plot-fluid", "schema"] {
+        let help = String::from_utf8_lossy(&verify(&[sub, "--help"]).stdout).to_string();
+        assert!(!help.contains("--fixtures"), "{sub}: {help}");
+    }
+}
+
+/// The default final time is clamped to [1, 200], and the run says so; the
+/// exceedance lines say "not exceeded" rather than printing null.
+#[test]
+fn simulate_says_when_the_default_final_time_was_clamped() {
+    // T(0.1, 0.001) = 63.96 for this fixture (its certificate), so the
+    // default 8 T = 511.7 is clamped to 200.
+    let spec = fixture_path("lagrange-top-fluctuating-gravity.json");
+    let dir = std::env::temp_dir().join(format!("verify-cli-clamp-{}", std::process::id()));
+    let out = simulate(
+        &[spec.to_str().unwrap(), "--paths", "20", "--dt", "0.1", "--outputs", "20", "--out", dir.to_str().unwrap()],
+        "2",
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("note: t_end = 200 (the default 8 T(eps, delta) = 511.685576"), "{err}");
+    assert!(!err.contains("null"), "{err}");
+    assert!(err.contains("certified until t = 31.980349"), "{err}");
+}

@@ -553,3 +553,33 @@ fn a_second_sweep_on_the_same_file_is_refused() {
     assert_eq!(lines.len() as u64, n, "one line per point");
     assert_eq!(index_set(&out), (0..n).collect::<Vec<_>>(), "every index exactly once");
 }
+
+/// Lines drawn under another spec are refused, even when the parameter names fit.
+#[test]
+fn plot_sweep_refuses_lines_of_another_spec() {
+    // heavy-top-gravity sweeps mgl; lagrange-top-map has a parameter mgl too.
+    let lines = fixture_path("sweeps/heavy-top-gravity.jsonl");
+    let other = fixture_path("sweeps/lagrange-top-map.json");
+    let dir = tmp("other-spec");
+    let o = verify(&[
+        "plot-sweep",
+        lines.to_str().unwrap(),
+        "--spec",
+        other.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("a sweep of another spec"), "{}", stderr(&o));
+    // With the spec that was swept, the same lines draw.
+    let own = fixture_path("sweeps/heavy-top-gravity.json");
+    let o = verify(&[
+        "plot-sweep",
+        lines.to_str().unwrap(),
+        "--spec",
+        own.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -179,6 +179,21 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             estimate / 60.0
         )));
     }
+    if args.t_end.is_none() {
+        // The default 8 T(eps, delta) is kept within [1, 200]: say so when
+        // it was moved.
+        if let Some(t) = stopping_time.filter(|t| t.is_finite()) {
+            let wanted = 8.0 * t;
+            if wanted != prepared.ensemble.t_end {
+                eprintln!(
+                    "note: t_end = {} (the default 8 T(eps, delta) = {} lies outside [1, 200]; pass --t-end {} to simulate that long)",
+                    crate::table::format_number(&json!(prepared.ensemble.t_end)),
+                    crate::table::format_number(&json!(wanted)),
+                    crate::table::format_number(&json!(wanted))
+                );
+            }
+        }
+    }
     if estimate > 10.0 {
         eprintln!(
             "note: about {:.0} s of computation ({:.2e} path-steps on {} threads)",
@@ -319,18 +334,29 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         nonlinear.casimir_drift,
         dir.display()
     );
+    // Every number to six significant digits at most, in one style.
+    let num = |x: f64| crate::table::format_number(&json!(x));
     if let Some(s) = sigma2 {
         eprintln!(
-            "  Sigma^2 = {s}, T({epsilon}, {delta}) = {}, moment Lyapunov exponent = {}",
-            stopping_time.map_or("infinity".into(), |t| format!("{t:.3}")),
-            lyapunov.map_or("-".into(), |l| format!("{l:.4}"))
+            "  Sigma^2 = {}, T({}, {}) = {}, moment Lyapunov exponent = {}",
+            num(s),
+            num(epsilon),
+            num(delta),
+            stopping_time.map_or("infinity".into(), num),
+            lyapunov.map_or("-".into(), num)
         );
     }
-    for e in &exceedance {
-        eprintln!(
-            "  P(|dmu_t|_P^2 > {epsilon}) <= {}: certified until t = {}, first exceeded in the ensemble at t = {}",
-            e["level"], e["certified_until"], e["empirical_first_exceeded"]
+    for e in &study.exceedance {
+        let certified = match e.certified_until {
+            Some(t) if t.is_infinite() => "certified for all t".to_string(),
+            Some(t) => format!("certified until t = {}", num(t)),
+            None => "not certified".to_string(),
+        };
+        let seen = e.empirical_first_exceeded.map_or_else(
+            || format!("not exceeded in the ensemble up to t = {}", num(t_end)),
+            |t| format!("first exceeded in the ensemble at t = {}", num(t)),
         );
+        eprintln!("  P(|dmu_t|_P^2 > {}) <= {}: {certified}; {seen}", num(epsilon), num(e.level));
     }
     Ok(())
 }

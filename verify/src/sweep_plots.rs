@@ -84,6 +84,8 @@ pub fn plot_files(
     let spec =
         parse_any_spec(&read(spec_path)?).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
     let known = spec.parameter_names();
+    let tag = sweep::spec_tag(&spec);
+    let mut untagged = 0usize;
     let mut names: Option<Vec<String>> = None;
     let mut id: Option<String> = None;
     let mut points = Vec::new();
@@ -107,6 +109,19 @@ pub fn plot_files(
                 }
                 _ => {}
             }
+            // The lines' spec must be this spec: a map drawn from one
+            // system's lines under another's name and boundaries is wrong.
+            match v["spec"].as_str() {
+                Some(t) if t == tag => {}
+                Some(t) => {
+                    return Err(at(&format!(
+                        "these lines are a sweep of another spec (spec tag {}; {} has {tag}): pass the spec that was swept as --spec",
+                        excerpt(t),
+                        spec_path.display()
+                    )))
+                }
+                None => untagged += 1,
+            }
             let params = v["parameters"].as_object().ok_or_else(|| at("no \"parameters\" object"))?;
             let these: Vec<String> = order(params.keys().cloned().collect(), &spec);
             if names.get_or_insert_with(|| these.clone()) != &these {
@@ -127,6 +142,11 @@ pub fn plot_files(
         }
     }
     let names = names.ok_or_else(|| Failure::BadInput("no sweep lines to plot".into()))?;
+    if untagged > 0 {
+        eprintln!(
+            "note: {untagged} line(s) carry no spec tag (written by an older engine): not checked against --spec"
+        );
+    }
     ensure_output_dir(out, "--out")?;
     // The name is data: a safe stem keeps every file inside the directory.
     let stem = out.join(file_stem_noted(spec.name()));

@@ -43,6 +43,23 @@ pub use point::{
 pub use resume::{scan, Existing, ResumeError};
 pub use run::{run, Done, Summary};
 
+/// The identity of the swept spec, written in every line: the first 16 hex
+/// digits of its SHA-256 ([`spec::spec_digest`]), so that lines met with a
+/// spec elsewhere (`verify plot-sweep`) can be told apart from another
+/// spec's.
+///
+/// ```
+/// let a = spec::parse_any_spec(r#"{"name": "a", "algebra": "so3", "hamiltonian": "Pi1^2/6 + Pi2^2/4 + Pi3^2/2",
+///   "casimirs": ["(Pi1^2 + Pi2^2 + Pi3^2)/2"], "equilibrium": [1, 0, 0], "noise": [[0.3, 0, 0]]}"#).unwrap();
+/// let b = spec::parse_any_spec(r#"{"name": "b", "algebra": "so3", "hamiltonian": "Pi1^2/6 + Pi2^2/4 + Pi3^2/2",
+///   "casimirs": ["(Pi1^2 + Pi2^2 + Pi3^2)/2"], "equilibrium": [1, 0, 0], "noise": [[0.3, 0, 0]]}"#).unwrap();
+/// assert_eq!(sweep::spec_tag(&a).len(), 16);
+/// assert_ne!(sweep::spec_tag(&a), sweep::spec_tag(&b));
+/// ```
+pub fn spec_tag(spec: &spec::AnySpec) -> String {
+    spec::spec_digest(spec.raw()).chars().take(16).collect()
+}
+
 /// The identity of a sweep: 16 hex digits of SHA-256 over the spec's digest,
 /// the plan (ranges and sampling, not the shard) and the level. Shards of one
 /// sweep share it; changing anything that changes the records changes it.

@@ -71,6 +71,11 @@ pub struct Evaluator {
 }
 
 impl Evaluator {
+    /// The swept spec's [`crate::spec_tag`].
+    pub fn spec_tag(&self) -> String {
+        crate::spec_tag(&self.spec)
+    }
+
     /// An evaluator for the parameters `names` of `spec`; every name must be
     /// a parameter of the spec.
     ///
@@ -207,9 +212,10 @@ fn string(out: &mut String, s: &str) {
     out.push_str(&Value::String(s.to_string()).to_string());
 }
 
-/// One JSON line (with its newline) for point `index` of sweep `id`.
+/// One JSON line (with its newline) for point `index` of sweep `id` over the
+/// spec whose [`crate::spec_tag`] is `spec_tag`.
 ///
-/// Keys: `sweep` (the sweep's id), `index`, `parameters` (doubles),
+/// Keys: `sweep` (the sweep's id), `spec` (the spec's tag), `index`, `parameters` (doubles),
 /// `exact_parameters` (rational strings), then `verdict`, `level`, `sigma2`,
 /// `T` (a number, or `"infinity"`), `growth_rate`, or `error` for a point
 /// where the spec is invalid. Written by hand: it is the hot path of a
@@ -218,15 +224,16 @@ fn string(out: &mut String, s: &str) {
 /// ```
 /// let out = sweep::Outcome { verdict: Some(sweep::Verdict::Stable), level: Some(sweep::VerificationLevel::Exact), sigma2: Some(0.27),
 ///     stopping_time: Some(Some(17.05)), growth_rate: None, error: None };
-/// let line = sweep::record_line("ab12", 3, &["I1".to_string()], &[exact::parse_number("3").unwrap()], &out);
+/// let line = sweep::record_line("ab12", "cd34", 3, &["I1".to_string()], &[exact::parse_number("3").unwrap()], &out);
 /// let v: serde_json::Value = serde_json::from_str(&line).unwrap();
 /// assert_eq!(v["sigma2"], 0.27);
 /// assert_eq!(v["exact_parameters"]["I1"], "3");
+/// assert_eq!(v["spec"], "cd34");
 /// assert!(line.ends_with('\n'));
 /// ```
-pub fn record_line(id: &str, index: u64, names: &[String], values: &[Rational], o: &Outcome) -> String {
+pub fn record_line(id: &str, spec_tag: &str, index: u64, names: &[String], values: &[Rational], o: &Outcome) -> String {
     let mut s = String::with_capacity(256);
-    let _ = write!(s, "{{\"sweep\":\"{id}\",\"index\":{index},\"parameters\":{{");
+    let _ = write!(s, "{{\"sweep\":\"{id}\",\"spec\":\"{spec_tag}\",\"index\":{index},\"parameters\":{{");
     for (i, (n, v)) in names.iter().zip(values).enumerate() {
         if i > 0 {
             s.push(',');

@@ -124,6 +124,7 @@ pub fn run(
     let len = plan.len();
     let todo = |i: u64| shard.contains(i) && !done.contains(i);
     let names = evaluator.names().to_vec();
+    let tag = evaluator.spec_tag();
     let work = |i: u64, chunk: &mut Chunk| {
         chunk.points += 1;
         if !todo(i) {
@@ -147,7 +148,7 @@ pub fn run(
             None => chunk.summary.invalid += 1,
         }
         chunk.summary.computed += 1;
-        chunk.text.push_str(&record_line(id, i, &names, &values, &outcome));
+        chunk.text.push_str(&record_line(id, &tag, i, &names, &values, &outcome));
     };
     let new_chunk = || Chunk { text: String::new(), summary: Summary::default(), points: 0 };
 
