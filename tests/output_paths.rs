@@ -116,7 +116,19 @@ fn names_that_are_paths_stay_inside_the_output_directory() {
 
         let map_spec =
             renamed(&fixture_path("sweeps/lagrange-top-map.json"), name, &inputs.join(format!("map{k}.json")));
-        let lines = fixture_path("sweeps/lagrange-top-map.jsonl");
+        // Lines of this (renamed) spec: plot-sweep refuses another spec's lines.
+        let lines = inputs.join(format!("map{k}.jsonl"));
+        let o = verify(&[
+            "sweep",
+            map_spec.to_str().unwrap(),
+            "--param",
+            "p=0:4:3",
+            "--param",
+            "mgl=0:1:2",
+            "-o",
+            lines.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
         let o = verify(&["plot-sweep", lines.to_str().unwrap(), "--spec", map_spec.to_str().unwrap(), "--out", out_s]);
         assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
         expected.extend(rel(names(stem, &["-map.svg", "-map.png"])));
