@@ -558,8 +558,11 @@ fn help_describes_the_no_argument_run_and_subcommands_do_not_offer_fixtures() {
 /// exceedance lines say "not exceeded" rather than printing null.
 #[test]
 fn simulate_says_when_the_default_final_time_was_clamped() {
-    // T(0.1, 0.001) = 63.96 for this fixture (its certificate), so the
-    // default 8 T = 511.7 is clamped to 200.
+    // Sigma^2 = 0.072 for this fixture (4 sigma^2 / (p^2 - 4 mgl I1), the
+    // closed form of tests/closed_forms.rs), so T(0.1, 0.001) = ln(100)/0.072
+    // = 63.9607 and the default 8 T = 511.685576 is clamped to 200; the
+    // level alpha = 0.1 is certified until ln(alpha eps/delta)/Sigma^2 =
+    // ln(10)/0.072 = 31.980349.
     let spec = fixture_path("lagrange-top-fluctuating-gravity.json");
     let dir = std::env::temp_dir().join(format!("verify-cli-clamp-{}", std::process::id()));
     let out = simulate(

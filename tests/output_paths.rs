@@ -116,8 +116,9 @@ fn names_that_are_paths_stay_inside_the_output_directory() {
 
         let map_spec =
             renamed(&fixture_path("sweeps/lagrange-top-map.json"), name, &inputs.join(format!("map{k}.json")));
-        // Lines of this (renamed) spec: plot-sweep refuses another spec's lines.
-        let lines = inputs.join(format!("map{k}.jsonl"));
+        // sweep --plot draws through the same code; its lines go to -o.
+        let plot = out.join("swept");
+        let lines = out.join("lines.jsonl");
         let o = verify(&[
             "sweep",
             map_spec.to_str().unwrap(),
@@ -127,28 +128,16 @@ fn names_that_are_paths_stay_inside_the_output_directory() {
             "mgl=0:1:2",
             "-o",
             lines.to_str().unwrap(),
-        ]);
-        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
-        let o = verify(&["plot-sweep", lines.to_str().unwrap(), "--spec", map_spec.to_str().unwrap(), "--out", out_s]);
-        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
-        expected.extend(rel(names(stem, &["-map.svg", "-map.png"])));
-
-        // sweep --plot draws through the same code; its lines go to -o.
-        let plot = out.join("swept");
-        let o = verify(&[
-            "sweep",
-            map_spec.to_str().unwrap(),
-            "--param",
-            "p=0:4:3",
-            "--param",
-            "mgl=0:1:2",
-            "-o",
-            out.join("lines.jsonl").to_str().unwrap(),
             "--plot",
             plot.to_str().unwrap(),
         ]);
         assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
         expected.insert(PathBuf::from("out").join(k.to_string()).join("lines.jsonl"));
+
+        // plot-sweep of those lines (the renamed spec's own: it refuses another spec's).
+        let o = verify(&["plot-sweep", lines.to_str().unwrap(), "--spec", map_spec.to_str().unwrap(), "--out", out_s]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        expected.extend(rel(names(stem, &["-map.svg", "-map.png"])));
         expected.extend(rel(names(&format!("swept/{stem}"), &["-map.svg", "-map.png"])));
     }
     let inputs_written: BTreeSet<PathBuf> =

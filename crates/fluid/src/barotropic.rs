@@ -49,10 +49,26 @@
 //! `B dq = -ik eta dq` ([`BarotropicMode::casimir_defect_apply`]); it tends
 //! to zero under refinement at fixed `k` and is reported, not used.
 
-use crate::banded::SymBanded;
+use crate::banded::{BandedCholesky, SymBanded};
 use crate::grid::{element_nodes, gll, gll_derivative, ELEMENT_DEGREE};
 use crate::lanczos::{largest_generalized_eigenvalue, Ritz};
 use nalgebra::{Complex, DMatrix};
+
+/// The largest eigenvalue of `(op, K)` by Lanczos, with the banded Cholesky
+/// factor of `K` for the solves.
+fn top_against(
+    kf: &SymBanded,
+    chol: &BandedCholesky,
+    op: impl FnMut(&[f64], &mut [f64]),
+    tol: f64,
+    max_iter: usize,
+) -> Ritz {
+    let solve = |b: &[f64], x: &mut [f64]| {
+        x.copy_from_slice(b);
+        chol.solve(x)
+    };
+    largest_generalized_eigenvalue(kf.n(), op, |x, o| kf.mul_vec(x, o), solve, tol, max_iter)
+}
 
 /// The element grid of a channel `[a, b]` with all nodes, walls included.
 #[derive(Clone, Debug)]
@@ -254,18 +270,7 @@ impl<'g> BarotropicMode<'g> {
         let kf = self.form();
         let q = self.generator();
         let chol = kf.cholesky().ok()?;
-        let n = kf.n();
-        let ritz = largest_generalized_eigenvalue(
-            n,
-            |x, out| q.mul_vec(x, out),
-            |x, out| kf.mul_vec(x, out),
-            |b, x| {
-                x.copy_from_slice(b);
-                chol.solve(x)
-            },
-            tol,
-            600,
-        );
+        let ritz = top_against(&kf, &chol, |x, out| q.mul_vec(x, out), tol, 600);
         (ritz.value.is_finite() && ritz.residual.is_finite() && ritz.scale.is_finite())
             .then_some(BarotropicSigma2 { lambda_max: ritz.value, ritz })
     }
@@ -349,23 +354,12 @@ impl<'g> BarotropicMode<'g> {
         let q = self.generator();
         let chol = kf.cholesky().ok()?;
         let apply = self.casimir_defect_apply(&kf, &q);
-        let n = kf.n();
-        let solve = |b: &[f64], x: &mut [f64]| {
-            x.copy_from_slice(b);
-            chol.solve(x)
+        let top = top_against(&kf, &chol, &apply, tol, 300);
+        let negated = |x: &[f64], o: &mut [f64]| {
+            apply(x, o);
+            o.iter_mut().for_each(|v| *v = -*v)
         };
-        let top = largest_generalized_eigenvalue(n, &apply, |x, o| kf.mul_vec(x, o), solve, tol, 300);
-        let bottom = largest_generalized_eigenvalue(
-            n,
-            |x, o| {
-                apply(x, o);
-                o.iter_mut().for_each(|v| *v = -*v)
-            },
-            |x, o| kf.mul_vec(x, o),
-            solve,
-            tol,
-            300,
-        );
+        let bottom = top_against(&kf, &chol, negated, tol, 300);
         let v = top.value.abs().max(bottom.value.abs());
         v.is_finite().then_some(v)
     }
@@ -379,18 +373,13 @@ impl<'g> BarotropicMode<'g> {
         let q = self.generator();
         let chol = kf.cholesky().ok()?;
         let defect = self.casimir_defect_apply(&kf, &q);
-        let n = kf.n();
-        let mut qx = vec![0.0; n];
+        let mut qx = vec![0.0; kf.n()];
         let apply = |x: &[f64], o: &mut [f64]| {
             defect(x, o);
             q.mul_vec(x, &mut qx);
             o.iter_mut().zip(&qx).for_each(|(o, v)| *o += v);
         };
-        let solve = |b: &[f64], x: &mut [f64]| {
-            x.copy_from_slice(b);
-            chol.solve(x)
-        };
-        let top = largest_generalized_eigenvalue(n, apply, |x, o| kf.mul_vec(x, o), solve, tol, 300);
+        let top = top_against(&kf, &chol, apply, tol, 300);
         (top.value.is_finite() && top.residual.is_finite()).then_some(top.value)
     }
 

@@ -35,10 +35,8 @@
 //! second order for the Stratonovich equation.
 
 use crate::barotropic::BarotropicMode;
-use crate::simulate::EnsembleRow;
+use crate::simulate::{strang_ensemble, EnsembleRow, StrangRun};
 use nalgebra::{Complex, DMatrix, DVector};
-use rand_distr::{Distribution, StandardNormal};
-use rayon::prelude::*;
 
 type C = Complex<f64>;
 
@@ -162,8 +160,12 @@ impl BarotropicSde {
         out
     }
 
-    /// The exact second moment at `t = j t_end / samples`, `j = 1..=samples`.
+    /// The exact second moment at `t = j t_end / samples`, `j = 1..=samples`
+    /// (none unless `t_end` is positive and finite).
     pub fn exact_moments(&self, t_end: f64, samples: usize) -> Vec<ExactMoment> {
+        if !(t_end.is_finite() && t_end > 0.0) {
+            return vec![];
+        }
         let n = self.n();
         // |backward_rate| <= 2 |A~^|_2 + sum |B^_j|_2^2 (operator norms on
         // the Frobenius space).
@@ -237,54 +239,18 @@ impl BarotropicSde {
                 o
             })
             .collect();
-        let v0 = self.energy(x0);
-        let records = steps / record_every;
-        let (one, zero) = (C::new(1.0, 0.0), C::new(0.0, 0.0));
-        let per_path: Vec<Vec<f64>> = (0..paths)
-            .into_par_iter()
-            .map(|p| {
-                let mut rng = simulate::path_rng(seed, p as u64);
-                let mut x = x0.clone();
-                let mut y = DVector::<C>::zeros(n);
-                let mut z = DVector::<C>::zeros(n);
-                let mut dws = vec![0.0; self.b.len()];
-                let mut out = Vec::with_capacity(records);
-                let sq = dt.sqrt();
-                for s in 1..=steps {
-                    y.gemv(one, &half, &x, zero);
-                    for dw in dws.iter_mut() {
-                        *dw = sq * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
-                    }
-                    // (I + sum O_j dW_j) y, then exp(sum D_j dW_j)
-                    z.copy_from(&y);
-                    for (o, dw) in off.iter().zip(&dws) {
-                        z.gemv(C::new(*dw, 0.0), o, &y, one);
-                    }
-                    for i in 0..n {
-                        let e: C = diag.iter().zip(&dws).map(|(d, dw)| d[i] * *dw).sum();
-                        z[i] *= e.exp();
-                    }
-                    x.gemv(one, &half, &z, zero);
-                    if s % record_every == 0 {
-                        out.push(self.energy(&x));
-                    }
-                }
-                out
-            })
-            .collect();
-        let max_path_drift = per_path.iter().flatten().map(|e| (e - v0).abs() / v0).fold(0.0, f64::max);
-        (0..records)
-            .map(|r| {
-                let vals: Vec<f64> = per_path.iter().map(|v| v[r]).collect();
-                let mean = vals.iter().sum::<f64>() / paths as f64;
-                let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (paths as f64 - 1.0).max(1.0);
-                EnsembleRow {
-                    t: dt * ((r + 1) * record_every) as f64,
-                    mean,
-                    std_error: (var / paths as f64).sqrt(),
-                    max_path_drift,
-                }
-            })
-            .collect()
+        // exp(sum D_j dW_j) (I + sum O_j dW_j) y
+        let noise = |y: &DVector<C>, dws: &[f64], z: &mut DVector<C>| {
+            z.copy_from(y);
+            for (o, dw) in off.iter().zip(dws) {
+                z.gemv(C::new(*dw, 0.0), o, y, C::new(1.0, 0.0));
+            }
+            for i in 0..n {
+                let e: C = diag.iter().zip(dws).map(|(d, dw)| d[i] * *dw).sum();
+                z[i] *= e.exp();
+            }
+        };
+        let run = StrangRun { dt, steps, record_every, paths, seed };
+        strang_ensemble(x0, &half, self.b.len(), &run, noise, |x| self.energy(x))
     }
 }

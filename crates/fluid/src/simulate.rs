@@ -32,6 +32,73 @@ pub struct ModeSde {
     eta: Vec<Vec<f64>>,
 }
 
+/// The sizes of a Strang-splitting ensemble.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StrangRun {
+    pub dt: f64,
+    pub steps: usize,
+    pub record_every: usize,
+    pub paths: usize,
+    pub seed: u64,
+}
+
+/// `paths` paths from `x0` of the Strang splitting half drift (`half`),
+/// noise flow (`noise(y, dW, z)` writes the flow of `y` under the increments
+/// `dW`, one per field, each of variance `dt`), half drift; `energy` recorded
+/// every `record_every` steps. One random stream per path
+/// ([`simulate::path_rng`]), so the numbers do not depend on the threads.
+pub(crate) fn strang_ensemble(
+    x0: &DVector<C>,
+    half: &DMatrix<C>,
+    fields: usize,
+    run: &StrangRun,
+    noise: impl Fn(&DVector<C>, &[f64], &mut DVector<C>) + Sync,
+    energy: impl Fn(&DVector<C>) -> f64 + Sync,
+) -> Vec<EnsembleRow> {
+    let &StrangRun { dt, steps, record_every, paths, seed } = run;
+    let n = x0.len();
+    let v0 = energy(x0);
+    let records = steps / record_every;
+    let (one, zero) = (C::new(1.0, 0.0), C::new(0.0, 0.0));
+    let sq = dt.sqrt();
+    let per_path: Vec<Vec<f64>> = (0..paths)
+        .into_par_iter()
+        .map(|p| {
+            let mut rng = simulate::path_rng(seed, p as u64);
+            let mut x = x0.clone();
+            let (mut y, mut z) = (DVector::<C>::zeros(n), DVector::<C>::zeros(n));
+            let mut dws = vec![0.0; fields];
+            let mut out = Vec::with_capacity(records);
+            for s in 1..=steps {
+                y.gemv(one, half, &x, zero);
+                for dw in dws.iter_mut() {
+                    *dw = sq * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
+                }
+                noise(&y, &dws, &mut z);
+                x.gemv(one, half, &z, zero);
+                if s % record_every == 0 {
+                    out.push(energy(&x));
+                }
+            }
+            out
+        })
+        .collect();
+    let max_path_drift = per_path.iter().flatten().map(|e| (e - v0).abs() / v0).fold(0.0, f64::max);
+    (0..records)
+        .map(|r| {
+            let vals: Vec<f64> = per_path.iter().map(|v| v[r]).collect();
+            let mean = vals.iter().sum::<f64>() / paths as f64;
+            let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (paths as f64 - 1.0).max(1.0);
+            EnsembleRow {
+                t: dt * ((r + 1) * record_every) as f64,
+                mean,
+                std_error: (var / paths as f64).sqrt(),
+                max_path_drift,
+            }
+        })
+        .collect()
+}
+
 /// `E V(t)` at the requested times, with its Monte Carlo standard error.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnsembleRow {
@@ -86,57 +153,16 @@ impl ModeSde {
         seed: u64,
     ) -> Option<Vec<EnsembleRow>> {
         let half = self.drift_propagator(dt / 2.0)?;
-        let n = w0.len();
-        let x0 = DVector::from_iterator(n, w0.iter().map(|x| C::new(*x, 0.0)));
-        let v0 = self.energy(&x0);
-        let records = steps / record_every;
-        // per path: V at each record, and the largest relative change of V
-        let per_path: Vec<(Vec<f64>, f64)> = (0..paths)
-            .into_par_iter()
-            .map(|p| {
-                let mut rng = simulate::path_rng(seed, p as u64);
-                let mut x = x0.clone();
-                let mut y = DVector::<C>::zeros(n);
-                let mut dws = vec![0.0; self.eta.len()];
-                let mut out = Vec::with_capacity(records);
-                let mut drift = 0.0f64;
-                let sq = dt.sqrt();
-                let (one, zero) = (C::new(1.0, 0.0), C::new(0.0, 0.0));
-                for s in 1..=steps {
-                    y.gemv(one, &half, &x, zero);
-                    for dw in dws.iter_mut() {
-                        *dw = sq * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
-                    }
-                    for a in 0..n {
-                        let phase: f64 = self.eta.iter().zip(&dws).map(|(e, dw)| e[a] * dw).sum();
-                        y[a] *= C::from_polar(1.0, -self.k * phase);
-                    }
-                    x.gemv(one, &half, &y, zero);
-                    if s % record_every == 0 {
-                        let e = self.energy(&x);
-                        drift = drift.max((e - v0).abs() / v0);
-                        out.push(e);
-                    }
-                }
-                (out, drift)
-            })
-            .collect();
-        let max_path_drift = per_path.iter().map(|(_, d)| *d).fold(0.0, f64::max);
-        Some(
-            (0..records)
-                .map(|r| {
-                    let vals: Vec<f64> = per_path.iter().map(|(v, _)| v[r]).collect();
-                    let mean = vals.iter().sum::<f64>() / paths as f64;
-                    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (paths as f64 - 1.0).max(1.0);
-                    EnsembleRow {
-                        t: dt * ((r + 1) * record_every) as f64,
-                        mean,
-                        std_error: (var / paths as f64).sqrt(),
-                        max_path_drift,
-                    }
-                })
-                .collect(),
-        )
+        let x0 = DVector::from_iterator(w0.len(), w0.iter().map(|x| C::new(*x, 0.0)));
+        // The noise operators commute and are diagonal: the flow is a phase per node.
+        let noise = |y: &DVector<C>, dws: &[f64], z: &mut DVector<C>| {
+            for a in 0..y.len() {
+                let phase: f64 = self.eta.iter().zip(dws).map(|(e, dw)| e[a] * dw).sum();
+                z[a] = y[a] * C::from_polar(1.0, -self.k * phase);
+            }
+        };
+        let run = StrangRun { dt, steps, record_every, paths, seed };
+        Some(strang_ensemble(&x0, &half, self.eta.len(), &run, noise, |x| self.energy(x)))
     }
 
     /// The exact `E V(t)` from `w0`, at `t = j * t_end / samples`, `j = 1..=samples`.
