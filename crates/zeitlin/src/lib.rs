@@ -1,0 +1,17 @@
+//! The stochastic Zeitlin model: the su(N) truncation of 2D Euler on the
+//! sphere (Zeitlin 1991; Modin & Viviani 2020; quflow) with stochastic
+//! transport noise, and the stochastic energy–Casimir method for its zonal
+//! equilibria.
+//!
+//! * [`laplacian`]: the Hoppe–Yau Laplacian on one off-diagonal (tridiagonal);
+//! * [`zonal`]: zonal harmonics `T_{l0}` and the quantisation of a profile `omega(z)`;
+//! * [`analysis`]: the per-block energy–Casimir–momentum form, `Q`, and `Sigma^2`.
+//!
+//! Conventions are quflow's: `<A, B> = Re tr(A B^*) / N`, the bracket
+//! `[A, B] / hbar` with `hbar = 2 / sqrt(N^2 - 1)`, `W = i diag(omega)` for a
+//! zonal state with the north pole last. See `docs/zeitlin.md`.
+#![warn(missing_docs)]
+
+pub mod analysis;
+pub mod laplacian;
+pub mod zonal;
