@@ -35,6 +35,7 @@ pub mod expr;
 pub mod grid;
 pub mod interval;
 pub mod lanczos;
+pub mod minimise;
 pub mod modes;
 pub mod profile;
 pub mod simulate;

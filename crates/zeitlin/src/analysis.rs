@@ -23,9 +23,10 @@
 //! positive factor). With `eps = 0` (a strictly monotone profile makes the
 //! Casimir–momentum form alone definite) `Q = 0` and `Sigma^2 = 0`.
 
-use crate::laplacian::{block, solve_general, solve_zonal, Tridiagonal, TridiagonalFactor};
+use crate::laplacian::{block, solve_zonal, GeneralTridiagonalFactor, Tridiagonal, TridiagonalFactor};
 use fluid::banded::SymBanded;
 use fluid::lanczos::largest_generalized_eigenvalue;
+use fluid::minimise::golden_section;
 use outcome::{Verdict, VerificationLevel};
 use rayon::prelude::*;
 
@@ -181,38 +182,15 @@ impl Block {
     fn congruent_p(&self, c: &[f64], eps: f64) -> SymBanded {
         let n = self.len();
         let mut out = SymBanded::zeros(n, 2);
-        let (d, e) = (&self.lap.diag, &self.lap.off);
+        let t = &self.lap;
         for i in 0..n {
-            out.add(i, i, -eps * d[i]);
+            out.add(i, i, -eps * t.diag[i]);
             if i > 0 {
-                out.add(i, i - 1, -eps * e[i - 1]);
+                out.add(i, i - 1, -eps * t.off[i - 1]);
             }
             // (Delta D Delta)_{ij} = sum_k Delta_ik c_k Delta_kj
-            let row = |k: usize| -> f64 {
-                if k == i {
-                    d[i]
-                } else if k + 1 == i {
-                    e[k]
-                } else if i + 1 == k {
-                    e[i]
-                } else {
-                    0.0
-                }
-            };
             for j in i.saturating_sub(2)..=i {
-                let mut s = 0.0;
-                for k in j.saturating_sub(1)..=(i + 1).min(n - 1) {
-                    let col = if k == j {
-                        d[j]
-                    } else if k + 1 == j {
-                        e[k]
-                    } else if j + 1 == k {
-                        e[j]
-                    } else {
-                        0.0
-                    };
-                    s += row(k) * c[k] * col;
-                }
+                let s: f64 = (j.saturating_sub(1)..=(i + 1).min(n - 1)).map(|k| t.get(i, k) * c[k] * t.get(k, j)).sum();
                 out.add(i, j, s);
             }
         }
@@ -258,11 +236,17 @@ impl Block {
         }
         let c = self.c(choice);
         let k2 = eps / (2.0 * hbar * hbar);
-        let mut t1 = vec![0.0; n];
-        let mut t2 = vec![0.0; n];
+        // P x = u with P = eps G + D_c: y = G x, x = -Delta y, (eps I - D_c Delta) y = u,
+        // a tridiagonal factored once for all the Lanczos steps.
+        let sub: Vec<f64> = (0..n.saturating_sub(1)).map(|j| -c[j + 1] * self.lap.off[j]).collect();
+        let dia: Vec<f64> = (0..n).map(|j| eps - c[j] * self.lap.diag[j]).collect();
+        let sup: Vec<f64> = (0..n.saturating_sub(1)).map(|j| -c[j] * self.lap.off[j]).collect();
+        let Some(p_factor) = GeneralTridiagonalFactor::new(&sub, &dia, &sup) else {
+            return BlockResult { m: self.m, lambda_max: f64::NAN, residual: f64::INFINITY };
+        };
+        let (mut gx, mut t1, mut t2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let apply_q = |x: &[f64], y: &mut [f64]| {
             // Q x = -k2 sum_i (D^2 G x - 2 D G D x + G D^2 x)
-            let mut gx = vec![0.0; n];
             self.g(x, &mut gx);
             y.iter_mut().for_each(|v| *v = 0.0);
             for d in &self.d_xi {
@@ -288,13 +272,10 @@ impl Block {
                 y[j] = eps * y[j] + c[j] * x[j];
             }
         };
-        // P x = u with P = eps G + D_c: y = G x, x = -Delta y, (eps I - D_c Delta) y = u.
-        let sub: Vec<f64> = (0..n.saturating_sub(1)).map(|j| -c[j + 1] * self.lap.off[j]).collect();
-        let dia: Vec<f64> = (0..n).map(|j| eps - c[j] * self.lap.diag[j]).collect();
-        let sup: Vec<f64> = (0..n.saturating_sub(1)).map(|j| -c[j] * self.lap.off[j]).collect();
+        let mut y = vec![0.0; n];
         let solve_p = |u: &[f64], x: &mut [f64]| {
-            let mut y = u.to_vec();
-            if !solve_general(&sub, &dia, &sup, &mut y) {
+            y.copy_from_slice(u);
+            if !p_factor.solve(&mut y) {
                 x.iter_mut().for_each(|v| *v = f64::NAN);
                 return;
             }
@@ -521,31 +502,6 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
             results.iter().map(|r| r.lambda_max).fold(0.0f64, |a, x| if x.is_nan() { f64::INFINITY } else { a.max(x) });
         (s, results)
     };
-    let golden = |f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, steps: usize| -> (f64, f64) {
-        let g = (5f64.sqrt() - 1.0) / 2.0;
-        let (mut x1, mut x2) = (b - g * (b - a), a + g * (b - a));
-        let (mut f1, mut f2) = (f(x1), f(x2));
-        for _ in 0..steps {
-            if f1 <= f2 {
-                b = x2;
-                x2 = x1;
-                f2 = f1;
-                x1 = b - g * (b - a);
-                f1 = f(x1);
-            } else {
-                a = x1;
-                x1 = x2;
-                f1 = f2;
-                x2 = a + g * (b - a);
-                f2 = f(x2);
-            }
-        }
-        if f1 <= f2 {
-            (x1, f1)
-        } else {
-            (x2, f2)
-        }
-    };
     const RANGE: f64 = 1e4;
     let mut candidates: Vec<(f64, f64, f64, bool)> = vec![]; // (eps, b, sigma2, attained)
                                                              // eps = 0: the Casimir–momentum form, Q = 0.
@@ -566,7 +522,7 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
                 continue;
             }
             // The most definite b (concave: golden section on -margin).
-            let (b0, m0) = golden(&|b| -margin(eps, b), -RANGE, RANGE, 90);
+            let (b0, m0) = golden_section(|b| -margin(eps, b), -RANGE, RANGE, 90);
             if -m0 <= 1e-9 || !definite(eps, b0) {
                 continue;
             }
@@ -587,7 +543,7 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
                 a
             };
             let (lo, hi) = (edge(-RANGE), edge(RANGE));
-            let (b, s) = golden(&|b| sigma2_at(eps, b).0, lo, hi, settings.golden_steps);
+            let (b, s) = golden_section(|b| sigma2_at(eps, b).0, lo, hi, settings.golden_steps);
             let at_edge = (b - lo).abs() <= 1e-6 * (hi - lo) || (hi - b).abs() <= 1e-6 * (hi - lo);
             if definite(eps, b) {
                 candidates.push((eps, b, s, !at_edge));

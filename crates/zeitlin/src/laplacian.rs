@@ -56,6 +56,19 @@ impl Tridiagonal {
         self.diag.is_empty()
     }
 
+    /// Entry `(i, j)` (zero off the three diagonals).
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        if i == j {
+            self.diag[i]
+        } else if i + 1 == j {
+            self.off[i]
+        } else if j + 1 == i {
+            self.off[j]
+        } else {
+            0.0
+        }
+    }
+
     /// `y = T x`.
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
         let n = self.len();
@@ -113,55 +126,83 @@ impl TridiagonalFactor {
     }
 }
 
-/// Solve the general tridiagonal system `(sub, diag, sup) x = b` by Gaussian
-/// elimination with partial pivoting (LAPACK's `dgtsv`), overwriting `b`.
-/// `sub[j]` is entry `(j + 1, j)`, `sup[j]` entry `(j, j + 1)`. Returns
-/// false if the matrix is singular in floating point.
+/// The LU factors, with partial pivoting, of a general tridiagonal matrix
+/// (LAPACK's `dgttrf`): factored once, solved many times (`dgttrs`).
 ///
 /// Written here rather than taken from a crate: nalgebra and faer solve
-/// dense or general sparse systems; this one is `O(n)` and ten lines.
-pub fn solve_general(sub: &[f64], diag: &[f64], sup: &[f64], b: &mut [f64]) -> bool {
-    let n = diag.len();
-    if n == 0 {
-        return true;
-    }
-    let (mut dl, mut d, mut du) = (sub.to_vec(), diag.to_vec(), sup.to_vec());
-    let mut du2 = vec![0.0; n.saturating_sub(2)];
-    for i in 0..n - 1 {
-        if d[i].abs() >= dl[i].abs() {
-            if d[i] == 0.0 {
-                return false;
+/// dense or general sparse systems; this one is `O(n)` and thirty lines.
+#[derive(Clone, Debug)]
+pub struct GeneralTridiagonalFactor {
+    /// Multipliers `l[i]` of the elimination of row `i + 1`.
+    l: Vec<f64>,
+    /// The upper factor's three diagonals.
+    d: Vec<f64>,
+    du: Vec<f64>,
+    du2: Vec<f64>,
+    /// Whether rows `i` and `i + 1` were swapped at step `i`.
+    swapped: Vec<bool>,
+}
+
+impl GeneralTridiagonalFactor {
+    /// Factor `(sub, diag, sup)`: `sub[j]` is entry `(j + 1, j)`, `sup[j]`
+    /// entry `(j, j + 1)`. `None` if it is singular in floating point.
+    pub fn new(sub: &[f64], diag: &[f64], sup: &[f64]) -> Option<Self> {
+        let n = diag.len();
+        let (mut d, mut du) = (diag.to_vec(), sup.to_vec());
+        let mut l = vec![0.0; n.saturating_sub(1)];
+        let mut du2 = vec![0.0; n.saturating_sub(2)];
+        let mut swapped = vec![false; n.saturating_sub(1)];
+        for i in 0..n.saturating_sub(1) {
+            if d[i].abs() >= sub[i].abs() {
+                if d[i] == 0.0 {
+                    return None;
+                }
+                l[i] = sub[i] / d[i];
+                d[i + 1] -= l[i] * du[i];
+            } else {
+                // Swap rows i and i + 1.
+                swapped[i] = true;
+                l[i] = d[i] / sub[i];
+                d[i] = sub[i];
+                let t = d[i + 1];
+                d[i + 1] = du[i] - l[i] * t;
+                du[i] = t;
+                if i + 2 < n {
+                    du2[i] = du[i + 1];
+                    du[i + 1] *= -l[i];
+                }
             }
-            let f = dl[i] / d[i];
-            d[i + 1] -= f * du[i];
-            b[i + 1] -= f * b[i];
-            dl[i] = 0.0;
-        } else {
-            // Swap rows i and i + 1.
-            let f = d[i] / dl[i];
-            d[i] = dl[i];
-            let t = d[i + 1];
-            d[i + 1] = du[i] - f * t;
-            du[i] = t;
-            if i + 2 < n {
-                du2[i] = du[i + 1];
-                du[i + 1] *= -f;
-            }
-            b.swap(i, i + 1);
-            b[i + 1] -= f * b[i];
         }
+        (n == 0 || (d[n - 1] != 0.0 && d.iter().all(|x| x.is_finite()))).then_some(GeneralTridiagonalFactor {
+            l,
+            d,
+            du,
+            du2,
+            swapped,
+        })
     }
-    if d[n - 1] == 0.0 || !d[n - 1].is_finite() {
-        return false;
+
+    /// Overwrite `b` with the solution; false if it is not finite.
+    pub fn solve(&self, b: &mut [f64]) -> bool {
+        let n = self.d.len();
+        for i in 0..n.saturating_sub(1) {
+            if self.swapped[i] {
+                b.swap(i, i + 1);
+            }
+            b[i + 1] -= self.l[i] * b[i];
+        }
+        for i in (0..n).rev() {
+            let mut x = b[i];
+            if i + 1 < n {
+                x -= self.du[i] * b[i + 1];
+            }
+            if i + 2 < n {
+                x -= self.du2[i] * b[i + 2];
+            }
+            b[i] = x / self.d[i];
+        }
+        b.iter().all(|x| x.is_finite())
     }
-    b[n - 1] /= d[n - 1];
-    if n > 1 {
-        b[n - 2] = (b[n - 2] - du[n - 2] * b[n - 1]) / d[n - 2];
-    }
-    for i in (0..n.saturating_sub(2)).rev() {
-        b[i] = (b[i] - du[i] * b[i + 1] - du2[i] * b[i + 2]) / d[i];
-    }
-    b.iter().all(|x| x.is_finite())
 }
 
 /// `pi` with `Delta_0 pi = omega` and `sum pi = 0`, for `sum omega = 0`: the
@@ -223,15 +264,7 @@ mod tests {
                     p[(j, j + m)] = 1.0;
                     let lp = laplacian_dense(n, &p);
                     for k in 0..n - m {
-                        let expect = if k == j {
-                            t.diag[j]
-                        } else if k + 1 == j {
-                            t.off[k]
-                        } else if j + 1 == k {
-                            t.off[j]
-                        } else {
-                            0.0
-                        };
+                        let expect = t.get(k, j);
                         assert!((lp[(k, k + m)] - expect).abs() < 1e-12, "n {n} m {m} j {j} k {k}");
                     }
                     // Nothing leaves the diagonal.
@@ -242,17 +275,7 @@ mod tests {
                         .sum();
                     assert!(off_diagonal < 1e-12);
                 }
-                let dense = DMatrix::from_fn(n - m, n - m, |i, j| {
-                    if i == j {
-                        t.diag[i]
-                    } else if i + 1 == j {
-                        t.off[i]
-                    } else if j + 1 == i {
-                        t.off[j]
-                    } else {
-                        0.0
-                    }
-                });
+                let dense = DMatrix::from_fn(n - m, n - m, |i, j| t.get(i, j));
                 let mut ev: Vec<f64> = SymmetricEigen::new(dense).eigenvalues.iter().copied().collect();
                 ev.sort_by(|a, b| b.total_cmp(a));
                 for (i, l) in (m..n).enumerate() {
@@ -281,7 +304,7 @@ mod tests {
                     + if i < 3 { sup[i] * x[i + 1] } else { 0.0 }
             })
             .collect();
-        assert!(solve_general(&sub, &diag, &sup, &mut b));
+        assert!(GeneralTridiagonalFactor::new(&sub, &diag, &sup).unwrap().solve(&mut b));
         assert!(x.iter().zip(&b).all(|(a, b)| (a - b).abs() < 1e-12), "{b:?}");
         // The zonal solve: Delta_0 pi = omega, mean zero.
         let omega: Vec<f64> = (0..6).map(|j| j as f64 - 2.5).collect();

@@ -276,3 +276,51 @@ fn with_the_energy_forced_sigma2_matches_the_dense_generator() {
     // number there is large: agreement to 1e-5 relative.
     assert!((top - sigma2).abs() <= 1e-5 * sigma2, "dense {top}, certified {sigma2}");
 }
+
+/// The problem is homogeneous (docs/zeitlin.md): `omega -> k omega` leaves
+/// `Sigma^2` alone and scales the drift's rates by `k`; `xi -> k xi` scales
+/// `Sigma^2` by `k^2`. Checked at factors across the double range (the
+/// answers must not move with how a user scales the state), and a `Sigma^2`
+/// beyond the double range is inconclusive, never stable.
+#[test]
+fn rescaling_the_state_or_the_noise_moves_nothing_but_the_units() {
+    let n = 8;
+    let forced = ZeitlinSettings { casimir_momentum: false, ..ZeitlinSettings::default() };
+    let omega = quantise(n, |z| z + 0.3 * z * z * z).diagonal;
+    let xi = quantise(n, |z| 0.2 * z * z).diagonal;
+    let run = |k_omega: f64, k_xi: f64, settings: &ZeitlinSettings, omega: &[f64]| {
+        let p = ZeitlinProblem {
+            n,
+            omega: omega.iter().map(|x| x * k_omega).collect(),
+            noise: vec![xi.iter().map(|x| x * k_xi).collect()],
+        };
+        analyse(&p, settings).unwrap()
+    };
+    let base = run(1.0, 1.0, &forced, &omega);
+    let s0 = base.sigma2.unwrap();
+    assert!(s0 > 0.0);
+    for k in [3.7e-300, 1.3e-6, 7.1e5, 2.9e300] {
+        let a = run(k, 1.0, &forced, &omega);
+        assert_eq!(a.verdict, Verdict::Stable, "omega x {k}: {}", a.reason);
+        let s = a.sigma2.unwrap();
+        assert!((s - s0).abs() <= 1e-6 * s0, "omega x {k}: {s} vs {s0}");
+    }
+    for k in [1e-100, 0.37, 45.0, 1e100] {
+        let a = run(1.0, k, &forced, &omega);
+        let s = a.sigma2.unwrap();
+        assert!((s - s0 * k * k).abs() <= 1e-6 * s0 * k * k, "xi x {k}: {s} vs {}", s0 * k * k);
+    }
+    // Sigma^2 about 1e600 * s0: not representable, so not stable.
+    let a = run(1.0, 1e300, &forced, &omega);
+    assert_eq!(a.verdict, Verdict::Inconclusive, "{}", a.reason);
+    assert_eq!(a.sigma2, None);
+    // The jet: the growth rate scales with omega, the verdict does not move.
+    let jet_omega = quantise(n, jet).diagonal;
+    let r0 = run(1.0, 1.0, &ZeitlinSettings::default(), &jet_omega).growth_rate.unwrap();
+    for k in [1e-200, 3.3, 1e200] {
+        let a = run(k, 1.0, &ZeitlinSettings::default(), &jet_omega);
+        assert_eq!(a.verdict, Verdict::LinearlyUnstable, "jet x {k}");
+        let r = a.growth_rate.unwrap();
+        assert!((r - r0 * k).abs() <= 1e-8 * r0 * k, "jet x {k}: {r} vs {}", r0 * k);
+    }
+}

@@ -159,27 +159,8 @@ pub(super) fn analyse_generator(
             };
         };
         let step = (hi_s - lo_s) / (scan - 1) as f64;
-        let (mut x0, mut x1) = ((best.0 - step).max(lo_s), (best.0 + step).min(hi_s));
-        let g = 0.5 * (5f64.sqrt() - 1.0);
-        let probe = |c: f64| f(c).unwrap_or(f64::INFINITY);
-        let (mut p, mut q) = (x1 - g * (x1 - x0), x0 + g * (x1 - x0));
-        let (mut fp, mut fq) = (probe(p), probe(q));
-        for _ in 0..12 {
-            if fp <= fq {
-                x1 = q;
-                q = p;
-                fq = fp;
-                p = x1 - g * (x1 - x0);
-                fp = probe(p);
-            } else {
-                x0 = p;
-                p = q;
-                fp = fq;
-                q = x0 + g * (x1 - x0);
-                fq = probe(q);
-            }
-        }
-        let (c, s) = if fp <= fq { (p, fp) } else { (q, fq) };
+        let (x0, x1) = ((best.0 - step).max(lo_s), (best.0 + step).min(hi_s));
+        let (c, s) = crate::minimise::golden_section(|c| f(c).unwrap_or(f64::INFINITY), x0, x1, 12);
         if s.is_finite() {
             curve.push((c, s));
         }
