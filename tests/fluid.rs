@@ -404,3 +404,56 @@ fn the_instability_search_refines_past_the_users_grid() {
     assert!((inst["k"].as_f64().unwrap() - 0.952).abs() < 1e-3);
     assert!((inst["growth_rate"].as_f64().unwrap() - 0.02189).abs() < 1e-5, "{inst}");
 }
+
+#[test]
+fn discrete_pseudomomentum_of_the_sine_channel_is_conserved_on_the_grid_but_has_no_continuum_limit() {
+    // U = sin y on (0, pi): U'' = -sin y vanishes only at the walls, which
+    // carry no unknowns. On the grid V = -diag(m_a / U''(y_a)) is definite;
+    // it is an exact invariant of the discretised drift (residual at
+    // rounding) and of every path of the discretised SDE (Q = 0).
+    for ny in [16, 32, 64] {
+        let p = sin_channel(ny, 1);
+        let grid = YGrid::new(Boundary::Walls, 0.0, PI, ny);
+        let coef = p.profile.coefficients(&grid);
+        assert!(coef.upp.iter().all(|u| *u < 0.0));
+        let form = Form { energy: 0.0, w: coef.upp.iter().map(|u| 1.0 / u).collect(), sign: fluid::Sign::Negative };
+        let mode = Mode::new(&grid, 1.0);
+        let residual = mode.drift_residual(&form, &coef).norm()
+            / (mode.form_matrix(&form).norm() * mode.drift_matrix(&coef).norm());
+        assert!(residual < 1e-14, "ny = {ny}: {residual}");
+        let sde = ModeSde::new(&grid, &coef, &form, 1.0);
+        let x0: Vec<f64> = grid.nodes().iter().map(|y| (2.0 * y).cos() + 0.3).collect();
+        let rows = sde.ensemble(&x0, 0.02, 50, 20, 100, 5).unwrap();
+        assert!(rows[0].max_path_drift < 1e-11, "ny = {ny}: {}", rows[0].max_path_drift);
+    }
+    // The engine reports it beside the headline energy–Casimir Sigma^2 (> 0).
+    let p = sin_channel(128, 2);
+    let settings = FluidSettings { convergence_from: 16, ..Default::default() };
+    let a = analyse(&p, &settings).unwrap();
+    assert_eq!(a.verdict, Verdict::Stable);
+    assert!(a.sigma2.unwrap() > 1e-3);
+    let d = fluid::analysis::discrete_pseudomomentum(&p, &settings).expect("U'' vanishes only at the walls");
+    assert_eq!(d.sign, fluid::Sign::Negative);
+    assert_eq!(d.rows.iter().map(|r| r.ny).collect::<Vec<_>>(), vec![16, 32, 64, 128]);
+    for w in d.rows.windows(2) {
+        // Near a wall the grid is self-similar under halving h: the largest
+        // entry m_a / sin(y_a) of V (next to the wall) is unchanged and the
+        // smallest (m_a ~ h in the middle) halves, so cond(V) doubles; the
+        // quadrature of int dy / sin y gains the new band [h/2, h] at each
+        // wall, ln 2 each, so norm_of_one grows by 2 ln 2 per doubling.
+        let ratio = w[1].condition_number / w[0].condition_number;
+        assert!((ratio - 2.0).abs() < 0.01, "{ratio}");
+        let step = w[1].norm_of_one - w[0].norm_of_one;
+        assert!((step - 2.0 * std::f64::consts::LN_2).abs() < 1e-3, "{step}");
+    }
+    // Profiles it does not apply to: U'' vanishing inside (cos y on (0, pi)),
+    // U'' of one sign on the closed interval (the continuum pseudomomentum is
+    // already the headline there), periodic.
+    for q in [
+        problem("cos(y)", &["0.3*cos(y)"], (0.0, PI), Boundary::Walls, 2.0 * PI, 64, 1),
+        problem("-cos(y)", &["0.3*sin(y)"], (-1.0, 1.0), Boundary::Walls, 2.0 * PI, 64, 1),
+        problem("sin(y)", &["0.3*cos(y)"], (0.0, 2.0 * PI), Boundary::Periodic, 2.0 * PI, 64, 1),
+    ] {
+        assert!(fluid::analysis::discrete_pseudomomentum(&q, &settings).is_none());
+    }
+}

@@ -24,9 +24,9 @@ use crate::document::{
 use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
 use crate::parse::Stopping;
 use crate::record::{
-    CompressibleRecord, ConvergenceRecord, DefectPoint, DiscreteSdeRecord, DiscretisationRecord, Engine, Float,
-    FluidCertificateDocument, FluidFormRecord, FluidOptimisationRecord, GeneratorRecord, LevelOrNone, ModeRecord,
-    PaperRecord, ShiftPoint, UnstableModeRecord,
+    CompressibleRecord, ConvergenceRecord, DefectPoint, DiscretePseudomomentumRecord, DiscreteSdeRecord,
+    DiscretisationRecord, Engine, Float, FluidCertificateDocument, FluidFormRecord, FluidOptimisationRecord,
+    GeneratorRecord, LevelOrNone, ModeRecord, PaperRecord, PseudomomentumRowRecord, ShiftPoint, UnstableModeRecord,
 };
 use fluid::analysis::{
     analyse, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
@@ -622,10 +622,29 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         choice: "energy + Casimir with Phi'' = U/U'' (no Galilean shift, c = 0), when that form is definite".into(),
     };
     let optimisation = FluidOptimisationRecord {
-        over: "the Galilean (momentum) multiplier c and the energy coefficient of e H + C_Phi + c M".into(),
+        over: "the Galilean (momentum) multiplier c and the energy coefficient e of e H + C_Phi + c M, with the Casimir weight Phi''(omega_e) = (e U + c)/U'' bounded on the closed interval (a form with a continuum limit)".into(),
         shift_curve: a.shift_curve.iter().map(|(c, s)| ShiftPoint { c: Float(*c), sigma2: Float(*s) }).collect(),
         infimum: opt(a.sigma2),
         attained_by: a.form.kind.to_string(),
+        discrete_pseudomomentum: (a.verdict == Verdict::Stable)
+            .then(|| fluid::analysis::discrete_pseudomomentum(p, &spec.settings))
+            .flatten()
+            .map(|d| DiscretePseudomomentumRecord {
+                meaning: format!(
+                    "U'' vanishes only at the walls (y = {}), which carry no unknowns, so on this grid V = diag(m_a / |U''(y_a)|) is definite and conserved by the discretised drift and by every noise field (Q = 0, Sigma^2 = 0 for the discretised linear SDE). It is not the headline: its weight 1/U'' is unbounded in the continuum, cond(V) grows with ny and the V-norm of a perturbation that does not vanish at a wall (norm_of_one, for omega = 1) grows without bound (docs/fluids.md §3, case 3)",
+                    d.zeros.iter().map(|z| format!("{z:.6}")).collect::<Vec<_>>().join(", ")
+                ),
+                sigma2: Float(0.0),
+                rows: d
+                    .rows
+                    .iter()
+                    .map(|r| PseudomomentumRowRecord {
+                        ny: r.ny as u64,
+                        condition_number: Float(r.condition_number),
+                        norm_of_one: Float(r.norm_of_one),
+                    })
+                    .collect(),
+            }),
     };
     let instability = a.instability.as_ref().map(|u| UnstableModeRecord {
         m: u.m as u64,

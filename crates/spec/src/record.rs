@@ -616,6 +616,35 @@ pub struct FluidOptimisationRecord {
     pub infimum: Option<Float>,
     /// The form that attains it.
     pub attained_by: String,
+    /// A form outside that family that gives `Sigma^2 = 0` on this grid but
+    /// has no continuum limit (`U''` vanishing only at the walls).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discrete_pseudomomentum: Option<DiscretePseudomomentumRecord>,
+}
+
+/// The discrete pseudomomentum `V = diag(m_a / |U''(y_a)|)`: conserved by the
+/// discretised linear SDE, degenerate under refinement.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DiscretePseudomomentumRecord {
+    /// What it is and why it is not the headline.
+    pub meaning: String,
+    /// Its `Sigma^2` (zero: `Q = 0`).
+    pub sigma2: Float,
+    /// Under refinement, coarsest first.
+    pub rows: Vec<PseudomomentumRowRecord>,
+}
+
+/// The discrete pseudomomentum at one resolution.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PseudomomentumRowRecord {
+    /// Resolution.
+    pub ny: u64,
+    /// `cond(V)`.
+    pub condition_number: Float,
+    /// `sum_a m_a / |U''(y_a)|`: the squared `V`-norm of `omega = 1`.
+    pub norm_of_one: Float,
 }
 
 /// The fastest-growing mode.

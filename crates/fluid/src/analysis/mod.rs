@@ -17,6 +17,7 @@ mod forms;
 mod generator;
 mod incompressible;
 mod instability;
+mod pseudomomentum;
 mod scaling;
 
 use compressible::*;
@@ -28,6 +29,7 @@ use scaling::*;
 
 pub use forms::chosen_form;
 pub use incompressible::prove_mode_bounds;
+pub use pseudomomentum::{discrete_pseudomomentum, DiscretePseudomomentum, PseudomomentumRow};
 
 /// Incompressible or compressible (barotropic, `rho_e = 1`).
 #[derive(Clone, Copy, Debug, PartialEq)]
