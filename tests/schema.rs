@@ -7,6 +7,7 @@
 //! invalid.
 
 use serde_json::{json, Value};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -29,6 +30,8 @@ fn committed_schemas_match_the_types() {
         ("fluid-spec", spec::document::fluid_spec_schema()),
         ("certificate", spec::record::certificate_schema()),
         ("fluid-certificate", spec::record::fluid_certificate_schema()),
+        ("zeitlin-spec", spec::document::zeitlin_spec_schema()),
+        ("zeitlin-certificate", spec::record::zeitlin_certificate_schema()),
     ];
     for (name, schema) in generated {
         // Not assert_eq: the two values are thousands of characters.
@@ -39,14 +42,42 @@ fn committed_schemas_match_the_types() {
     }
 }
 
+/// The kind of a spec: `spec` (finite-dimensional), `fluid-spec` or `zeitlin-spec`.
+fn kind(spec: &Value) -> &'static str {
+    if spec::is_fluid_spec(spec) {
+        "fluid-spec"
+    } else if spec::is_zeitlin_spec(spec) {
+        "zeitlin-spec"
+    } else {
+        "spec"
+    }
+}
+
+/// Reads a certificate into its typed document and writes it back (the
+/// error when it does not read).
+fn round_trip(kind: &str, v: &Value) -> Result<Value, spec::SpecError> {
+    Ok(match kind {
+        "fluid-spec" => serde_json::to_value(spec::document::from_value::<spec::record::FluidCertificateDocument>(v)?),
+        "zeitlin-spec" => {
+            serde_json::to_value(spec::document::from_value::<spec::record::ZeitlinCertificateDocument>(v)?)
+        }
+        _ => serde_json::to_value(spec::document::from_value::<spec::record::CertificateDocument>(v)?),
+    }
+    .unwrap())
+}
+
 /// Every committed certificate is valid against its certificate schema
 /// and reads into its typed document, which writes it back unchanged; an
 /// added field makes it invalid for both.
 #[test]
 fn fixture_certificates_match_the_certificate_types() {
-    let finite = jsonschema::validator_for(&committed("certificate.schema.json")).unwrap();
-    let fluid = jsonschema::validator_for(&committed("fluid-certificate.schema.json")).unwrap();
-    let (mut n_finite, mut n_fluid) = (0, 0);
+    let schema_of = |kind: &str| {
+        let name = kind.replace("spec", "certificate");
+        jsonschema::validator_for(&committed(&format!("{name}.schema.json"))).unwrap()
+    };
+    let validators: BTreeMap<&str, _> =
+        ["spec", "fluid-spec", "zeitlin-spec"].into_iter().map(|k| (k, schema_of(k))).collect();
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     let mut dirs = vec![root().join("fixtures")];
     while let Some(dir) = dirs.pop() {
         for entry in std::fs::read_dir(&dir).unwrap() {
@@ -59,32 +90,24 @@ fn fixture_certificates_match_the_certificate_types() {
                 continue;
             }
             let v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-            let is_fluid = spec::is_fluid_spec(&v["spec"]);
-            let schema = if is_fluid { &fluid } else { &finite };
+            let kind = kind(&v["spec"]);
+            *counts.entry(kind).or_default() += 1;
+            let schema = &validators[kind];
             let errors: Vec<String> = schema.iter_errors(&v).map(|e| e.to_string()).collect();
             assert!(errors.is_empty(), "{}: {errors:?}", path.display());
-            let back = if is_fluid {
-                n_fluid += 1;
-                let doc: spec::record::FluidCertificateDocument = spec::document::from_value(&v).unwrap();
-                serde_json::to_value(&doc).unwrap()
-            } else {
-                n_finite += 1;
-                let doc: spec::record::CertificateDocument = spec::document::from_value(&v).unwrap();
-                serde_json::to_value(&doc).unwrap()
-            };
-            assert_eq!(back, v, "{}", path.display());
+            assert_eq!(round_trip(kind, &v).unwrap(), v, "{}", path.display());
             let mut extra = v.clone();
             extra["growth_bonus"] = json!(1);
             assert!(!schema.is_valid(&extra));
-            let e = if is_fluid {
-                spec::document::from_value::<spec::record::FluidCertificateDocument>(&extra).unwrap_err()
-            } else {
-                spec::document::from_value::<spec::record::CertificateDocument>(&extra).unwrap_err()
-            };
-            assert_eq!(e.path, "$.growth_bonus");
+            assert_eq!(round_trip(kind, &extra).unwrap_err().path, "$.growth_bonus");
         }
     }
-    assert!(n_finite >= 5 && n_fluid >= 2, "{n_finite} finite, {n_fluid} fluid certificates");
+    assert!(
+        counts.get("spec") >= Some(&5)
+            && counts.get("fluid-spec") >= Some(&2)
+            && counts.get("zeitlin-spec") >= Some(&2),
+        "{counts:?}"
+    );
 }
 
 fn fixtures() -> Vec<(PathBuf, Value)> {
@@ -108,25 +131,28 @@ fn fixtures() -> Vec<(PathBuf, Value)> {
 
 #[test]
 fn every_fixture_is_valid_against_its_schema() {
-    let finite = jsonschema::validator_for(&committed("spec.schema.json")).unwrap();
-    let fluid = jsonschema::validator_for(&committed("fluid-spec.schema.json")).unwrap();
-    let all = fixtures();
-    let (mut n_finite, mut n_fluid) = (0, 0);
-    for (path, v) in &all {
-        let is_fluid = spec::is_fluid_spec(v);
-        let validator = if is_fluid { &fluid } else { &finite };
-        let errors: Vec<String> = validator.iter_errors(v).map(|e| e.to_string()).collect();
+    let kinds = ["spec", "fluid-spec", "zeitlin-spec"];
+    let validators: BTreeMap<&str, _> = kinds
+        .into_iter()
+        .map(|k| (k, jsonschema::validator_for(&committed(&format!("{k}.schema.json"))).unwrap()))
+        .collect();
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for (path, v) in &fixtures() {
+        let kind = kind(v);
+        let errors: Vec<String> = validators[kind].iter_errors(v).map(|e| e.to_string()).collect();
         assert!(errors.is_empty(), "{}: {errors:?}", path.display());
-        // Each fixture is valid for exactly one of the two schemas.
-        let other = if is_fluid { &finite } else { &fluid };
-        assert!(!other.is_valid(v), "{}", path.display());
-        if is_fluid {
-            n_fluid += 1
-        } else {
-            n_finite += 1
+        // Each fixture is valid for exactly one of the schemas.
+        for other in kinds.iter().filter(|k| **k != kind) {
+            assert!(!validators[other].is_valid(v), "{} is also a valid {other}", path.display());
         }
+        *counts.entry(kind).or_default() += 1;
     }
-    assert!(n_finite >= 5 && n_fluid >= 2, "{n_finite} finite, {n_fluid} fluid fixtures found");
+    assert!(
+        counts.get("spec") >= Some(&5)
+            && counts.get("fluid-spec") >= Some(&2)
+            && counts.get("zeitlin-spec") >= Some(&2),
+        "{counts:?}"
+    );
 }
 
 /// Structural mistakes: the engine refuses them as bad input (naming the

@@ -290,6 +290,8 @@ impl<T: Scalar> Scalar for Jet<T> {
 /// tape, folded to a number when its operands are numbers.
 struct Tape<'a> {
     params: &'a BTreeMap<String, f64>,
+    /// The name of the independent variable (`y` for shear flows).
+    variable: &'a str,
     nodes: Vec<Node>,
 }
 
@@ -307,7 +309,20 @@ struct Tape<'a> {
 /// assert!(parse("log(y)", &Default::default()).unwrap_err().message.contains("unknown function 'log'"));
 /// ```
 pub fn parse(text: &str, params: &BTreeMap<String, f64>) -> Result<Expr, ExprError> {
-    let mut tape = Tape { params, nodes: Vec::new() };
+    parse_in(text, "y", params)
+}
+
+/// Parse an expression in the variable `variable` (`z` for zonal profiles
+/// on the sphere); [`Expr::eval`] evaluates it there.
+///
+/// ```
+/// use fluid::expr::parse_in;
+/// let e = parse_in("z^3 - z/2", "z", &Default::default()).unwrap();
+/// assert_eq!(e.eval(0.5), 0.125 - 0.25);
+/// assert!(parse_in("y", "z", &Default::default()).unwrap_err().message.contains("unknown symbol 'y' (known: z, pi)"));
+/// ```
+pub fn parse_in(text: &str, variable: &str, params: &BTreeMap<String, f64>) -> Result<Expr, ExprError> {
+    let mut tape = Tape { params, variable, nodes: Vec::new() };
     let root = exact::syntax::parse(text, &mut tape, MAX_DEPTH, MAX_LENGTH)?;
     Ok(Expr { nodes: compact(tape.nodes, root) })
 }
@@ -415,13 +430,13 @@ impl Semantics for Tape<'_> {
 
     fn symbol(&mut self, name: &str, at: usize) -> Result<u32, ExprError> {
         match name {
-            "y" => Ok(self.push_raw(Node::Y)),
+            _ if name == self.variable => Ok(self.push_raw(Node::Y)),
             "pi" => Ok(self.push_raw(Node::Num(std::f64::consts::PI))),
             _ => match self.params.get(name) {
                 Some(v) => Ok(self.push_raw(Node::Num(*v))),
                 None => {
                     let known: Vec<&str> =
-                        ["y", "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
+                        [self.variable, "pi"].into_iter().chain(self.params.keys().map(String::as_str)).collect();
                     err(format!("unknown symbol '{}' (known: {})", exact::quote(name, 40), known.join(", ")), at)
                 }
             },

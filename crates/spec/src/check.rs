@@ -97,6 +97,15 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
             "fluid certificates need the `fluid` feature of the spec crate (on by default)",
         )));
     }
+    if map.get("spec").is_some_and(crate::is_zeitlin_spec) {
+        #[cfg(feature = "fluid")]
+        return crate::zeitlin::check_zeitlin_certificate(cert);
+        #[cfg(not(feature = "fluid"))]
+        return Err(CheckError::BadInput(SpecError::new(
+            "$.spec.zeitlin",
+            "Zeitlin certificates need the `fluid` feature of the spec crate (on by default)",
+        )));
+    }
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     check_engine(map)?;
     // The shape first: every field of the certificate type, no other.

@@ -739,6 +739,74 @@ pub struct FluidSettingsDoc {
     pub instability_ny: Option<Count>,
 }
 
+/// A Zeitlin spec: the stochastic su(N) Zeitlin model of 2D Euler on the
+/// sphere about a zonal equilibrium (docs/zeitlin.md). Required: `name`,
+/// `zeitlin`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: spec of a stochastic Zeitlin model")]
+pub struct ZeitlinSpecDocument {
+    /// The schema this file follows, for editors (`"$schema":
+    /// "./schema/zeitlin-spec.schema.json"`); ignored by the engine.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
+    /// A non-empty name.
+    pub name: String,
+    /// Free text, ignored by the engine.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Named constants (expressions evaluated in name order, each may use
+    /// the ones before it).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, Expression>,
+    /// The model.
+    #[serde(deserialize_with = "objects::object")]
+    pub zeitlin: ZeitlinDoc,
+    /// The stopping question.
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
+    pub stopping: Option<StoppingDoc>,
+    /// Numerical settings; absent keys take their defaults.
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
+    pub settings: Option<ZeitlinSettingsDoc>,
+    /// Sweep annotations.
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
+    pub sweep: Option<SweepDoc>,
+}
+
+/// The Zeitlin model: `N`, the zonal equilibrium and the zonal noise.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinDoc {
+    /// The matrix size `N` (2 to 4096): `W` in su(N), dimension `N^2 - 1`.
+    #[serde(rename = "N")]
+    pub n: Count,
+    /// The zonal vorticity `omega(z)`, `z = cos(colatitude)` in `[-1, 1]`,
+    /// quantised as quflow does (`W_e = sum_l a_l T_l0`, `a_l` its Legendre
+    /// coefficients up to `l = N - 1`; the mean `a_0` is dropped: `W` is
+    /// trace-free).
+    pub equilibrium: Expression,
+    /// Zonal noise stream functions `xi_i(z)` (at most 256), quantised the
+    /// same way: `X_i = sum_l b_l T_l0`.
+    pub noise: Vec<Expression>,
+}
+
+/// Numerical settings of a Zeitlin spec.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinSettingsDoc {
+    /// Relative accuracy of each block's `lambda_max` (Lanczos), 1e-14 to 1e-3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<Real>,
+    /// Whether the Casimir–momentum form alone (no energy) may be chosen
+    /// (default true); false keeps the paper's `±H + C + beta J`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub casimir_momentum: Option<bool>,
+    /// Largest `N` for which, without a definite form, the drift's
+    /// eigenvalues are computed densely per block (2 to 512).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instability_max_n: Option<Count>,
+}
+
 /// Deserialise a document from a JSON value, naming the JSON path of the
 /// first error (`$.noise[0][1]`) in the engine's words.
 ///
@@ -872,6 +940,11 @@ pub fn spec_schema() -> Value {
 /// (committed as `schema/fluid-spec.schema.json`).
 pub fn fluid_spec_schema() -> Value {
     serde_json::to_value(schemars::schema_for!(FluidSpecDocument)).unwrap_or(Value::Null)
+}
+
+/// The JSON Schema of a Zeitlin spec.
+pub fn zeitlin_spec_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(ZeitlinSpecDocument)).unwrap_or(Value::Null)
 }
 
 #[cfg(test)]

@@ -52,6 +52,8 @@ mod pretty;
 pub mod record;
 mod settings;
 mod sweep;
+#[cfg(feature = "fluid")]
+mod zeitlin;
 
 pub use certificate::{
     certificate_json, certify, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
@@ -63,6 +65,17 @@ pub use fluid::{
     certify_fluid, certify_fluid_spec, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value,
     parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
+
+#[cfg(feature = "fluid")]
+pub use zeitlin::{
+    certify_zeitlin, check_zeitlin_certificate, parse_zeitlin_spec, zeitlin_certificate_document,
+    zeitlin_spec_from_value, ZeitlinSpec, N_RANGE, ZEITLIN_TOLERANCE,
+};
+
+/// Whether a spec value is a Zeitlin spec (has a `zeitlin` object at the top).
+pub fn is_zeitlin_spec(v: &serde_json::Value) -> bool {
+    v.get("zeitlin").is_some()
+}
 
 /// Whether a spec value is a fluid spec (has a `fluid` object at the top).
 pub fn is_fluid_spec(v: &serde_json::Value) -> bool {
@@ -91,6 +104,9 @@ pub enum AnySpec {
     /// A fluid.
     #[cfg(feature = "fluid")]
     Fluid(Box<FluidSpec>),
+    /// The stochastic Zeitlin model on the sphere.
+    #[cfg(feature = "fluid")]
+    Zeitlin(Box<ZeitlinSpec>),
 }
 
 impl AnySpec {
@@ -100,6 +116,8 @@ impl AnySpec {
             AnySpec::Lie(s) => &s.name,
             #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => &s.name,
+            #[cfg(feature = "fluid")]
+            AnySpec::Zeitlin(s) => &s.name,
         }
     }
 
@@ -109,6 +127,8 @@ impl AnySpec {
             AnySpec::Lie(s) => &s.sweep,
             #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => &s.sweep,
+            #[cfg(feature = "fluid")]
+            AnySpec::Zeitlin(s) => &s.sweep,
         }
     }
 
@@ -118,8 +138,8 @@ impl AnySpec {
         match self {
             AnySpec::Lie(s) => s.parameters.clone(),
             #[cfg(feature = "fluid")]
-            AnySpec::Fluid(s) => s
-                .raw
+            AnySpec::Fluid(_) | AnySpec::Zeitlin(_) => self
+                .raw()
                 .get("parameters")
                 .and_then(serde_json::Value::as_object)
                 .map(|m| {
@@ -148,6 +168,8 @@ impl AnySpec {
             AnySpec::Lie(s) => &s.raw,
             #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => &s.raw,
+            #[cfg(feature = "fluid")]
+            AnySpec::Zeitlin(s) => &s.raw,
         }
     }
 
@@ -157,6 +179,8 @@ impl AnySpec {
             AnySpec::Lie(s) => certify(s).json,
             #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => certify_fluid(s),
+            #[cfg(feature = "fluid")]
+            AnySpec::Zeitlin(s) => certify_zeitlin(s),
         }
     }
 }
@@ -176,6 +200,14 @@ pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
         return fluid_spec_from_value(value).map(|s| AnySpec::Fluid(Box::new(s)));
         #[cfg(not(feature = "fluid"))]
         return Err(fluid_unavailable());
+    } else if is_zeitlin_spec(&value) {
+        #[cfg(feature = "fluid")]
+        return zeitlin_spec_from_value(value).map(|s| AnySpec::Zeitlin(Box::new(s)));
+        #[cfg(not(feature = "fluid"))]
+        return Err(SpecError::new(
+            "$.zeitlin",
+            "Zeitlin specs need the `fluid` feature of the spec crate (on by default)",
+        ));
     } else {
         spec_from_value(value).map(|s| AnySpec::Lie(Box::new(s)))
     }

@@ -747,3 +747,120 @@ pub struct DefectPoint {
 pub fn fluid_certificate_schema() -> Value {
     serde_json::to_value(schemars::schema_for!(FluidCertificateDocument)).unwrap_or(Value::Null)
 }
+
+/// A Zeitlin certificate (`kind: "zeitlin"`): the stochastic su(N) model
+/// about a zonal equilibrium (docs/zeitlin.md).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: certificate of a stochastic Zeitlin model")]
+pub struct ZeitlinCertificateDocument {
+    /// Format version ([`crate::CERTIFICATE_VERSION`]).
+    pub certificate_version: u64,
+    /// The engine that wrote it.
+    pub engine: Engine,
+    /// The spec's name.
+    pub name: String,
+    /// `zeitlin`.
+    pub kind: String,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Why, in a sentence.
+    pub reason: String,
+    /// What the verdict rests on (`none`: no claim).
+    pub level: LevelOrNone,
+    /// What each part rests on.
+    pub checks: BTreeMap<String, String>,
+    /// `Sigma^2 = max(0, max_m lambda_max(Q_m, P_m))` at the chosen form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2: Option<Float>,
+    /// The stopping-time bound from `sigma2`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopping: Option<StoppingRecord>,
+    /// SHA-256 of the embedded spec's compact JSON.
+    pub spec_sha256: String,
+    /// The model and its conventions.
+    pub model: ZeitlinModelRecord,
+    /// The conserved functional, when one is definite.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub form: Option<ZeitlinFormRecord>,
+    /// `lambda_max(Q_m, P_m)` per off-diagonal block `m = 1..N-1`, when
+    /// stable with a Lanczos `Sigma^2` (empty under exact structure: `Q = 0`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub blocks: Vec<ZeitlinBlockRecord>,
+    /// `|[P_e, W_e]| / hbar`, `max_i |[X_i, W_e]| / hbar` and the largest
+    /// relative `|sym(P A)|` on random probes.
+    pub residuals: ZeitlinResidualsRecord,
+    /// The fastest growth rate `max Re lambda(A)` over the blocks, when the
+    /// drift's spectrum was computed (no definite form).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth_rate: Option<Float>,
+    /// The settings in force (all of them).
+    pub settings: crate::document::ZeitlinSettingsDoc,
+    /// The spec exactly as given.
+    pub spec: Value,
+}
+
+/// The Zeitlin model's conventions.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinModelRecord {
+    /// `N`.
+    #[serde(rename = "N")]
+    pub n: u64,
+    /// `N^2 - 1`, the dimension of su(N).
+    pub dimension: u64,
+    /// `hbar = 2 / sqrt(N^2 - 1)`.
+    pub hbar: Float,
+    /// The equations, in words.
+    pub formulation: String,
+    /// How the zonal functions become matrices.
+    pub quantisation: String,
+    /// The Legendre coefficients `a_1..a_L` of the equilibrium (quflow's
+    /// normalisation), up to the last nonzero one and at most 64 of them.
+    pub equilibrium_coefficients: Vec<Float>,
+}
+
+/// The conserved functional `eps H + C_Phi + beta J`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinFormRecord {
+    /// What the family is and what was searched.
+    pub family: String,
+    /// The energy coefficient `eps` (`+1`, `-1` or `0`).
+    pub energy_coefficient: Float,
+    /// The momentum coefficient `beta`.
+    pub momentum_coefficient: Float,
+    /// `Phi''` where it is free (repeated eigenvalues, the diagonal block).
+    pub free_curvature: Float,
+    /// Whether the minimum of `Sigma^2` over the family is attained (false
+    /// when approached at the edge of the definite arc).
+    pub attained: bool,
+}
+
+/// One off-diagonal block.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinBlockRecord {
+    /// The diagonal `m`.
+    pub m: u64,
+    /// `lambda_max(Q_m, P_m)` (Lanczos; not floored).
+    pub lambda_max: Float,
+}
+
+/// The residuals of a Zeitlin analysis.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinResidualsRecord {
+    /// `|[P_e, W_e]| / hbar` (zero: both diagonal).
+    pub equilibrium: Float,
+    /// `max_i |[X_i, W_e]| / hbar` (zero: both diagonal).
+    pub noise: Float,
+    /// The largest relative `|sym(P A)|` on random probes (zero up to
+    /// rounding for a conserved form).
+    pub drift: Float,
+}
+
+/// The JSON Schema of a Zeitlin certificate.
+pub fn zeitlin_certificate_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(ZeitlinCertificateDocument)).unwrap_or(Value::Null)
+}

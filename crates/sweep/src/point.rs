@@ -132,8 +132,8 @@ impl Evaluator {
     ///
     /// Finite-dimensional specs take a short path: the system is rebuilt
     /// from the expressions read once ([`spec::Spec::system_with`]) and the
-    /// record comes straight from the analysis. Fluid specs are re-read from
-    /// their JSON and certified whole.
+    /// record comes straight from the analysis. Fluid and Zeitlin specs are
+    /// re-read from their JSON and certified whole.
     pub fn evaluate(&self, values: &[Rational]) -> Outcome {
         match &self.spec {
             AnySpec::Lie(s) => {
@@ -171,6 +171,16 @@ impl Evaluator {
                     Err(e) => Outcome::invalid(e),
                 }
             }
+            AnySpec::Zeitlin(s) => {
+                let mut raw = s.raw.clone();
+                for (n, v) in self.names.iter().zip(values) {
+                    raw["parameters"][n.as_str()] = Value::String(v.to_string());
+                }
+                match spec::zeitlin_spec_from_value(raw) {
+                    Ok(z) => outcome_from_certificate(&spec::certify_zeitlin(&z)),
+                    Err(e) => Outcome::invalid(e),
+                }
+            }
         }
     }
 }
@@ -194,7 +204,8 @@ pub fn outcome_from_certificate(cert: &Value) -> Outcome {
     };
     let growth_rate = cert
         .get("instability")
-        .and_then(|i| i.get("growth_rate").and_then(number).or_else(|| i["eigenvalue"].get("re").and_then(number)));
+        .and_then(|i| i.get("growth_rate").and_then(number).or_else(|| i["eigenvalue"].get("re").and_then(number)))
+        .or_else(|| cert.get("growth_rate").and_then(number)); // Zeitlin certificates
     Outcome { verdict, level, sigma2, stopping_time, growth_rate, error: None }
 }
 

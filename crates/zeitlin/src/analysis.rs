@@ -378,6 +378,10 @@ pub fn analyse(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> Result<Z
         c.momentum *= s_omega;
     }
     a.growth_rate = a.growth_rate.map(|r| r * s_omega);
+    if let (Verdict::LinearlyUnstable, Some(rate)) = (a.verdict, a.growth_rate) {
+        // The reason was written in the normalised units.
+        a.reason = unstable_reason(rate);
+    }
     if let Some(s) = a.sigma2 {
         let s = s * k2;
         if !s.is_finite() || (s > 0.0 && s < f64::MIN_POSITIVE) {
@@ -391,6 +395,10 @@ pub fn analyse(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> Result<Z
         }
     }
     Ok(a)
+}
+
+fn unstable_reason(rate: f64) -> String {
+    format!("no energy–Casimir–momentum form is definite, and the drift has an eigenvalue with real part {rate:.6e}")
 }
 
 fn validate(problem: &ZeitlinProblem) -> Result<(), ZeitlinError> {
@@ -487,8 +495,13 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
     let allowed = |eps: f64, b: f64| -> bool {
         constraints.iter().all(|(dp, mu)| (eps * dp + b * mu).abs() <= 1e-9 * (eps.abs() * dp.abs() + b.abs() * mu))
     };
-    let definite =
-        |eps: f64, b: f64| -> bool { allowed(eps, b) && blocks.par_iter().all(|blk| blk.definite(&choice_at(eps, b))) };
+    // The choice is formed once (c_scale is a pass over every block), not per block.
+    let definite = |eps: f64, b: f64| -> bool {
+        allowed(eps, b) && {
+            let choice = choice_at(eps, b);
+            blocks.par_iter().all(|blk| blk.definite(&choice))
+        }
+    };
     // min_m lambda_min(P_m(b)) / scale: concave in b (P is affine in b).
     let margin = |eps: f64, b: f64| -> f64 {
         let choice = choice_at(eps, b);
@@ -569,7 +582,7 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
             analysis.growth_rate = Some(rate);
             if rate > 1e-6 * scale.max(f64::MIN_POSITIVE) {
                 analysis.verdict = Verdict::LinearlyUnstable;
-                analysis.reason = format!("no energy–Casimir–momentum form is definite, and the drift has an eigenvalue with real part {rate:.6e}");
+                analysis.reason = unstable_reason(rate);
                 return Ok(analysis);
             }
             analysis.reason = "no energy–Casimir–momentum form is definite, and every eigenvalue of the drift is on the imaginary axis (to the tolerance): spectrally stable only".into();

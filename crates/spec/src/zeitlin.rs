@@ -1,0 +1,372 @@
+//! The Zeitlin contract: a spec of the stochastic su(N) Zeitlin model about
+//! a zonal equilibrium (`"zeitlin": {...}`), its certificate, and the
+//! re-check (docs/zeitlin.md).
+//!
+//! ```
+//! let text = r#"{"name": "monotone", "zeitlin": {"N": 32, "equilibrium": "z + 0.3*z^3", "noise": ["0.1*z^2"]},
+//!                "stopping": {"epsilon": 0.1, "delta": 0.001}}"#;
+//! let spec = spec::parse_zeitlin_spec(text).unwrap();
+//! let cert = spec::certify_zeitlin(&spec);
+//! assert_eq!(cert["verdict"], "stable");
+//! assert_eq!(cert["sigma2"], 0.0); // the Casimir–momentum form is conserved pathwise
+//! assert_eq!(cert["level"], "exact_structure");
+//! assert_eq!(cert["stopping"]["T"], "infinity");
+//! assert_eq!(spec::check_zeitlin_certificate(&cert).unwrap().verdict, spec::Verdict::Stable);
+//! ```
+
+use crate::certificate::{spec_digest, stopping_record, CERTIFICATE_VERSION, ENGINE_VERSION};
+use crate::check::{compare_with, fail, CheckError, CheckReport};
+use crate::document::{Count, Expression, Real, ZeitlinSettingsDoc, ZeitlinSpecDocument};
+use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
+use crate::parse::Stopping;
+use crate::record::{
+    Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinFormRecord, ZeitlinModelRecord,
+    ZeitlinResidualsRecord,
+};
+use outcome::{Verdict, VerificationLevel};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use zeitlin::analysis::{analyse, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
+use zeitlin::zonal::quantise;
+
+/// Smallest and largest accepted `N`.
+pub const N_RANGE: (usize, usize) = (2, 4096);
+
+/// Relative tolerance when re-checking the floating-point fields of a
+/// Zeitlin certificate (Lanczos values, the momentum coefficient found by
+/// golden section): the computation is deterministic, so this only absorbs
+/// another CPU's rounding.
+pub const ZEITLIN_TOLERANCE: f64 = 1e-9;
+
+/// Most Legendre coefficients of the equilibrium that a certificate lists.
+const LISTED_COEFFICIENTS: usize = 64;
+
+/// A parsed Zeitlin spec.
+#[derive(Clone, Debug)]
+pub struct ZeitlinSpec {
+    /// `name`.
+    pub name: String,
+    /// The spec as given.
+    pub raw: Value,
+    /// The problem: `N`, the quantised equilibrium and noise.
+    pub problem: ZeitlinProblem,
+    /// The equilibrium's Legendre coefficients `a_0..a_{N-1}` (quflow's
+    /// normalisation; `a_0` is dropped from the matrix).
+    pub coefficients: Vec<f64>,
+    /// The stopping question.
+    pub stopping: Option<Stopping>,
+    /// Numerical settings.
+    pub settings: ZeitlinSettings,
+    /// The optional `sweep` section.
+    pub sweep: crate::sweep::SweepSection,
+}
+
+/// Parse a Zeitlin spec from text.
+pub fn parse_zeitlin_spec(text: &str) -> Result<ZeitlinSpec> {
+    let value: Value = crate::json::parse_json(text)?;
+    zeitlin_spec_from_value(value)
+}
+
+fn constant(e: &Expression, path: &str, params: &BTreeMap<String, f64>) -> Result<f64> {
+    let text = &e.0;
+    let parsed = fluid::expr::parse_in(text, "z", params)
+        .map_err(|err| SpecError::new(path, format!("in '{}': {err}", exact::quote(text, 60))))?;
+    let x = parsed.constant().ok_or_else(|| SpecError::new(path, "must be a constant (it may not depend on z)"))?;
+    if !x.is_finite() {
+        return Err(SpecError::new(path, format!("is not finite ({x})")));
+    }
+    Ok(x)
+}
+
+/// Quantise the zonal function at `path` on `N`: `(diagonal, coefficients)`.
+fn zonal(e: &Expression, path: &str, n: usize, params: &BTreeMap<String, f64>) -> Result<(Vec<f64>, Vec<f64>)> {
+    let text = &e.0;
+    let f = fluid::expr::parse_in(text, "z", params)
+        .map_err(|err| SpecError::new(path, format!("in '{}': {err}", exact::quote(text, 60))))?;
+    // A singular profile must not slip between the quadrature nodes: it is
+    // evaluated on a fine uniform sample of the closed interval as well.
+    const SAMPLES: usize = 4097;
+    if let Some(z) =
+        (0..SAMPLES).map(|i| -1.0 + 2.0 * i as f64 / (SAMPLES - 1) as f64).find(|z| !f.eval(*z).is_finite())
+    {
+        return Err(SpecError::new(path, format!("is not finite at z = {z} (it must be finite on [-1, 1])")));
+    }
+    let q = quantise(n, |z| f.eval(z));
+    if let Some(l) = q.coefficients.iter().position(|x| !x.is_finite()) {
+        return Err(SpecError::new(
+            path,
+            format!("is not finite on [-1, 1]: its Legendre coefficient a_{l} is {} (a singularity, or values beyond the range of doubles, at a quadrature node)", q.coefficients[l]),
+        ));
+    }
+    if q.diagonal.iter().any(|x| !x.is_finite()) {
+        return Err(SpecError::new(path, "its quantised matrix overflows the range of doubles: rescale it"));
+    }
+    Ok((q.diagonal, q.coefficients))
+}
+
+/// Parse a Zeitlin spec from a JSON value.
+pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
+    let root = "$";
+    if !value.is_object() {
+        return Err(SpecError::new(root, format!("expected an object, found {}", type_name(&value))));
+    }
+    let doc: ZeitlinSpecDocument = crate::document::from_value(&value)?;
+    let name = doc.name.clone();
+    if name.trim().is_empty() {
+        return Err(SpecError::new(child(root, "name"), "must not be empty"));
+    }
+    let mut params = BTreeMap::new();
+    let ppath = child(root, "parameters");
+    for (key, v) in &doc.parameters {
+        let kpath = child(&ppath, key);
+        let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !valid || ["z", "pi", "sin", "cos", "exp", "sqrt"].contains(&key.as_str()) {
+            return Err(SpecError::new(
+                kpath,
+                format!(
+                    "'{}' is not a valid parameter name (letters, digits, '_'; not z, pi or a function)",
+                    exact::quote(key, 40)
+                ),
+            ));
+        }
+        let x = constant(v, &kpath, &params)?;
+        params.insert(key.clone(), x);
+    }
+    let zpath = child(root, "zeitlin");
+    let z = &doc.zeitlin;
+    let npath = child(&zpath, "N");
+    let n = usize::try_from(z.n.0).map_err(|_| SpecError::new(&npath, "too large"))?;
+    if !(N_RANGE.0..=N_RANGE.1).contains(&n) {
+        return Err(SpecError::new(npath, format!("must be between {} and {}, got {n}", N_RANGE.0, N_RANGE.1)));
+    }
+    let (omega, coefficients) = zonal(&z.equilibrium, &child(&zpath, "equilibrium"), n, &params)?;
+    let noise_path = child(&zpath, "noise");
+    if z.noise.len() > crate::parse::MAX_NOISE_FIELDS {
+        return Err(SpecError::new(
+            &noise_path,
+            format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
+        ));
+    }
+    let noise = z
+        .noise
+        .iter()
+        .enumerate()
+        .map(|(i, e)| zonal(e, &index(&noise_path, i), n, &params).map(|(d, _)| d))
+        .collect::<Result<Vec<_>>>()?;
+    let stopping =
+        doc.stopping.as_ref().map(|s| crate::parse::read_stopping(s, &child(root, "stopping"))).transpose()?;
+    let settings = match &doc.settings {
+        Some(s) => read_settings(s, &child(root, "settings"))?,
+        None => ZeitlinSettings::default(),
+    };
+    let names: Vec<String> = params.keys().cloned().collect();
+    let sweep = crate::sweep::read_sweep_section(doc.sweep.as_ref(), &child(root, "sweep"), &names)?;
+    Ok(ZeitlinSpec {
+        name,
+        raw: value,
+        problem: ZeitlinProblem { n, omega, noise },
+        coefficients,
+        stopping,
+        settings,
+        sweep,
+    })
+}
+
+fn read_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<ZeitlinSettings> {
+    let mut s = ZeitlinSettings::default();
+    if let Some(Real(x)) = doc.tolerance {
+        if !(1e-14..=1e-3).contains(&x) {
+            return Err(SpecError::new(child(path, "tolerance"), format!("must be between 1e-14 and 1e-3, got {x}")));
+        }
+        s.tolerance = x;
+    }
+    if let Some(b) = doc.casimir_momentum {
+        s.casimir_momentum = b;
+    }
+    if let Some(Count(m)) = doc.instability_max_n {
+        let p = child(path, "instability_max_n");
+        if !(2..=512).contains(&m) {
+            return Err(SpecError::new(p, format!("must be between 2 and 512, got {m}")));
+        }
+        s.instability_max_n = m as usize;
+    }
+    Ok(s)
+}
+
+/// The settings as the certificate records them (all keys).
+fn settings_document(s: &ZeitlinSettings) -> ZeitlinSettingsDoc {
+    ZeitlinSettingsDoc {
+        tolerance: Some(Real(s.tolerance)),
+        casimir_momentum: Some(s.casimir_momentum),
+        instability_max_n: Some(Count(s.instability_max_n as u64)),
+    }
+}
+
+/// Run the Zeitlin pipeline and build the certificate JSON.
+pub fn certify_zeitlin(spec: &ZeitlinSpec) -> Value {
+    let analysis = analyse(&spec.problem, &spec.settings);
+    serde_json::to_value(zeitlin_certificate_document(spec, &analysis)).unwrap_or_default()
+}
+
+/// The typed certificate of a Zeitlin spec from its analysis (an analysis
+/// error gives an `inconclusive` certificate that says why).
+pub fn zeitlin_certificate_document(
+    spec: &ZeitlinSpec,
+    analysis: &std::result::Result<ZeitlinAnalysis, ZeitlinError>,
+) -> ZeitlinCertificateDocument {
+    let n = spec.problem.n;
+    let scale = spec.coefficients.iter().skip(1).fold(0.0f64, |m, x| m.max(x.abs()));
+    let last = spec.coefficients.iter().rposition(|x| x.abs() > 1e-14 * scale).unwrap_or(0);
+    let model = ZeitlinModelRecord {
+        n: n as u64,
+        dimension: (n * n - 1) as u64,
+        hbar: Float(hbar(n)),
+        formulation: "dW = [P, W]/hbar dt + sum_i [X_i, W]/hbar o dB^i, Delta_N P = W (Hoppe–Yau Laplacian, eigenvalues -l(l+1)), hbar = 2/sqrt(N^2 - 1), <A, B> = Re tr(A B*)/N; W_e = i diag(omega) zonal, X_i = i diag(xi_i) zonal; a perturbation splits by its off-diagonal m = 1..N-1 into independent blocks".into(),
+        quantisation: "quflow's: a_l = 1/2 int_{-1}^{1} f(z) sqrt(2l+1) P_l(z) dz by Gauss–Legendre on 2N + 32 nodes, W = sum_{l=1}^{N-1} a_l T_l0, T_l0 = i sqrt(N) diag(u_l) with u_l the l-th eigenvector of the zonal Laplacian block (last entry positive); a_0 (the mean) is dropped".into(),
+        equilibrium_coefficients: spec.coefficients.iter().take(last + 1).skip(1).take(LISTED_COEFFICIENTS).map(|x| Float(*x)).collect(),
+    };
+    let mut doc = ZeitlinCertificateDocument {
+        certificate_version: CERTIFICATE_VERSION,
+        engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
+        name: spec.name.clone(),
+        kind: "zeitlin".into(),
+        verdict: Verdict::Inconclusive,
+        reason: String::new(),
+        level: LevelOrNone(None),
+        checks: BTreeMap::new(),
+        sigma2: None,
+        stopping: None,
+        spec_sha256: spec_digest(&spec.raw),
+        model,
+        form: None,
+        blocks: vec![],
+        residuals: ZeitlinResidualsRecord { equilibrium: Float(0.0), noise: Float(0.0), drift: Float(0.0) },
+        growth_rate: None,
+        settings: settings_document(&spec.settings),
+        spec: spec.raw.clone(),
+    };
+    let a = match analysis {
+        Ok(a) => a,
+        Err(e) => {
+            doc.reason = format!("the analysis could not run: {e}");
+            return doc;
+        }
+    };
+    doc.verdict = a.verdict;
+    doc.reason = a.reason.clone();
+    doc.residuals = ZeitlinResidualsRecord {
+        equilibrium: Float(a.equilibrium_residual),
+        noise: Float(a.noise_residual),
+        drift: Float(a.drift_residual),
+    };
+    doc.growth_rate = a.growth_rate.map(Float);
+    let mut checks = BTreeMap::new();
+    checks.insert(
+        "equilibrium".to_string(),
+        "W_e and P_e = Delta_N^-1 W_e are diagonal, so [P_e, W_e] = 0; zonal noise commutes with W_e: compatible"
+            .to_string(),
+    );
+    checks.insert(
+        "discretisation".to_string(),
+        "the claims are about the Zeitlin model at this N (a finite-dimensional Lie–Poisson system in its own right), not about the continuum Euler equations".to_string(),
+    );
+    match a.verdict {
+        Verdict::Stable => {
+            let choice = a.choice.as_ref();
+            let exact_structure = choice.is_some_and(|c| c.energy == 0.0);
+            // Q = 0 identically for the Casimir–momentum form (diagonal P
+            // commutes with diagonal noise) and P's definiteness is verified:
+            // Sigma^2 = 0 follows from the structure. Otherwise Sigma^2 is a
+            // Lanczos value, a lower estimate.
+            let level = if exact_structure { VerificationLevel::ExactStructure } else { a.level };
+            doc.level = LevelOrNone(Some(level));
+            checks.insert(
+                "form".to_string(),
+                "P_m = eps G_m + D_c (G_m = -Delta_m^-1) is shown definite per block by a verified (rounding-aware) Cholesky of the pentadiagonal Delta_m P_m Delta_m".to_string(),
+            );
+            checks.insert(
+                "sigma2".to_string(),
+                if exact_structure {
+                    "exact structure: the Casimir–momentum form is diagonal in every block and the noise is diagonal, so Q = 0 identically and Sigma^2 = 0".to_string()
+                } else {
+                    "numerical: per block, lambda_max(Q_m, P_m) by Lanczos (a Ritz value, a lower estimate, not a proved bound); Sigma^2 is the largest over the blocks".to_string()
+                },
+            );
+            doc.sigma2 = a.sigma2.map(Float);
+            let bound = if exact_structure {
+                "P(|dW_t|_P^2 > epsilon) <= delta/epsilon for all t when |dW_0|_P^2 = delta (Sigma^2 = 0: the form is conserved along every path)"
+            } else {
+                "P(|dW_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dW_0|_P^2 = delta, with the Lanczos Sigma^2: an estimate, not a guarantee (Sigma^2 is not proved)"
+            };
+            doc.stopping = stopping_record(spec.stopping, a.sigma2, bound);
+            doc.form = choice.map(|c| ZeitlinFormRecord {
+                family: format!(
+                    "eps H + tr Phi(W)/N + beta J with eps in {{{}}} (P is defined up to a positive factor), beta by golden section on the definite interval, Phi'' fixed by the first variation on distinct eigenvalues of W_e",
+                    if spec.settings.casimir_momentum { "0, +1, -1; eps = 0 first" } else { "+1, -1" }
+                ),
+                energy_coefficient: Float(c.energy),
+                momentum_coefficient: Float(c.momentum),
+                free_curvature: Float(c.free_curvature),
+                attained: a.attained,
+            });
+            // Under exact structure every block's lambda_max is 0 by Q = 0:
+            // nothing to list (N - 1 zeros at N = 2048).
+            if !exact_structure {
+                doc.blocks = a
+                    .blocks
+                    .iter()
+                    .map(|b| ZeitlinBlockRecord { m: b.m as u64, lambda_max: Float(b.lambda_max) })
+                    .collect();
+            }
+        }
+        Verdict::LinearlyUnstable => {
+            doc.level = LevelOrNone(Some(a.level));
+            checks.insert(
+                "instability".to_string(),
+                "numerical: the eigenvalues of each block's drift (i/hbar)(D_dpi + D_domega G_m), dense, and the largest real part exceeds 1e-6 of the drift's scale".to_string(),
+            );
+        }
+        _ => {}
+    }
+    doc.checks = checks;
+    doc
+}
+
+/// Re-check a Zeitlin certificate: its shape, the embedded spec and
+/// settings, the digest, then re-derivation and comparison (floating-point
+/// fields to [`ZEITLIN_TOLERANCE`]).
+pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+    let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
+    let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
+    crate::check::check_engine(map)?;
+    crate::document::from_value::<ZeitlinCertificateDocument>(cert)
+        .map_err(|e| fail(&e.path, format!("not a certificate as this engine writes them: {}", e.message)))?;
+    let mut spec = zeitlin_spec_from_value(spec_value).map_err(|e| {
+        fail(
+            &format!("$.spec{}", e.path.trim_start_matches('$')),
+            format!("the embedded spec is not valid: {}", e.message),
+        )
+    })?;
+    spec.settings = match map.get("settings") {
+        None => ZeitlinSettings::default(),
+        Some(v) => crate::document::from_value_at::<ZeitlinSettingsDoc>(v, "$.settings")
+            .and_then(|d| read_settings(&d, "$.settings"))
+            .map_err(|e| fail(&e.path, format!("the recorded settings are not valid: {}", e.message)))?,
+    };
+    if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {
+        return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
+    }
+    let analysis = analyse(&spec.problem, &spec.settings);
+    let expected = serde_json::to_value(zeitlin_certificate_document(&spec, &analysis)).unwrap_or_default();
+    compare_with(&expected, cert, "$", 0.0, ZEITLIN_TOLERANCE)?;
+    let (verdict, level, sigma2) = match &analysis {
+        Ok(a) => (
+            a.verdict,
+            expected.get("level").and_then(Value::as_str).and_then(|s| s.parse::<VerificationLevel>().ok()),
+            a.sigma2,
+        ),
+        Err(_) => (Verdict::Inconclusive, None, None),
+    };
+    Ok(CheckReport { name: spec.name.clone(), verdict, level, sigma2 })
+}

@@ -1,0 +1,223 @@
+//! Zeitlin specs through the contract and the `verify` binary: every
+//! verdict path, bad input (exit 2, the JSON path named), tampered
+//! certificates (exit 1), determinism and scale invariance.
+
+use serde_json::Value;
+use std::io::Write;
+use std::process::{Command, Output};
+use zeitlin::analysis::{analyse, ZeitlinProblem, ZeitlinSettings};
+use zeitlin::zonal::quantise;
+
+fn verify(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
+}
+
+fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("verify-zeitlin-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::File::create(&path).unwrap().write_all(contents.as_bytes()).unwrap();
+    path
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A small valid spec (the monotone profile at N = 16), edited by `edit`.
+fn spec_with(edit: impl FnOnce(&mut Value)) -> Value {
+    let mut v: Value = serde_json::from_str(
+        r#"{"name": "t", "parameters": {"a": 0.1},
+            "zeitlin": {"N": 16, "equilibrium": "z + 0.3*z^3", "noise": ["a*z^2"]},
+            "stopping": {"epsilon": 0.1, "delta": 0.001}}"#,
+    )
+    .unwrap();
+    edit(&mut v);
+    v
+}
+
+fn certify(v: &Value) -> Value {
+    spec::certify_zeitlin(&spec::zeitlin_spec_from_value(v.clone()).expect("valid spec"))
+}
+
+#[test]
+fn every_verdict_path_and_the_library_agree() {
+    let stable = certify(&spec_with(|_| {}));
+    assert_eq!(stable["verdict"], "stable");
+    assert_eq!(stable["level"], "exact_structure");
+    assert_eq!(stable["sigma2"], 0.0);
+    assert_eq!(stable["form"]["energy_coefficient"], 0.0);
+    assert_eq!(stable["stopping"]["T"], "infinity");
+    assert_eq!(stable["model"]["dimension"], 255);
+
+    // The paper's family only: energy forced, Sigma^2 > 0 by Lanczos, the
+    // same value as the library on the same profile written as a closure
+    // (the spec's expression parser and quantisation against Rust code).
+    let energy = certify(&spec_with(|v| v["settings"] = serde_json::json!({"casimir_momentum": false})));
+    assert_eq!(energy["verdict"], "stable");
+    assert_eq!(energy["level"], "numerical");
+    let n = 16;
+    let problem = ZeitlinProblem {
+        n,
+        omega: quantise(n, |z| z + 0.3 * z * z * z).diagonal,
+        noise: vec![quantise(n, |z| 0.1 * z * z).diagonal],
+    };
+    let lib = analyse(&problem, &ZeitlinSettings { casimir_momentum: false, ..Default::default() }).unwrap();
+    let s = energy["sigma2"].as_f64().unwrap();
+    assert!(s > 0.0 && (s - lib.sigma2.unwrap()).abs() <= 1e-12 * s, "{s} vs {:?}", lib.sigma2);
+    assert_eq!(energy["blocks"].as_array().unwrap().len(), n - 1);
+    assert!(energy["stopping"]["bound"].as_str().unwrap().contains("not a guarantee"));
+
+    // A Gaussian jet: linearly unstable; the reason states the rate in the
+    // user's units (it once printed the rate of the normalised problem).
+    let jet = certify(&spec_with(|v| {
+        v["zeitlin"]["N"] = 24.into();
+        v["zeitlin"]["equilibrium"] = "3*exp(-(z/0.3)^2)".into();
+    }));
+    assert_eq!(jet["verdict"], "linearly_unstable");
+    let rate = jet["growth_rate"].as_f64().unwrap();
+    let problem = ZeitlinProblem {
+        n: 24,
+        omega: quantise(24, |z| 3.0 * (-(z / 0.3f64).powi(2)).exp()).diagonal,
+        noise: vec![quantise(24, |z| 0.1 * z * z).diagonal],
+    };
+    let lib = analyse(&problem, &ZeitlinSettings::default()).unwrap();
+    assert!((rate - lib.growth_rate.unwrap()).abs() <= 1e-12 * rate);
+    assert!(jet["reason"].as_str().unwrap().contains(&format!("{rate:.6e}")), "{}", jet["reason"]);
+    assert!(jet.get("sigma2").is_none() && jet.get("stopping").is_none());
+
+    // P_2: not monotone, no definite form, spectrum on the axis.
+    let p2 = certify(&spec_with(|v| v["zeitlin"]["equilibrium"] = "1.5*z^2 - 0.5".into()));
+    assert_eq!(p2["verdict"], "inconclusive");
+    assert_eq!(p2["level"], "none");
+    assert!(p2.get("sigma2").is_none());
+
+    // Each re-checks.
+    for c in [&stable, &energy, &jet, &p2] {
+        let report = spec::check_certificate_value(c).unwrap_or_else(|e| panic!("{e}: {c}"));
+        assert_eq!(report.verdict.as_str(), c["verdict"].as_str().unwrap());
+    }
+}
+
+#[test]
+fn scaling_the_equilibrium_or_the_noise_moves_only_the_units() {
+    // omega -> k omega leaves Sigma^2 (a rate set by the noise) unchanged;
+    // noise -> k noise multiplies it by k^2 (docs/zeitlin.md).
+    let base = certify(&spec_with(|v| v["settings"] = serde_json::json!({"casimir_momentum": false})));
+    let s0 = base["sigma2"].as_f64().unwrap();
+    for k in ["1e-300", "1e-7", "1e7", "1e300"] {
+        let c = certify(&spec_with(|v| {
+            v["settings"] = serde_json::json!({"casimir_momentum": false});
+            v["zeitlin"]["equilibrium"] = format!("{k}*(z + 0.3*z^3)").into();
+        }));
+        let s = c["sigma2"].as_f64().unwrap();
+        assert!((s - s0).abs() <= 1e-6 * s0, "omega x {k}: {s} vs {s0}");
+        let c = certify(&spec_with(|v| {
+            v["settings"] = serde_json::json!({"casimir_momentum": false});
+            v["parameters"]["a"] = format!("0.1*{k}").into();
+        }));
+        let kf: f64 = k.parse().unwrap();
+        match c["sigma2"].as_f64() {
+            Some(s) => assert!((s - s0 * kf * kf).abs() <= 1e-6 * s0 * kf * kf, "noise x {k}: {s}"),
+            // k^2 Sigma^2 beyond the range of doubles: never "stable".
+            None => assert_eq!(c["verdict"], "inconclusive", "noise x {k}"),
+        }
+    }
+}
+
+#[test]
+fn bad_input_names_the_field() {
+    let cases: Vec<(Value, &str, &str)> = vec![
+        (spec_with(|v| v["zeitlin"]["N"] = 1.into()), "$.zeitlin.N", "between 2 and 4096"),
+        (spec_with(|v| v["zeitlin"]["N"] = 5000.into()), "$.zeitlin.N", "between 2 and 4096"),
+        (spec_with(|v| v["zeitlin"]["N"] = "16".into()), "$.zeitlin.N", "positive integer"),
+        (spec_with(|v| v["zeitlin"]["equilibrium"] = "log(z)".into()), "$.zeitlin.equilibrium", "unknown function"),
+        (spec_with(|v| v["zeitlin"]["equilibrium"] = "1/z".into()), "$.zeitlin.equilibrium", "not finite at z = 0"),
+        (spec_with(|v| v["zeitlin"]["equilibrium"] = "sqrt(z)".into()), "$.zeitlin.equilibrium", "not finite"),
+        (spec_with(|v| v["zeitlin"]["noise"][0] = "y".into()), "$.zeitlin.noise[0]", "unknown symbol 'y'"),
+        (spec_with(|v| v["zeitlin"]["noise"] = Value::Null), "$.zeitlin.noise", ""),
+        (
+            spec_with(|v| {
+                v["zeitlin"].as_object_mut().unwrap().remove("noise");
+            }),
+            "$.zeitlin.noise",
+            "required field is missing",
+        ),
+        (spec_with(|v| v["zeitlin"]["extra"] = 1.into()), "$.zeitlin.extra", "unknown field"),
+        (spec_with(|v| v["parameters"]["z"] = 1.into()), "$.parameters.z", "not a valid parameter name"),
+        (spec_with(|v| v["settings"] = serde_json::json!({"tolerance": 0})), "$.settings.tolerance", "between"),
+        (
+            spec_with(|v| v["settings"] = serde_json::json!({"instability_max_n": 100000})),
+            "$.settings.instability_max_n",
+            "between",
+        ),
+        (spec_with(|v| v["zeitlin"]["equilibrium"] = "1e308*exp(50*z)".into()), "$.zeitlin.equilibrium", ""),
+        (spec_with(|v| v["name"] = "".into()), "$.name", "empty"),
+    ];
+    for (v, path, words) in cases {
+        let e = spec::zeitlin_spec_from_value(v.clone()).expect_err(&v.to_string());
+        assert_eq!(e.path, path, "{e}");
+        assert!(e.message.contains(words), "{e}");
+        // Through the binary: exit 2, the path in the message.
+        let file = temp_file("bad.json", &v.to_string());
+        let out = verify(&["certify", file.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(stderr(&out).contains(path), "{}", stderr(&out));
+    }
+}
+
+#[test]
+fn the_cli_certifies_and_checks_and_refuses_tampering() {
+    let v = spec_with(|v| v["settings"] = serde_json::json!({"casimir_momentum": false}));
+    let spec_file = temp_file("energy.json", &v.to_string());
+    let cert_file = spec_file.with_file_name("energy.cert.json");
+    let out = verify(&["certify", spec_file.to_str().unwrap(), "-o", cert_file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stderr(&out).contains("stable (numerical)"), "{}", stderr(&out));
+    let first = std::fs::read_to_string(&cert_file).unwrap();
+    // Two runs on one file give the same certificate.
+    let out = verify(&["certify", spec_file.to_str().unwrap(), "-o", cert_file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(std::fs::read_to_string(&cert_file).unwrap(), first);
+    let out = verify(&["check", cert_file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // check on the spec itself: bad input with advice.
+    let out = verify(&["check", spec_file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("this is a spec"), "{}", stderr(&out));
+
+    let cert: Value = serde_json::from_str(&first).unwrap();
+    let tampered: Vec<(&str, Value)> = vec![
+        ("$.sigma2", {
+            let mut c = cert.clone();
+            c["sigma2"] = (c["sigma2"].as_f64().unwrap() * (1.0 - 1e-7)).into();
+            c
+        }),
+        ("$.blocks[3].lambda_max", {
+            let mut c = cert.clone();
+            c["blocks"][3]["lambda_max"] = (c["blocks"][3]["lambda_max"].as_f64().unwrap() * (1.0 + 1e-7)).into();
+            c
+        }),
+        ("$.verdict", {
+            let mut c = cert.clone();
+            c["verdict"] = "linearly_unstable".into();
+            c
+        }),
+        ("$.spec_sha256", {
+            let mut c = cert.clone();
+            c["spec"]["zeitlin"]["equilibrium"] = "z + 0.31*z^3".into();
+            c
+        }),
+        ("$.form.momentum_coefficient", {
+            let mut c = cert.clone();
+            c["form"]["momentum_coefficient"] = (c["form"]["momentum_coefficient"].as_f64().unwrap() * 1.001).into();
+            c
+        }),
+    ];
+    for (path, c) in tampered {
+        let file = temp_file("tampered.json", &c.to_string());
+        let out = verify(&["check", file.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(1), "{path}: {}", stderr(&out));
+        assert!(stderr(&out).contains(path), "{path}: {}", stderr(&out));
+    }
+}
