@@ -186,6 +186,15 @@ fn the_cli_certifies_and_checks_and_refuses_tampering() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("this is a spec"), "{}", stderr(&out));
 
+    // A sweep over the noise amplitude: Sigma^2 scales as a^2.
+    let out = verify(&["sweep", spec_file.to_str().unwrap(), "--param", "a=1/10:1:2"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let lines: Vec<Value> =
+        String::from_utf8_lossy(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let s: Vec<f64> = lines.iter().map(|l| l["sigma2"].as_f64().unwrap()).collect();
+    assert_eq!(s.len(), 2);
+    assert!((s[1] / s[0] - 100.0).abs() < 1e-6, "{s:?}");
+
     let cert: Value = serde_json::from_str(&first).unwrap();
     let tampered: Vec<(&str, Value)> = vec![
         ("$.sigma2", {
