@@ -92,8 +92,17 @@ fn every_verdict_path_and_the_library_agree() {
     assert_eq!(p2["level"], "none");
     assert!(p2.get("sigma2").is_none());
 
+    // Above settings.energy_search_max_n the energy family is not searched:
+    // inconclusive, and the reason says why (the monotone profile with the
+    // Casimir–momentum form disallowed, which is definite at N = 16).
+    let capped = certify(&spec_with(|v| {
+        v["settings"] = serde_json::json!({"casimir_momentum": false, "energy_search_max_n": 8})
+    }));
+    assert_eq!(capped["verdict"], "inconclusive");
+    assert!(capped["reason"].as_str().unwrap().contains("energy_search_max_n"), "{}", capped["reason"]);
+
     // Each re-checks.
-    for c in [&stable, &energy, &jet, &p2] {
+    for c in [&stable, &energy, &jet, &p2, &capped] {
         let report = spec::check_certificate_value(c).unwrap_or_else(|e| panic!("{e}: {c}"));
         assert_eq!(report.verdict.as_str(), c["verdict"].as_str().unwrap());
     }
@@ -149,6 +158,11 @@ fn bad_input_names_the_field() {
         (
             spec_with(|v| v["settings"] = serde_json::json!({"instability_max_n": 100000})),
             "$.settings.instability_max_n",
+            "between",
+        ),
+        (
+            spec_with(|v| v["settings"] = serde_json::json!({"energy_search_max_n": 1})),
+            "$.settings.energy_search_max_n",
             "between",
         ),
         (spec_with(|v| v["zeitlin"]["equilibrium"] = "1e308*exp(50*z)".into()), "$.zeitlin.equilibrium", ""),

@@ -805,6 +805,11 @@ pub struct ZeitlinSettingsDoc {
     /// eigenvalues are computed densely per block (2 to 512).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub instability_max_n: Option<Count>,
+    /// Largest `N` for which the energy–Casimir–momentum family is searched
+    /// when the Casimir–momentum form is not definite (2 to 4096, default
+    /// 256; the search costs about 4.6x per doubling of N).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy_search_max_n: Option<Count>,
 }
 
 /// Deserialise a document from a JSON value, naming the JSON path of the

@@ -818,6 +818,8 @@ pub struct ZeitlinModelRecord {
     /// The Legendre coefficients `a_1..a_L` of the equilibrium (quflow's
     /// normalisation), up to the last nonzero one and at most 64 of them.
     pub equilibrium_coefficients: Vec<Float>,
+    /// The same for each noise field's stream function.
+    pub noise_coefficients: Vec<Vec<Float>>,
 }
 
 /// The conserved functional `eps H + C_Phi + beta J`.

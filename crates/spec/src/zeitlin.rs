@@ -53,6 +53,8 @@ pub struct ZeitlinSpec {
     /// The equilibrium's Legendre coefficients `a_0..a_{N-1}` (quflow's
     /// normalisation; `a_0` is dropped from the matrix).
     pub coefficients: Vec<f64>,
+    /// Each noise field's Legendre coefficients, likewise.
+    pub noise_coefficients: Vec<Vec<f64>>,
     /// The stopping question.
     pub stopping: Option<Stopping>,
     /// Numerical settings.
@@ -148,12 +150,14 @@ pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
             format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
         ));
     }
-    let noise = z
+    let (noise, noise_coefficients): (Vec<Vec<f64>>, Vec<Vec<f64>>) = z
         .noise
         .iter()
         .enumerate()
-        .map(|(i, e)| zonal(e, &index(&noise_path, i), n, &params).map(|(d, _)| d))
-        .collect::<Result<Vec<_>>>()?;
+        .map(|(i, e)| zonal(e, &index(&noise_path, i), n, &params))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
     let stopping =
         doc.stopping.as_ref().map(|s| crate::parse::read_stopping(s, &child(root, "stopping"))).transpose()?;
     let settings = match &doc.settings {
@@ -167,6 +171,7 @@ pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
         raw: value,
         problem: ZeitlinProblem { n, omega, noise },
         coefficients,
+        noise_coefficients,
         stopping,
         settings,
         sweep,
@@ -191,6 +196,13 @@ fn read_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<ZeitlinSettings
         }
         s.instability_max_n = m as usize;
     }
+    if let Some(Count(m)) = doc.energy_search_max_n {
+        let p = child(path, "energy_search_max_n");
+        if !(2..=N_RANGE.1 as u64).contains(&m) {
+            return Err(SpecError::new(p, format!("must be between 2 and {}, got {m}", N_RANGE.1)));
+        }
+        s.energy_search_max_n = m as usize;
+    }
     Ok(s)
 }
 
@@ -200,6 +212,7 @@ fn settings_document(s: &ZeitlinSettings) -> ZeitlinSettingsDoc {
         tolerance: Some(Real(s.tolerance)),
         casimir_momentum: Some(s.casimir_momentum),
         instability_max_n: Some(Count(s.instability_max_n as u64)),
+        energy_search_max_n: Some(Count(s.energy_search_max_n as u64)),
     }
 }
 
@@ -216,15 +229,20 @@ pub fn zeitlin_certificate_document(
     analysis: &std::result::Result<ZeitlinAnalysis, ZeitlinError>,
 ) -> ZeitlinCertificateDocument {
     let n = spec.problem.n;
-    let scale = spec.coefficients.iter().skip(1).fold(0.0f64, |m, x| m.max(x.abs()));
-    let last = spec.coefficients.iter().rposition(|x| x.abs() > 1e-14 * scale).unwrap_or(0);
+    // a_1..a_L, up to the last one above 1e-14 of the largest, at most 64.
+    let listed = |a: &[f64]| -> Vec<Float> {
+        let scale = a.iter().skip(1).fold(0.0f64, |m, x| m.max(x.abs()));
+        let last = a.iter().rposition(|x| x.abs() > 1e-14 * scale).unwrap_or(0);
+        a.iter().take(last + 1).skip(1).take(LISTED_COEFFICIENTS).map(|x| Float(*x)).collect()
+    };
     let model = ZeitlinModelRecord {
         n: n as u64,
         dimension: (n * n - 1) as u64,
         hbar: Float(hbar(n)),
         formulation: "dW = [P, W]/hbar dt + sum_i [X_i, W]/hbar o dB^i, Delta_N P = W (Hoppe–Yau Laplacian, eigenvalues -l(l+1)), hbar = 2/sqrt(N^2 - 1), <A, B> = Re tr(A B*)/N; W_e = i diag(omega) zonal, X_i = i diag(xi_i) zonal; a perturbation splits by its off-diagonal m = 1..N-1 into independent blocks".into(),
         quantisation: "quflow's: a_l = 1/2 int_{-1}^{1} f(z) sqrt(2l+1) P_l(z) dz by Gauss–Legendre on 2N + 32 nodes, W = sum_{l=1}^{N-1} a_l T_l0, T_l0 = i sqrt(N) diag(u_l) with u_l the l-th eigenvector of the zonal Laplacian block (last entry positive); a_0 (the mean) is dropped".into(),
-        equilibrium_coefficients: spec.coefficients.iter().take(last + 1).skip(1).take(LISTED_COEFFICIENTS).map(|x| Float(*x)).collect(),
+        equilibrium_coefficients: listed(&spec.coefficients),
+        noise_coefficients: spec.noise_coefficients.iter().map(|a| listed(a)).collect(),
     };
     let mut doc = ZeitlinCertificateDocument {
         certificate_version: CERTIFICATE_VERSION,
