@@ -5,7 +5,9 @@
 //!
 //! * [`laplacian`]: the Hoppe–Yau Laplacian on one off-diagonal (tridiagonal);
 //! * [`zonal`]: zonal harmonics `T_{l0}` and the quantisation of a profile `omega(z)`;
-//! * [`analysis`]: the per-block energy–Casimir–momentum form, `Q`, and `Sigma^2`.
+//! * [`analysis`]: the per-block energy–Casimir–momentum form, `Q`, and `Sigma^2`;
+//! * [`isospectral`]: Monte Carlo of the full nonlinear model with the
+//!   Casimir-preserving stochastic isospectral midpoint, and an `O(N^2)` stream solve.
 //!
 //! Conventions are quflow's: `<A, B> = Re tr(A B^*) / N`, the bracket
 //! `[A, B] / hbar` with `hbar = 2 / sqrt(N^2 - 1)`, `W = i diag(omega)` for a
@@ -13,5 +15,6 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+pub mod isospectral;
 pub mod laplacian;
 pub mod zonal;
