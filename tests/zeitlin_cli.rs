@@ -50,12 +50,13 @@ fn every_verdict_path_and_the_library_agree() {
     assert_eq!(stable["stopping"]["T"], "infinity");
     assert_eq!(stable["model"]["dimension"], 255);
 
-    // The paper's family only: energy forced, Sigma^2 > 0 by Lanczos, the
-    // same value as the library on the same profile written as a closure
-    // (the spec's expression parser and quantisation against Rust code).
+    // The paper's family only: energy forced, Sigma^2 > 0 with a proved
+    // upper bound, the same values as the library on the same profile
+    // written as a closure (the spec's expression parser and quantisation
+    // against Rust code).
     let energy = certify(&spec_with(|v| v["settings"] = serde_json::json!({"casimir_momentum": false})));
     assert_eq!(energy["verdict"], "stable");
-    assert_eq!(energy["level"], "numerical");
+    assert_eq!(energy["level"], "verified_float");
     let n = 16;
     let problem = ZeitlinProblem {
         n,
@@ -66,7 +67,17 @@ fn every_verdict_path_and_the_library_agree() {
     let s = energy["sigma2"].as_f64().unwrap();
     assert!(s > 0.0 && (s - lib.sigma2.unwrap()).abs() <= 1e-12 * s, "{s} vs {:?}", lib.sigma2);
     assert_eq!(energy["blocks"].as_array().unwrap().len(), n - 1);
-    assert!(energy["stopping"]["bound"].as_str().unwrap().contains("not a guarantee"));
+    // The bound is above the estimate, by the stated 1e-8 raise plus the
+    // verification margin (at most 1e-2 by construction; 1e-10 here).
+    let upper = energy["sigma2_upper"].as_f64().unwrap();
+    assert_eq!(upper, lib.sigma2_upper.unwrap());
+    assert!(upper > s && upper <= s * (1.0 + 1e-7), "{upper} vs {s}");
+    assert!(energy["stopping"]["bound"].as_str().unwrap().contains("sigma2_upper (proved)"));
+    // T is computed from the proved bound: T = ln(epsilon/delta)/Sigma^2.
+    let t = energy["stopping"]["T"].as_f64().unwrap();
+    let (epsilon, delta) =
+        (energy["stopping"]["epsilon"].as_f64().unwrap(), energy["stopping"]["delta"].as_f64().unwrap());
+    assert!((t - (epsilon / delta).ln() / upper).abs() <= 1e-12 * t, "T {t}");
 
     // A Gaussian jet: linearly unstable; the reason states the rate in the
     // user's units (it once printed the rate of the normalised problem).
@@ -187,7 +198,7 @@ fn the_cli_certifies_and_checks_and_refuses_tampering() {
     let cert_file = spec_file.with_file_name("energy.cert.json");
     let out = verify(&["certify", spec_file.to_str().unwrap(), "-o", cert_file.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    assert!(stderr(&out).contains("stable (numerical)"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("stable (verified_float)"), "{}", stderr(&out));
     let first = std::fs::read_to_string(&cert_file).unwrap();
     // Two runs on one file give the same certificate.
     let out = verify(&["certify", spec_file.to_str().unwrap(), "-o", cert_file.to_str().unwrap()]);
@@ -214,6 +225,11 @@ fn the_cli_certifies_and_checks_and_refuses_tampering() {
         ("$.sigma2", {
             let mut c = cert.clone();
             c["sigma2"] = (c["sigma2"].as_f64().unwrap() * (1.0 - 1e-7)).into();
+            c
+        }),
+        ("$.sigma2_upper", {
+            let mut c = cert.clone();
+            c["sigma2_upper"] = (c["sigma2_upper"].as_f64().unwrap() * (1.0 - 1e-7)).into();
             c
         }),
         ("$.blocks[3].lambda_max", {

@@ -32,14 +32,14 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// Higham's `gamma_m = m u / (1 - m u)`, `u = 2^-53`: the relative error
 /// bound of `m` successive roundings.
-pub(crate) fn gamma(m: usize) -> f64 {
+pub fn gamma(m: usize) -> f64 {
     let u = f64::EPSILON / 2.0;
     let m = m as f64;
     m * u / (1.0 - m * u)
 }
 
 /// `2^e` for `-1022 <= e <= 1023` (clamped), exactly.
-pub(crate) fn pow2(e: i32) -> f64 {
+pub fn pow2(e: i32) -> f64 {
     f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
 }
 
@@ -50,6 +50,83 @@ pub struct SymBanded {
     n: usize,
     b: usize,
     band: Vec<f64>,
+}
+
+/// A banded matrix and an entrywise bound on its rounding, built entry by
+/// entry, for the verified inertia tests: `err` bounds `|A_exact - a|`
+/// entrywise, where `A_exact` is the matrix of the exact operations on the
+/// stored inputs.
+///
+/// ```
+/// use fluid::banded::Bounded;
+/// // [[1/3, 1], [1, -2/3]] (1/3 and 2/3 rounded once each): inertia (1, 1)
+/// let mut a = Bounded::new(2, 1);
+/// a.set(0, 0, 1.0 / 3.0, 1);
+/// a.set(1, 0, 1.0, 0);
+/// a.set(1, 1, -2.0 / 3.0, 1);
+/// assert_eq!(a.inertia(), Some((1, 1)));
+/// assert_eq!(a.plain_inertia(), Some((1, 1)));
+/// ```
+#[derive(Clone, Debug)]
+pub struct Bounded {
+    /// The matrix as computed.
+    a: SymBanded,
+    /// The entrywise bound on its rounding (`None`: not tracked).
+    err: Option<SymBanded>,
+}
+
+impl Bounded {
+    /// The zero matrix of size `n` and bandwidth `b`, exact.
+    pub fn new(n: usize, b: usize) -> Self {
+        Bounded { a: SymBanded::zeros(n, b), err: Some(SymBanded::zeros(n, b)) }
+    }
+
+    /// The same without the rounding bounds, for [`Bounded::plain_inertia`]
+    /// only ([`Bounded::inertia`] proves nothing and says `None`): a search
+    /// that tests many matrices then skips their bookkeeping.
+    pub fn untracked(n: usize, b: usize) -> Self {
+        Bounded { a: SymBanded::zeros(n, b), err: None }
+    }
+
+    /// The matrix as computed.
+    pub fn matrix(&self) -> &SymBanded {
+        &self.a
+    }
+
+    /// Entry `(i, j)` is `v`, computed with at most `rounds` roundings of
+    /// nonnegative-magnitude factors (a product of such factors is within
+    /// `gamma_rounds |v|` of the exact one), plus underflow.
+    pub fn set(&mut self, i: usize, j: usize, v: f64, rounds: usize) {
+        self.set_with_error(i, j, v, v, rounds);
+    }
+
+    /// Entry `(i, j)` is `v`, within `gamma_rounds |scale|` of the exact
+    /// value (plus underflow): for a difference that cancels, whose error is
+    /// relative to the sum of its terms' magnitudes, not to `v`.
+    pub fn set_with_error(&mut self, i: usize, j: usize, v: f64, scale: f64, rounds: usize) {
+        if v != 0.0 {
+            self.a.add(i, j, v);
+        }
+        if let (Some(err), true) = (self.err.as_mut(), rounds > 0) {
+            let g = gamma(rounds);
+            err.add(i, j, g * scale.abs().max(v.abs()) * (1.0 + 2.0 * g) + (rounds as f64) * 5e-324);
+        }
+    }
+
+    /// The inertia proved for every matrix within the entrywise bound
+    /// ([`SymBanded::power_of_two_scaled`], then
+    /// [`SymBanded::verified_inertia_within`]).
+    pub fn inertia(&self) -> Option<(usize, usize)> {
+        let (s, r) = self.a.power_of_two_scaled(self.err.as_ref()?);
+        s.verified_inertia_within(r)
+    }
+
+    /// The inertia of the computed matrix, unproved ([`SymBanded::inertia`]):
+    /// for searches. (No equilibration: scaling by powers of two moves
+    /// `L D L^T`'s pivots by exact factors, so the signs are the same.)
+    pub fn plain_inertia(&self) -> Option<(usize, usize)> {
+        self.a.inertia()
+    }
 }
 
 /// Why a banded Cholesky failed.
@@ -413,32 +490,7 @@ impl SymBanded {
             return None;
         }
         let b1 = b + 1;
-        // l[i * b1 + d] = L[i][i - d] for d >= 1 (L[i][i] = 1), d[i] = D[i]
-        let mut l = vec![0.0; n * b1];
-        let mut dg = vec![0.0; n];
-        let mut t = vec![0.0; b1]; // t[i - k] = L[i][k] D[k] for the current row
-        for i in 0..n {
-            let lo = i.saturating_sub(b);
-            for j in lo..i {
-                // sum_{k = lo}^{j - 1} L[i][k] D[k] L[j][k]
-                let s = self.band[i * b1 + (i - j)] - dot(&t[i - j + 1..=i - lo], &l[j * b1 + 1..=j * b1 + (j - lo)]);
-                let v = s / dg[j];
-                if !v.is_finite() {
-                    return None;
-                }
-                l[i * b1 + (i - j)] = v;
-                t[i - j] = v * dg[j];
-            }
-            let s = self.band[i * b1] - dot(&t[1..=i - lo], &l[i * b1 + 1..=i * b1 + (i - lo)]);
-            if !(s.is_finite() && s != 0.0) {
-                return None;
-            }
-            dg[i] = s;
-        }
-        // the unit diagonal stored, so every row is one slice
-        for i in 0..n {
-            l[i * b1] = 1.0;
-        }
+        let (l, dg) = self.ldl()?;
         let labs: Vec<f64> = l.iter().map(|x| x.abs()).collect();
         // The residual and L |D| L^T, entry by entry of the band (k <= j <= i).
         let u = f64::EPSILON / 2.0;
@@ -487,15 +539,107 @@ impl SymBanded {
         Some((pos, n - pos))
     }
 
+    /// The unpivoted `L D L^T` factors in floating point, `l[i * (b + 1) + d]
+    /// = L[i][i - d]` (the unit diagonal stored at `d = 0`) and `D`; `None`
+    /// at a zero or non-finite pivot.
+    fn ldl(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let (n, b) = (self.n, self.b);
+        let b1 = b + 1;
+        // l[i * b1 + d] = L[i][i - d] for d >= 1 (L[i][i] = 1), d[i] = D[i]
+        let mut l = vec![0.0; n * b1];
+        let mut dg = vec![0.0; n];
+        let mut t = vec![0.0; b1]; // t[i - k] = L[i][k] D[k] for the current row
+        for i in 0..n {
+            let lo = i.saturating_sub(b);
+            for j in lo..i {
+                // sum_{k = lo}^{j - 1} L[i][k] D[k] L[j][k]
+                let s = self.band[i * b1 + (i - j)] - dot(&t[i - j + 1..=i - lo], &l[j * b1 + 1..=j * b1 + (j - lo)]);
+                let v = s / dg[j];
+                if !v.is_finite() {
+                    return None;
+                }
+                l[i * b1 + (i - j)] = v;
+                t[i - j] = v * dg[j];
+            }
+            let s = self.band[i * b1] - dot(&t[1..=i - lo], &l[i * b1 + 1..=i * b1 + (i - lo)]);
+            if !(s.is_finite() && s != 0.0) {
+                return None;
+            }
+            dg[i] = s;
+        }
+        // the unit diagonal stored, so every row is one slice
+        for i in 0..n {
+            l[i * b1] = 1.0;
+        }
+        Some((l, dg))
+    }
+
+    /// The inertia `(positive, negative)` of this matrix as an unpivoted
+    /// floating-point `L D L^T` counts it (Sylvester), with no proof: for
+    /// searches, where a wrong count near a singular matrix only moves the
+    /// search. `None` at a zero or non-finite pivot.
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// // tridiag(1, 0.5, 1): eigenvalues 0.5 - sqrt 2 < 0 < 0.5 < 0.5 + sqrt 2
+    /// let mut a = SymBanded::zeros(3, 1);
+    /// for i in 0..3 { a.add(i, i, 0.5); }
+    /// for i in 1..3 { a.add(i, i - 1, 1.0); }
+    /// assert_eq!(a.inertia(), Some((2, 1)));
+    /// ```
+    pub fn inertia(&self) -> Option<(usize, usize)> {
+        if self.n == 0 || self.band.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        let (_, dg) = self.ldl()?;
+        let pos = dg.iter().filter(|d| **d > 0.0).count();
+        Some((pos, self.n - pos))
+    }
+
     /// Cholesky factor `A = C C^T`, `C` lower triangular with the same bandwidth.
     pub fn cholesky(&self) -> Result<BandedCholesky, BandedError> {
+        let mut c = vec![];
+        self.factor_into(None, &mut c).map(|()| BandedCholesky { n: self.n, b: self.b, c })
+    }
+
+    /// Whether `self - shift * other` (same size and bandwidth) has a
+    /// floating-point Cholesky factor, computed in `work` without forming
+    /// the difference: for bisections on a pencil, which would otherwise
+    /// allocate two matrices a step. Unproved, like [`SymBanded::cholesky`].
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// // tridiag(-1, 2, -1) - l I: definite for l < 2 - sqrt 2 = 0.5858
+    /// let mut a = SymBanded::zeros(3, 1);
+    /// let mut id = SymBanded::zeros(3, 1);
+    /// for i in 0..3 { a.add(i, i, 2.0); id.add(i, i, 1.0); }
+    /// for i in 1..3 { a.add(i, i - 1, -1.0); }
+    /// let mut work = vec![];
+    /// assert!(a.minus_is_positive_definite(0.58, &id, &mut work));
+    /// assert!(!a.minus_is_positive_definite(0.59, &id, &mut work));
+    /// ```
+    ///
+    /// # Panics
+    /// If the sizes or bandwidths differ (a programming error).
+    pub fn minus_is_positive_definite(&self, shift: f64, other: &SymBanded, work: &mut Vec<f64>) -> bool {
+        assert!(self.n == other.n && self.b == other.b, "same size and bandwidth");
+        self.factor_into(Some((shift, other)), work).is_ok()
+    }
+
+    /// The banded Cholesky factor of `self - shift * other` into `c`.
+    fn factor_into(&self, minus: Option<(f64, &SymBanded)>, c: &mut Vec<f64>) -> Result<(), BandedError> {
         let (n, b) = (self.n, self.b);
         let b1 = b + 1;
         // c[i * b1 + d] = C[i][i - d]
-        let mut c = vec![0.0; n * b1];
+        c.clear();
+        c.resize(n * b1, 0.0);
         for i in 0..n {
             for j in i.saturating_sub(b)..=i {
-                let mut s = self.band[i * b1 + (i - j)];
+                let at = i * b1 + (i - j);
+                let mut s = match minus {
+                    None => self.band[at],
+                    Some((shift, other)) => self.band[at] - shift * other.band[at],
+                };
                 // sum_{k = lo}^{j - 1} C[i][k] C[j][k], lo = i - b
                 let lo = i.saturating_sub(b);
                 s -= dot(&c[i * b1 + (i - j + 1)..=i * b1 + (i - lo)], &c[j * b1 + 1..=j * b1 + (j - lo)]);
@@ -509,7 +653,7 @@ impl SymBanded {
                 }
             }
         }
-        Ok(BandedCholesky { n, b, c })
+        Ok(())
     }
 }
 

@@ -57,42 +57,9 @@
 //! counted like any other. The entrywise bounds become a 2-norm radius after
 //! an exact power-of-two equilibration ([`SymBanded::power_of_two_scaled`]).
 
-use crate::banded::SymBanded;
+use crate::banded::Bounded;
 use crate::grid::YGrid;
 use crate::modes::{Coefficients, Form};
-
-use crate::banded::gamma;
-
-/// A banded matrix and an entrywise bound on its rounding, built entry by entry.
-struct Bounded {
-    a: SymBanded,
-    err: SymBanded,
-}
-
-impl Bounded {
-    fn new(n: usize, b: usize) -> Self {
-        Bounded { a: SymBanded::zeros(n, b), err: SymBanded::zeros(n, b) }
-    }
-
-    /// Entry `(i, j)` is `v`, computed with at most `rounds` roundings of
-    /// nonnegative-magnitude factors (a product of such factors is within
-    /// `gamma_rounds |v|` of the exact one), plus underflow.
-    fn set(&mut self, i: usize, j: usize, v: f64, rounds: usize) {
-        if v != 0.0 {
-            self.a.add(i, j, v);
-        }
-        if rounds > 0 {
-            let g = gamma(rounds);
-            self.err.add(i, j, g * v.abs() * (1.0 + 2.0 * g) + (rounds as f64) * 5e-324);
-        }
-    }
-
-    /// The inertia proved for every matrix within the entrywise bound.
-    fn inertia(&self) -> Option<(usize, usize)> {
-        let (s, r) = self.a.power_of_two_scaled(&self.err);
-        s.verified_inertia_within(r)
-    }
-}
 
 /// `(V ≻ 0, bar V - Q ≻ 0)` for mode `k` of a walls grid, proved as the
 /// module docs say; `(false, false)` when nothing could be proved.
@@ -180,7 +147,8 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
         big.set(idx(a, 1), idx(a, 0), m[a], 0);
         if nj > 0 {
             big.set(idx(a, 2), idx(a, 0), m[a] * (s2[a] + t), nj + 4);
-            big.set(idx(a, 3), idx(a, 0), m[a] * (s2[a] - t), nj + 4);
+            // s2 - t cancels: its error is relative to s2 + t, not to the difference
+            big.set_with_error(idx(a, 3), idx(a, 0), m[a] * (s2[a] - t), m[a] * (s2[a] + t), nj + 4);
         }
         for (c, e) in eta.iter().enumerate() {
             big.set(idx(a, 2 + pm + c), idx(a, 0), e[a] * m[a], 2);

@@ -773,7 +773,12 @@ pub struct ZeitlinCertificateDocument {
     /// `Sigma^2 = max(0, max_m lambda_max(Q_m, P_m))` at the chosen form.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sigma2: Option<Float>,
-    /// The stopping-time bound from `sigma2`.
+    /// A proved upper bound on `Sigma^2` (`verified_float`), from which the
+    /// stopping time is computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_upper: Option<Float>,
+    /// The stopping-time bound from `sigma2_upper` (or `sigma2` under exact
+    /// structure, or when no bound was proved).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopping: Option<StoppingRecord>,
     /// SHA-256 of the embedded spec's compact JSON.
@@ -784,7 +789,8 @@ pub struct ZeitlinCertificateDocument {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub form: Option<ZeitlinFormRecord>,
     /// `lambda_max(Q_m, P_m)` per off-diagonal block `m = 1..N-1`, when
-    /// stable with a Lanczos `Sigma^2` (empty under exact structure: `Q = 0`).
+    /// stable with the energy in the form (empty under exact structure:
+    /// `Q = 0`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub blocks: Vec<ZeitlinBlockRecord>,
     /// `|[P_e, W_e]| / hbar`, `max_i |[X_i, W_e]| / hbar` and the largest

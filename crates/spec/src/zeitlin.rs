@@ -33,7 +33,7 @@ use zeitlin::zonal::quantise;
 pub const N_RANGE: (usize, usize) = (2, 4096);
 
 /// Relative tolerance when re-checking the floating-point fields of a
-/// Zeitlin certificate (Lanczos values, the momentum coefficient found by
+/// Zeitlin certificate (bisection estimates, the momentum coefficient found by
 /// golden section): the computation is deterministic, so this only absorbs
 /// another CPU's rounding.
 pub const ZEITLIN_TOLERANCE: f64 = 1e-9;
@@ -254,6 +254,7 @@ pub fn zeitlin_certificate_document(
         level: LevelOrNone(None),
         checks: BTreeMap::new(),
         sigma2: None,
+        sigma2_upper: None,
         stopping: None,
         spec_sha256: spec_digest(&spec.raw),
         model,
@@ -278,7 +279,10 @@ pub fn zeitlin_certificate_document(
         noise: Float(a.noise_residual),
         drift: Float(a.drift_residual),
     };
-    doc.growth_rate = a.growth_rate.map(Float);
+    // Below the instability threshold the rate is rounding (an imaginary
+    // eigenvalue moved off the axis by about sqrt(eps) |A|): it differs
+    // between machines and is not recorded; the reason says what it shows.
+    doc.growth_rate = a.growth_rate.filter(|_| a.verdict == Verdict::LinearlyUnstable).map(Float);
     let mut checks = BTreeMap::new();
     checks.insert(
         "equilibrium".to_string(),
@@ -296,8 +300,9 @@ pub fn zeitlin_certificate_document(
             // Q = 0 identically for the Casimir–momentum form (diagonal P
             // commutes with diagonal noise) and P's definiteness is verified:
             // Sigma^2 = 0 follows from the structure. Otherwise Sigma^2 is a
-            // Lanczos value, a lower estimate.
+            // bisection estimate and sigma2_upper, when proved, a bound.
             let level = if exact_structure { VerificationLevel::ExactStructure } else { a.level };
+            let proved = !exact_structure && level == VerificationLevel::VerifiedFloat;
             doc.level = LevelOrNone(Some(level));
             checks.insert(
                 "form".to_string(),
@@ -307,17 +312,22 @@ pub fn zeitlin_certificate_document(
                 "sigma2".to_string(),
                 if exact_structure {
                     "exact structure: the Casimir–momentum form is diagonal in every block and the noise is diagonal, so Q = 0 identically and Sigma^2 = 0".to_string()
+                } else if proved {
+                    "verified_float: per block, s P_m - Q_m ≻ 0 at s = sigma2_upper, by a verified (rounding-aware) L D L^T inertia test of a banded lifting (the Schur complement of its lower block is s P_m - Q_m; Haynsworth), for the floating-point c, Delta_m and noise values as stored (P_e from a tridiagonal solve, its conservation measured by residuals.drift); sigma2 and the blocks' lambda_max are the upper ends of floating-point bisection brackets (estimates)".to_string()
                 } else {
-                    "numerical: per block, lambda_max(Q_m, P_m) by Lanczos (a Ritz value, a lower estimate, not a proved bound); Sigma^2 is the largest over the blocks".to_string()
+                    "numerical: per block, lambda_max(Q_m, P_m) by bisection on the floating-point inertia of a banded lifting (an estimate; the verified test did not prove a bound)".to_string()
                 },
             );
             doc.sigma2 = a.sigma2.map(Float);
-            let bound = if exact_structure {
-                "P(|dW_t|_P^2 > epsilon) <= delta/epsilon for all t when |dW_0|_P^2 = delta (Sigma^2 = 0: the form is conserved along every path)"
+            doc.sigma2_upper = if proved { a.sigma2_upper.map(Float) } else { None };
+            let (bound, s) = if exact_structure {
+                ("P(|dW_t|_P^2 > epsilon) <= delta/epsilon for all t when |dW_0|_P^2 = delta (Sigma^2 = 0: the form is conserved along every path)", a.sigma2)
+            } else if proved {
+                ("P(|dW_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dW_0|_P^2 = delta, with Sigma^2 = sigma2_upper (proved)", a.sigma2_upper)
             } else {
-                "P(|dW_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dW_0|_P^2 = delta, with the Lanczos Sigma^2: an estimate, not a guarantee (Sigma^2 is not proved)"
+                ("P(|dW_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dW_0|_P^2 = delta, with the estimated Sigma^2: an estimate, not a guarantee (Sigma^2 is not proved)", a.sigma2)
             };
-            doc.stopping = stopping_record(spec.stopping, a.sigma2, bound);
+            doc.stopping = stopping_record(spec.stopping, s, bound);
             doc.form = choice.map(|c| ZeitlinFormRecord {
                 family: format!(
                     "eps H + tr Phi(W)/N + beta J with eps in {{{}}} (P is defined up to a positive factor), beta by golden section on the definite interval, Phi'' fixed by the first variation on distinct eigenvalues of W_e",

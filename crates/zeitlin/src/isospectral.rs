@@ -511,11 +511,10 @@ impl ZeitlinModel {
         let mut best: Option<(usize, Complex<f64>)> = None;
         for m in 1..n {
             let k = self.block_drift(omega, m)?;
-            if k.iter().any(|x| !x.is_finite()) {
-                // nalgebra's Schur iteration has no limit and loops on NaN.
-                return Err(IsospectralError::Numerical(format!("the drift on diagonal {m} is not finite")));
-            }
-            for ev in k.complex_eigenvalues().iter() {
+            let values = crate::eigen::real_eigenvalues(&k).ok_or_else(|| {
+                IsospectralError::Numerical(format!("the drift on diagonal {m}: not finite, or no eigenvalues"))
+            })?;
+            for ev in values.iter() {
                 if best.is_none_or(|(_, b)| -ev.im > -b.im) {
                     best = Some((m, *ev));
                 }

@@ -15,6 +15,7 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+pub mod eigen;
 pub mod isospectral;
 pub mod laplacian;
 pub mod zonal;
