@@ -156,6 +156,12 @@ fn summary(cert: &Value) -> String {
     if let Some(list) = cert.pointer("/compressible/compatible_completion") {
         s.push_str(&format!("\n  compatible noise (paste as fluid.noise): {list}"));
     }
+    if let Some(fields) = cert.get("compatible_noise").and_then(Value::as_array) {
+        for (i, rows) in fields.iter().enumerate() {
+            let rows = messages::cut_message(&rows.to_string());
+            s.push_str(&format!("\n  compatible part of noise[{i}] (paste as {{\"harmonics\": ...}}): {rows}"));
+        }
+    }
     s
 }
 

@@ -26,7 +26,7 @@
 //! all negative for `g_i > 0` (`L ≻ 0`). So `bar V - Q ≻ 0` iff `B` has
 //! exactly `n + n #{g_i < 0}` positive and `n #{g_i > 0}` negative
 //! eigenvalues, proved by the verified inertia test
-//! [`SymBanded::verified_inertia_within`]. In the same way `V ≻ 0` iff
+//! [`crate::banded::SymBanded::verified_inertia_within`]. In the same way `V ≻ 0` iff
 //! `[[s M diag(w), M], [M, -s L]]` has inertia `(n + n [s < 0], n [s > 0])`.
 //! Interleaving the unknowns per node (the lifted ones first, then
 //! `omega_a`) gives `B` the bandwidth `(J + 4)(p + 1) - 1`: the work is
@@ -55,7 +55,7 @@
 //! mean `mu_j` is subtracted (`[E - mu, [E - mu, K]] = [E, [E, K]]`
 //! exactly, and the expansion above is an identity in `E`), its rounding
 //! counted like any other. The entrywise bounds become a 2-norm radius after
-//! an exact power-of-two equilibration ([`SymBanded::power_of_two_scaled`]).
+//! an exact power-of-two equilibration ([`crate::banded::SymBanded::power_of_two_scaled`]).
 
 use crate::banded::Bounded;
 use crate::grid::YGrid;

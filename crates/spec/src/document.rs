@@ -773,21 +773,68 @@ pub struct ZeitlinSpecDocument {
     pub sweep: Option<SweepDoc>,
 }
 
-/// The Zeitlin model: `N`, the zonal equilibrium and the zonal noise.
+/// The Zeitlin model: `N`, the equilibrium and the noise.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ZeitlinDoc {
     /// The matrix size `N` (2 to 4096): `W` in su(N), dimension `N^2 - 1`.
     #[serde(rename = "N")]
     pub n: Count,
-    /// The zonal vorticity `omega(z)`, `z = cos(colatitude)` in `[-1, 1]`,
-    /// quantised as quflow does (`W_e = sum_l a_l T_l0`, `a_l` its Legendre
-    /// coefficients up to `l = N - 1`; the mean `a_0` is dropped: `W` is
-    /// trace-free).
-    pub equilibrium: Expression,
-    /// Zonal noise stream functions `xi_i(z)` (at most 256), quantised the
-    /// same way: `X_i = sum_l b_l T_l0`.
-    pub noise: Vec<Expression>,
+    /// The vorticity: a zonal profile `omega(z)`, `z = cos(colatitude)` in
+    /// `[-1, 1]`, quantised as quflow does (`W_e = sum_l a_l T_l0`, `a_l` its
+    /// Legendre coefficients up to `l = N - 1`; the mean `a_0` is dropped:
+    /// `W` is trace-free), or `{"harmonics": [[l, m, value], ...]}` in
+    /// quflow's real spherical-harmonic basis (`W_e = sum value T_lm`).
+    pub equilibrium: ZeitlinField,
+    /// Noise stream functions (at most 256), each a zonal profile `xi_i(z)`
+    /// quantised the same way, or `{"harmonics": ...}`.
+    pub noise: Vec<ZeitlinField>,
+}
+
+/// A field of the Zeitlin model: a zonal profile (an expression in `z`), or
+/// quflow's real spherical-harmonic coefficients.
+#[derive(Clone, Debug, PartialEq, Serialize, JsonSchema)]
+#[serde(untagged)]
+pub enum ZeitlinField {
+    /// A zonal profile `f(z)`.
+    Profile(Expression),
+    /// Spherical-harmonic coefficients.
+    Harmonics(HarmonicsDoc),
+}
+
+impl Default for ZeitlinField {
+    fn default() -> Self {
+        ZeitlinField::Profile(Expression::default())
+    }
+}
+
+impl<'de> Deserialize<'de> for ZeitlinField {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        // Through `Value`, so that the message says which forms are accepted
+        // (an untagged enum only says that nothing matched).
+        match Value::deserialize(d)? {
+            Value::String(s) => Ok(ZeitlinField::Profile(Expression(s))),
+            Value::Number(n) => Ok(ZeitlinField::Profile(Expression(n.to_string()))),
+            v @ Value::Object(_) => serde_json::from_value::<HarmonicsDoc>(v)
+                .map(ZeitlinField::Harmonics)
+                .map_err(|e| de::Error::custom(format!("in a harmonics object: {e}"))),
+            other => Err(de::Error::custom(format!(
+                "expected a zonal profile (an expression in z) or {{\"harmonics\": [[l, m, value], ...]}}, found {}",
+                crate::json::type_name(&other)
+            ))),
+        }
+    }
+}
+
+/// quflow's real spherical-harmonic coefficients of a field: `W = sum value
+/// T_lm` over rows `[l, m, value]` with `1 <= l <= N - 1`, `|m| <= l` (quflow's
+/// `omega` vector holds `value` at index `l^2 + l + m`); `value` is an
+/// expression in the parameters (a number, or a constant expression).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HarmonicsDoc {
+    /// Rows `[l, m, value]` (at most 65536).
+    pub harmonics: Vec<Vec<Expression>>,
 }
 
 /// Numerical settings of a Zeitlin spec.
@@ -811,6 +858,19 @@ pub struct ZeitlinSettingsDoc {
     /// N = 1024 and 40 s at N = 2048 on two cores).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy_search_max_n: Option<Count>,
+    /// Fields given by harmonics: largest relative `|[P_e, W_e]|` for an
+    /// equilibrium, and relative off-diagonal part for a zonal frame (1e-15
+    /// to 1e-3, default 1e-10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub equilibrium_tolerance: Option<Real>,
+    /// Fields given by harmonics: largest relative `|[X_i, W_e]|` for
+    /// compatible noise (1e-15 to 1e-3, default 1e-10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_tolerance: Option<Real>,
+    /// Fields given by harmonics: largest `N` for the dense analysis of a
+    /// state zonal about no axis (2 to 48, default 32; `O(N^6)` work).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dense_max_n: Option<Count>,
 }
 
 /// Deserialise a document from a JSON value, naming the JSON path of the

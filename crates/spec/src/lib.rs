@@ -68,8 +68,8 @@ pub use fluid::{
 
 #[cfg(feature = "fluid")]
 pub use zeitlin::{
-    certify_zeitlin, check_zeitlin_certificate, parse_zeitlin_spec, zeitlin_certificate_document,
-    zeitlin_spec_from_value, ZeitlinSpec, N_RANGE, ZEITLIN_TOLERANCE,
+    analyse_zeitlin, certify_zeitlin, check_zeitlin_certificate, parse_zeitlin_spec, zeitlin_certificate_document,
+    zeitlin_spec_from_value, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
 };
 
 /// Whether a spec value is a Zeitlin spec (has a `zeitlin` object at the top).

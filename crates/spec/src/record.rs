@@ -800,6 +800,17 @@ pub struct ZeitlinCertificateDocument {
     /// drift's spectrum was computed (no definite form).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub growth_rate: Option<Float>,
+    /// Fields given by harmonics: the frame of the analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<ZeitlinFrameRecord>,
+    /// Fields given by harmonics, incompatible noise: each field's
+    /// compatible part (its projection onto the matrices that commute with
+    /// `W_e`), as harmonics `[l, m, value]` to paste back into the spec.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub compatible_noise: Vec<Vec<(u64, i64, Float)>>,
+    /// Fields given by harmonics, zonal in no frame: the dense analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dense: Option<ZeitlinDenseRecord>,
     /// The settings in force (all of them).
     pub settings: crate::document::ZeitlinSettingsDoc,
     /// The spec exactly as given.
@@ -866,6 +877,48 @@ pub struct ZeitlinResidualsRecord {
     /// The largest relative `|sym(P A)|` on random probes (zero up to
     /// rounding for a conserved form).
     pub drift: Float,
+}
+
+/// The frame in which a state given by harmonics was analysed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinFrameRecord {
+    /// `zonal` (diagonal as given), `rotated` (zonal about `axis`) or
+    /// `general` (zonal in no frame).
+    pub kind: String,
+    /// The axis `n` with `[n.S, W_e] = 0`, for `rotated`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[Float; 3]>,
+    /// The largest relative off-diagonal part dropped in the zonal frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub off_diagonal: Option<Float>,
+    /// How the frame was found and what it implies.
+    pub meaning: String,
+}
+
+/// The dense energy–Casimir analysis of a state zonal in no frame.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinDenseRecord {
+    /// `N^2 - 1`.
+    pub dimension: u64,
+    /// Whether the eigenvalues of `W_e` are distinct (else no
+    /// energy–Casimir test is made).
+    pub distinct_eigenvalues: bool,
+    /// `max over eps = ±1 of lambda_min(eps R) / max |eig R|`, `R` the
+    /// Hessian of `H + C_Phi` restricted to the orbit's tangent space
+    /// (positive: definite; null when no test was made).
+    pub restricted_margin: Option<Float>,
+    /// The energy coefficient of a definite form (0: none).
+    pub energy_coefficient: Float,
+    /// The infimum of `Sigma^2` over the Casimir Hessian, when definite.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub infimum: Option<Float>,
+    /// `cond(P)` of the chosen form, when definite.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition_number: Option<Float>,
+    /// `|P A + A^T P|_F / (|P|_F |A|_F)` for `P` the Hessian of `H + C_Phi`.
+    pub drift_residual: Float,
 }
 
 /// The JSON Schema of a Zeitlin certificate.

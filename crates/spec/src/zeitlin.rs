@@ -16,17 +16,18 @@
 
 use crate::certificate::{spec_digest, stopping_record, CERTIFICATE_VERSION, ENGINE_VERSION};
 use crate::check::{compare_with, fail, CheckError, CheckReport};
-use crate::document::{Count, Expression, Real, ZeitlinSettingsDoc, ZeitlinSpecDocument};
+use crate::document::{Count, Expression, HarmonicsDoc, Real, ZeitlinField, ZeitlinSettingsDoc, ZeitlinSpecDocument};
 use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
 use crate::parse::Stopping;
 use crate::record::{
-    Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinFormRecord, ZeitlinModelRecord,
-    ZeitlinResidualsRecord,
+    Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinDenseRecord, ZeitlinFormRecord,
+    ZeitlinFrameRecord, ZeitlinModelRecord, ZeitlinResidualsRecord,
 };
 use outcome::{Verdict, VerificationLevel};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use zeitlin::analysis::{analyse, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
+use zeitlin::general::{analyse_general, Frame, GeneralAnalysis, GeneralProblem, GeneralSettings};
 use zeitlin::zonal::quantise;
 
 /// Smallest and largest accepted `N`.
@@ -48,8 +49,8 @@ pub struct ZeitlinSpec {
     pub name: String,
     /// The spec as given.
     pub raw: Value,
-    /// The problem: `N`, the quantised equilibrium and noise.
-    pub problem: ZeitlinProblem,
+    /// The problem: `N`, the equilibrium and the noise.
+    pub input: ZeitlinInput,
     /// The equilibrium's Legendre coefficients `a_0..a_{N-1}` (quflow's
     /// normalisation; `a_0` is dropped from the matrix).
     pub coefficients: Vec<f64>,
@@ -57,11 +58,38 @@ pub struct ZeitlinSpec {
     pub noise_coefficients: Vec<Vec<f64>>,
     /// The stopping question.
     pub stopping: Option<Stopping>,
-    /// Numerical settings.
-    pub settings: ZeitlinSettings,
+    /// Numerical settings (the zonal pipeline's in `settings.zonal`).
+    pub settings: GeneralSettings,
     /// The optional `sweep` section.
     pub sweep: crate::sweep::SweepSection,
 }
+
+/// What a Zeitlin spec gives.
+#[derive(Clone, Debug)]
+pub enum ZeitlinInput {
+    /// Every field a zonal profile: the zonal pipeline.
+    Zonal(ZeitlinProblem),
+    /// Some field given by harmonics: matrices, and the general pipeline
+    /// (which takes a state zonal in some frame to the zonal one).
+    General(GeneralProblem),
+}
+
+impl ZeitlinInput {
+    /// `N`.
+    pub fn n(&self) -> usize {
+        match self {
+            ZeitlinInput::Zonal(p) => p.n,
+            ZeitlinInput::General(p) => p.n,
+        }
+    }
+}
+
+/// Largest `N` for fields given by harmonics (dense `N x N` complex
+/// matrices, `O(N^3)` products: about 3 s at N = 1024).
+pub const HARMONICS_MAX_N: usize = 1024;
+
+/// Most rows of a harmonics list.
+const MAX_HARMONIC_ROWS: usize = 1 << 20;
 
 /// Parse a Zeitlin spec from text.
 pub fn parse_zeitlin_spec(text: &str) -> Result<ZeitlinSpec> {
@@ -106,6 +134,58 @@ fn zonal(e: &Expression, path: &str, n: usize, params: &BTreeMap<String, f64>) -
     Ok((q.diagonal, q.coefficients))
 }
 
+/// The matrix of a field given by harmonics: rows `[l, m, value]`.
+fn harmonics(
+    h: &HarmonicsDoc,
+    path: &str,
+    n: usize,
+    params: &BTreeMap<String, f64>,
+) -> Result<nalgebra::DMatrix<nalgebra::Complex<f64>>> {
+    let hpath = child(path, "harmonics");
+    if h.harmonics.len() > MAX_HARMONIC_ROWS {
+        return Err(SpecError::new(hpath, format!("at most {MAX_HARMONIC_ROWS} rows")));
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    let mut rows = Vec::with_capacity(h.harmonics.len());
+    for (r, row) in h.harmonics.iter().enumerate() {
+        let rpath = index(&hpath, r);
+        if row.len() != 3 {
+            return Err(SpecError::new(&rpath, format!("expected [l, m, value], got {} entries", row.len())));
+        }
+        let integer = |e: &Expression, at: usize| -> Result<i64> {
+            let epath = index(&rpath, at);
+            let x = constant(e, &epath, params)?;
+            if x.fract() != 0.0 || x.abs() > 1e6 {
+                return Err(SpecError::new(epath, format!("must be an integer, got {x}")));
+            }
+            Ok(x as i64)
+        };
+        let (l, m) = (integer(&row[0], 0)?, integer(&row[1], 1)?);
+        if l < 1 || l >= n as i64 {
+            return Err(SpecError::new(
+                index(&rpath, 0),
+                format!(
+                    "l must be between 1 and N - 1 = {} (l = 0 is the trace, which su(N) leaves out), got {l}",
+                    n - 1
+                ),
+            ));
+        }
+        if m.abs() > l {
+            return Err(SpecError::new(index(&rpath, 1), format!("|m| must be at most l = {l}, got {m}")));
+        }
+        if !seen.insert((l, m)) {
+            return Err(SpecError::new(&rpath, format!("(l, m) = ({l}, {m}) appears twice")));
+        }
+        let v = constant(&row[2], &index(&rpath, 2), params)?;
+        rows.push((l as usize, m, v));
+    }
+    let w = zeitlin::sphere::from_harmonics(n, &rows).map_err(|e| SpecError::new(&hpath, e.to_string()))?;
+    if w.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
+        return Err(SpecError::new(hpath, "its matrix overflows the range of doubles: rescale it"));
+    }
+    Ok(w)
+}
+
 /// Parse a Zeitlin spec from a JSON value.
 pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
     let root = "$";
@@ -142,7 +222,6 @@ pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
     if !(N_RANGE.0..=N_RANGE.1).contains(&n) {
         return Err(SpecError::new(npath, format!("must be between {} and {}, got {n}", N_RANGE.0, N_RANGE.1)));
     }
-    let (omega, coefficients) = zonal(&z.equilibrium, &child(&zpath, "equilibrium"), n, &params)?;
     let noise_path = child(&zpath, "noise");
     if z.noise.len() > crate::parse::MAX_NOISE_FIELDS {
         return Err(SpecError::new(
@@ -150,35 +229,78 @@ pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
             format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
         ));
     }
-    let (noise, noise_coefficients): (Vec<Vec<f64>>, Vec<Vec<f64>>) = z
-        .noise
-        .iter()
-        .enumerate()
-        .map(|(i, e)| zonal(e, &index(&noise_path, i), n, &params))
-        .collect::<Result<Vec<_>>>()?
-        .into_iter()
-        .unzip();
+    let fields: Vec<(&ZeitlinField, String)> = std::iter::once((&z.equilibrium, child(&zpath, "equilibrium")))
+        .chain(z.noise.iter().enumerate().map(|(i, f)| (f, index(&noise_path, i))))
+        .collect();
+    let general = fields.iter().any(|(f, _)| matches!(f, ZeitlinField::Harmonics(_)));
+    if general && n > HARMONICS_MAX_N {
+        let (_, path) = fields.iter().find(|(f, _)| matches!(f, ZeitlinField::Harmonics(_))).expect("one");
+        return Err(SpecError::new(
+            path,
+            format!("fields given by harmonics are supported up to N = {HARMONICS_MAX_N} (dense N x N matrices), got N = {n}"),
+        ));
+    }
+    let mut matrices = Vec::new();
+    let mut zonal_parts = Vec::new();
+    for (field, path) in &fields {
+        match field {
+            ZeitlinField::Profile(e) => {
+                let (d, a) = zonal(e, path, n, &params)?;
+                if general {
+                    matrices.push(zeitlin::isospectral::zonal_state(&d));
+                }
+                zonal_parts.push((d, a));
+            }
+            ZeitlinField::Harmonics(h) => {
+                matrices.push(harmonics(h, path, n, &params)?);
+                zonal_parts.push((vec![], vec![]));
+            }
+        }
+    }
+    let (input, coefficients, noise_coefficients) = if general {
+        let w = matrices.remove(0);
+        (ZeitlinInput::General(GeneralProblem { n, w, noise: matrices }), vec![], vec![])
+    } else {
+        let mut parts = zonal_parts.into_iter();
+        let (omega, coefficients) = parts.next().expect("the equilibrium");
+        let (noise, noise_coefficients): (Vec<Vec<f64>>, Vec<Vec<f64>>) = parts.unzip();
+        (ZeitlinInput::Zonal(ZeitlinProblem { n, omega, noise }), coefficients, noise_coefficients)
+    };
     let stopping =
         doc.stopping.as_ref().map(|s| crate::parse::read_stopping(s, &child(root, "stopping"))).transpose()?;
     let settings = match &doc.settings {
         Some(s) => read_settings(s, &child(root, "settings"))?,
-        None => ZeitlinSettings::default(),
+        None => GeneralSettings::default(),
     };
     let names: Vec<String> = params.keys().cloned().collect();
     let sweep = crate::sweep::read_sweep_section(doc.sweep.as_ref(), &child(root, "sweep"), &names)?;
-    Ok(ZeitlinSpec {
-        name,
-        raw: value,
-        problem: ZeitlinProblem { n, omega, noise },
-        coefficients,
-        noise_coefficients,
-        stopping,
-        settings,
-        sweep,
-    })
+    Ok(ZeitlinSpec { name, raw: value, input, coefficients, noise_coefficients, stopping, settings, sweep })
 }
 
-fn read_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<ZeitlinSettings> {
+fn read_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<GeneralSettings> {
+    let mut g = GeneralSettings::default();
+    for (key, value, slot) in [
+        ("equilibrium_tolerance", doc.equilibrium_tolerance, &mut g.equilibrium_tolerance),
+        ("noise_tolerance", doc.noise_tolerance, &mut g.noise_tolerance),
+    ] {
+        if let Some(Real(x)) = value {
+            if !(1e-15..=1e-3).contains(&x) {
+                return Err(SpecError::new(child(path, key), format!("must be between 1e-15 and 1e-3, got {x}")));
+            }
+            *slot = x;
+        }
+    }
+    if let Some(Count(m)) = doc.dense_max_n {
+        if !(2..=48).contains(&m) {
+            return Err(SpecError::new(child(path, "dense_max_n"), format!("must be between 2 and 48, got {m}")));
+        }
+        g.dense_max_n = m as usize;
+    }
+    g.zonal = read_zonal_settings(doc, path)?;
+    Ok(g)
+}
+
+fn read_zonal_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<ZeitlinSettings> {
     let mut s = ZeitlinSettings::default();
     if let Some(Real(x)) = doc.tolerance {
         if !(1e-14..=1e-3).contains(&x) {
@@ -206,29 +328,65 @@ fn read_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<ZeitlinSettings
     Ok(s)
 }
 
-/// The settings as the certificate records them (all keys).
-fn settings_document(s: &ZeitlinSettings) -> ZeitlinSettingsDoc {
+/// The settings as the certificate records them (all keys; those of the
+/// general pipeline only where it ran).
+fn settings_document(g: &GeneralSettings, general: bool) -> ZeitlinSettingsDoc {
+    let s = &g.zonal;
     ZeitlinSettingsDoc {
         tolerance: Some(Real(s.tolerance)),
         casimir_momentum: Some(s.casimir_momentum),
         instability_max_n: Some(Count(s.instability_max_n as u64)),
         energy_search_max_n: Some(Count(s.energy_search_max_n as u64)),
+        equilibrium_tolerance: general.then_some(Real(g.equilibrium_tolerance)),
+        noise_tolerance: general.then_some(Real(g.noise_tolerance)),
+        dense_max_n: general.then_some(Count(g.dense_max_n as u64)),
+    }
+}
+
+/// The analysis of a Zeitlin spec: the zonal pipeline's, or the general one's.
+#[derive(Clone, Debug)]
+pub enum ZeitlinOutcome {
+    /// Zonal profiles.
+    Zonal(std::result::Result<ZeitlinAnalysis, ZeitlinError>),
+    /// Fields given by harmonics (boxed: it holds a zonal analysis too).
+    General(Box<std::result::Result<GeneralAnalysis, ZeitlinError>>),
+}
+
+/// Run the pipeline the spec's input calls for.
+pub fn analyse_zeitlin(spec: &ZeitlinSpec) -> ZeitlinOutcome {
+    match &spec.input {
+        ZeitlinInput::Zonal(p) => ZeitlinOutcome::Zonal(analyse(p, &spec.settings.zonal)),
+        ZeitlinInput::General(p) => ZeitlinOutcome::General(Box::new(analyse_general(p, &spec.settings))),
     }
 }
 
 /// Run the Zeitlin pipeline and build the certificate JSON.
 pub fn certify_zeitlin(spec: &ZeitlinSpec) -> Value {
-    let analysis = analyse(&spec.problem, &spec.settings);
+    let analysis = analyse_zeitlin(spec);
     serde_json::to_value(zeitlin_certificate_document(spec, &analysis)).unwrap_or_default()
+}
+
+/// Largest degree `l` of the harmonics a certificate lists.
+const LISTED_DEGREE: usize = 128;
+
+/// The harmonics `[l, m, value]` of a matrix (quflow's order) up to
+/// `l = 128`, keeping those above 1e-13 of the largest, at most 4096 of them.
+fn harmonics_record(w: &nalgebra::DMatrix<nalgebra::Complex<f64>>) -> Vec<(u64, i64, Float)> {
+    let n = w.nrows();
+    let all = zeitlin::sphere::to_harmonics(w, n.saturating_sub(1).min(LISTED_DEGREE)).unwrap_or_default();
+    let top = all.iter().fold(0.0f64, |a, (_, _, v)| a.max(v.abs()));
+    all.into_iter()
+        .filter(|(_, _, v)| v.abs() > 1e-13 * top)
+        .take(4096)
+        .map(|(l, m, v)| (l as u64, m, Float(v)))
+        .collect()
 }
 
 /// The typed certificate of a Zeitlin spec from its analysis (an analysis
 /// error gives an `inconclusive` certificate that says why).
-pub fn zeitlin_certificate_document(
-    spec: &ZeitlinSpec,
-    analysis: &std::result::Result<ZeitlinAnalysis, ZeitlinError>,
-) -> ZeitlinCertificateDocument {
-    let n = spec.problem.n;
+pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome) -> ZeitlinCertificateDocument {
+    let n = spec.input.n();
+    let general = matches!(spec.input, ZeitlinInput::General(_));
     // a_1..a_L, up to the last one above 1e-14 of the largest, at most 64.
     let listed = |a: &[f64]| -> Vec<Float> {
         let scale = a.iter().skip(1).fold(0.0f64, |m, x| m.max(x.abs()));
@@ -239,8 +397,16 @@ pub fn zeitlin_certificate_document(
         n: n as u64,
         dimension: (n * n - 1) as u64,
         hbar: Float(hbar(n)),
-        formulation: "dW = [P, W]/hbar dt + sum_i [X_i, W]/hbar o dB^i, Delta_N P = W (Hoppe–Yau Laplacian, eigenvalues -l(l+1)), hbar = 2/sqrt(N^2 - 1), <A, B> = Re tr(A B*)/N; W_e = i diag(omega) zonal, X_i = i diag(xi_i) zonal; a perturbation splits by its off-diagonal m = 1..N-1 into independent blocks".into(),
-        quantisation: "quflow's: a_l = 1/2 int_{-1}^{1} f(z) sqrt(2l+1) P_l(z) dz by Gauss–Legendre on 2N + 32 nodes, W = sum_{l=1}^{N-1} a_l T_l0, T_l0 = i sqrt(N) diag(u_l) with u_l the l-th eigenvector of the zonal Laplacian block (last entry positive); a_0 (the mean) is dropped".into(),
+        formulation: if general {
+            "dW = [P, W]/hbar dt + sum_i [X_i, W]/hbar o dB^i, Delta_N P = W (Hoppe–Yau Laplacian, eigenvalues -l(l+1)), hbar = 2/sqrt(N^2 - 1), <A, B> = Re tr(A B*)/N; W_e and X_i skew-Hermitian matrices".into()
+        } else {
+            "dW = [P, W]/hbar dt + sum_i [X_i, W]/hbar o dB^i, Delta_N P = W (Hoppe–Yau Laplacian, eigenvalues -l(l+1)), hbar = 2/sqrt(N^2 - 1), <A, B> = Re tr(A B*)/N; W_e = i diag(omega) zonal, X_i = i diag(xi_i) zonal; a perturbation splits by its off-diagonal m = 1..N-1 into independent blocks".into()
+        },
+        quantisation: if general {
+            "fields given by harmonics: W = sum value T_lm in quflow's real spherical-harmonic basis (shr2mat: T_lm from the eigenvectors of the Laplacian block on diagonal |m|); zonal profiles as quflow quantises them (a_l by Gauss–Legendre on 2N + 32 nodes, W = sum a_l T_l0, a_0 dropped)".into()
+        } else {
+            "quflow's: a_l = 1/2 int_{-1}^{1} f(z) sqrt(2l+1) P_l(z) dz by Gauss–Legendre on 2N + 32 nodes, W = sum_{l=1}^{N-1} a_l T_l0, T_l0 = i sqrt(N) diag(u_l) with u_l the l-th eigenvector of the zonal Laplacian block (last entry positive); a_0 (the mean) is dropped".into()
+        },
         equilibrium_coefficients: listed(&spec.coefficients),
         noise_coefficients: spec.noise_coefficients.iter().map(|a| listed(a)).collect(),
     };
@@ -262,37 +428,158 @@ pub fn zeitlin_certificate_document(
         blocks: vec![],
         residuals: ZeitlinResidualsRecord { equilibrium: Float(0.0), noise: Float(0.0), drift: Float(0.0) },
         growth_rate: None,
-        settings: settings_document(&spec.settings),
+        frame: None,
+        compatible_noise: vec![],
+        dense: None,
+        settings: settings_document(&spec.settings, general),
         spec: spec.raw.clone(),
     };
-    let a = match analysis {
-        Ok(a) => a,
-        Err(e) => {
-            doc.reason = format!("the analysis could not run: {e}");
-            return doc;
-        }
-    };
-    doc.verdict = a.verdict;
-    doc.reason = a.reason.clone();
-    doc.residuals = ZeitlinResidualsRecord {
-        equilibrium: Float(a.equilibrium_residual),
-        noise: Float(a.noise_residual),
-        drift: Float(a.drift_residual),
-    };
-    // Below the instability threshold the rate is rounding (an imaginary
-    // eigenvalue moved off the axis by about sqrt(eps) |A|): it differs
-    // between machines and is not recorded; the reason says what it shows.
-    doc.growth_rate = a.growth_rate.filter(|_| a.verdict == Verdict::LinearlyUnstable).map(Float);
     let mut checks = BTreeMap::new();
-    checks.insert(
-        "equilibrium".to_string(),
-        "W_e and P_e = Delta_N^-1 W_e are diagonal, so [P_e, W_e] = 0; zonal noise commutes with W_e: compatible"
-            .to_string(),
-    );
     checks.insert(
         "discretisation".to_string(),
         "the claims are about the Zeitlin model at this N (a finite-dimensional Lie–Poisson system in its own right), not about the continuum Euler equations".to_string(),
     );
+    match outcome {
+        ZeitlinOutcome::Zonal(Err(e)) => {
+            doc.reason = format!("the analysis could not run: {e}");
+        }
+        ZeitlinOutcome::General(g) => match g.as_ref() {
+            Err(e) => doc.reason = format!("the analysis could not run: {e}"),
+            Ok(g) => fill_general(&mut doc, &mut checks, spec, g),
+        },
+        ZeitlinOutcome::Zonal(Ok(a)) => {
+            checks.insert(
+                "equilibrium".to_string(),
+                "W_e and P_e = Delta_N^-1 W_e are diagonal, so [P_e, W_e] = 0; zonal noise commutes with W_e: compatible"
+                    .to_string(),
+            );
+            doc.residuals = ZeitlinResidualsRecord {
+                equilibrium: Float(a.equilibrium_residual),
+                noise: Float(a.noise_residual),
+                drift: Float(a.drift_residual),
+            };
+            fill_zonal(&mut doc, &mut checks, spec, a);
+        }
+    }
+    doc.checks = checks;
+    doc
+}
+
+/// The verdict and its evidence from a general analysis.
+fn fill_general(
+    doc: &mut ZeitlinCertificateDocument,
+    checks: &mut BTreeMap<String, String>,
+    spec: &ZeitlinSpec,
+    g: &GeneralAnalysis,
+) {
+    doc.verdict = g.verdict;
+    doc.reason = g.reason.clone();
+    // `inconclusive` claims nothing (as the zonal pipeline's certificates say).
+    doc.level = LevelOrNone((g.verdict != Verdict::Inconclusive).then_some(g.level));
+    doc.residuals = ZeitlinResidualsRecord {
+        equilibrium: Float(g.equilibrium_residual),
+        noise: Float(g.noise_residuals.iter().fold(0.0f64, |a, x| a.max(*x))),
+        drift: Float(0.0),
+    };
+    checks.insert(
+        "equilibrium".to_string(),
+        format!(
+            "numerical: |[P_e, W_e]|_F / (|P_e|_F |W_e|_F) = residuals.equilibrium against settings.equilibrium_tolerance = {:e}, with P_e from the O(N^2) stream solve; |[X_i, W_e]|_F / (|X_i|_F |W_e|_F) against settings.noise_tolerance = {:e} (residuals.noise, the largest)",
+            spec.settings.equilibrium_tolerance, spec.settings.noise_tolerance
+        ),
+    );
+    match g.verdict {
+        Verdict::NotAnEquilibrium => return,
+        Verdict::NoiseIncompatible => {
+            doc.compatible_noise = g.compatible_noise.iter().map(harmonics_record).collect();
+            checks.insert(
+                "compatible_noise".to_string(),
+                "each field's projection onto the matrices that commute with W_e (in W_e's eigenbasis, the entries between equal eigenvalues), as [l, m, value] rows (up to l = 128, those above 1e-13 of the largest) to paste into the spec's noise as {\"harmonics\": ...}".to_string(),
+            );
+            return;
+        }
+        _ => {}
+    }
+    match &g.frame {
+        Some(Frame::Zonal) | Some(Frame::Rotated { .. }) => {
+            let r = g.zonal.as_ref().expect("a zonal frame has its reduction");
+            let (kind, axis, meaning) = match &g.frame {
+                Some(Frame::Rotated { axis }) => (
+                    "rotated",
+                    Some(axis.map(Float)),
+                    "W_e commutes with n.S for the axis n (the null vector of the Gram matrix of [S_a, W_e], measured directly); V = exp(-i theta u.S) takes n to the pole and V^* W_e V is diagonal up to off_diagonal (dropped). The Laplacian and the inner product commute with Ad_V, so the rotated system is the same stochastic system: the zonal pipeline's claims below are about the rotated, diagonal problem as stored",
+                ),
+                _ => ("zonal", None, "W_e and the noise are diagonal as given (up to off_diagonal, dropped): the zonal pipeline's claims below are about the diagonal problem as stored"),
+            };
+            doc.frame = Some(ZeitlinFrameRecord {
+                kind: kind.into(),
+                axis,
+                off_diagonal: Some(Float(r.off_diagonal)),
+                meaning: meaning.into(),
+            });
+            doc.residuals.drift = Float(r.analysis.drift_residual);
+            fill_zonal(doc, checks, spec, &r.analysis);
+            doc.reason = g.reason.clone();
+        }
+        Some(Frame::General) => {
+            doc.frame = Some(ZeitlinFrameRecord {
+                kind: "general".into(),
+                axis: None,
+                off_diagonal: None,
+                meaning: "W_e commutes with n.S for no axis n: it is zonal in no frame, and the energy–Casimir method runs densely in real orthonormal coordinates of su(N) in W_e's eigenbasis (no momentum multiplier: criticality would need [n.S, W_e] = 0)".into(),
+            });
+            if let Some(d) = &g.dense {
+                doc.residuals.drift = Float(d.drift_residual);
+                doc.dense = Some(ZeitlinDenseRecord {
+                    dimension: d.dimension as u64,
+                    distinct_eigenvalues: d.distinct_eigenvalues,
+                    restricted_margin: d.restricted_margin.is_finite().then_some(Float(d.restricted_margin)),
+                    energy_coefficient: Float(d.energy),
+                    infimum: d.infimum.map(Float),
+                    condition_number: d.condition_number.map(Float),
+                    drift_residual: Float(d.drift_residual),
+                });
+                doc.growth_rate = d.growth_rate.filter(|_| g.verdict == Verdict::LinearlyUnstable).map(Float);
+                match g.verdict {
+                    Verdict::Stable => {
+                        doc.sigma2 = d.sigma2.map(Float);
+                        checks.insert(
+                            "sigma2".to_string(),
+                            "numerical: lambda_max(Q, P) by a dense generalized eigenproblem at a Casimir Hessian built for a target just above the infimum over it (dense.infimum)".to_string(),
+                        );
+                        doc.stopping = stopping_record(
+                            spec.stopping,
+                            d.sigma2,
+                            "P(|dW_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dW_0|_P^2 = delta, with the numerical Sigma^2: an estimate, not a guarantee",
+                        );
+                    }
+                    Verdict::LinearlyUnstable => {
+                        checks.insert(
+                            "instability".to_string(),
+                            "numerical: the eigenvalues of the dense drift (dimension N^2 - 1, faer), and the largest real part exceeds 1e-6 of the largest modulus".to_string(),
+                        );
+                    }
+                    _ => {}
+                }
+            }
+        }
+        None => {}
+    }
+}
+
+/// The verdict and its evidence from the zonal pipeline's analysis.
+fn fill_zonal(
+    doc: &mut ZeitlinCertificateDocument,
+    checks: &mut BTreeMap<String, String>,
+    spec: &ZeitlinSpec,
+    a: &ZeitlinAnalysis,
+) {
+    doc.verdict = a.verdict;
+    doc.reason = a.reason.clone();
+    // Below the instability threshold the rate is rounding (an imaginary
+    // eigenvalue moved off the axis by about sqrt(eps) |A|): it differs
+    // between machines and is not recorded; the reason says what it shows.
+    doc.growth_rate = a.growth_rate.filter(|_| a.verdict == Verdict::LinearlyUnstable).map(Float);
     match a.verdict {
         Verdict::Stable => {
             let choice = a.choice.as_ref();
@@ -331,7 +618,7 @@ pub fn zeitlin_certificate_document(
             doc.form = choice.map(|c| ZeitlinFormRecord {
                 family: format!(
                     "eps H + tr Phi(W)/N + beta J with eps in {{{}}} (P is defined up to a positive factor), beta by golden section on the definite interval, Phi'' fixed by the first variation on distinct eigenvalues of W_e",
-                    if spec.settings.casimir_momentum { "0, +1, -1; eps = 0 first" } else { "+1, -1" }
+                    if spec.settings.zonal.casimir_momentum { "0, +1, -1; eps = 0 first" } else { "+1, -1" }
                 ),
                 energy_coefficient: Float(c.energy),
                 momentum_coefficient: Float(c.momentum),
@@ -357,8 +644,6 @@ pub fn zeitlin_certificate_document(
         }
         _ => {}
     }
-    doc.checks = checks;
-    doc
 }
 
 /// Re-check a Zeitlin certificate: its shape, the embedded spec and
@@ -377,7 +662,7 @@ pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckRepor
         )
     })?;
     spec.settings = match map.get("settings") {
-        None => ZeitlinSettings::default(),
+        None => GeneralSettings::default(),
         Some(v) => crate::document::from_value_at::<ZeitlinSettingsDoc>(v, "$.settings")
             .and_then(|d| read_settings(&d, "$.settings"))
             .map_err(|e| fail(&e.path, format!("the recorded settings are not valid: {}", e.message)))?,
@@ -385,16 +670,20 @@ pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckRepor
     if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {
         return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
     }
-    let analysis = analyse(&spec.problem, &spec.settings);
+    let analysis = analyse_zeitlin(&spec);
     let expected = serde_json::to_value(zeitlin_certificate_document(&spec, &analysis)).unwrap_or_default();
     compare_with(&expected, cert, "$", 0.0, ZEITLIN_TOLERANCE)?;
-    let (verdict, level, sigma2) = match &analysis {
-        Ok(a) => (
-            a.verdict,
-            expected.get("level").and_then(Value::as_str).and_then(|s| s.parse::<VerificationLevel>().ok()),
-            a.sigma2,
-        ),
-        Err(_) => (Verdict::Inconclusive, None, None),
+    let level = expected.get("level").and_then(Value::as_str).and_then(|s| s.parse::<VerificationLevel>().ok());
+    let (verdict, sigma2) = match &analysis {
+        ZeitlinOutcome::Zonal(Ok(a)) => (a.verdict, a.sigma2),
+        ZeitlinOutcome::General(g) => match g.as_ref() {
+            Ok(g) => (
+                g.verdict,
+                g.zonal.as_ref().and_then(|r| r.analysis.sigma2).or(g.dense.as_ref().and_then(|d| d.sigma2)),
+            ),
+            Err(_) => (Verdict::Inconclusive, None),
+        },
+        _ => (Verdict::Inconclusive, None),
     };
     Ok(CheckReport { name: spec.name.clone(), verdict, level, sigma2 })
 }

@@ -136,7 +136,7 @@ pub struct ZeitlinAnalysis {
     pub sigma2: Option<f64>,
     /// A proved upper bound on `Sigma^2` (`verified_float`): `s P_m - Q_m`
     /// is shown positive definite in every block by a verified inertia test
-    /// of a banded lifting (see [`Block::lifted`]). `Some(0)` under exact
+    /// of a banded lifting (docs/zeitlin.md, "Sigma^2"). `Some(0)` under exact
     /// structure (`Q = 0`).
     pub sigma2_upper: Option<f64>,
     /// Whether the minimum over the family is attained (false when it is

@@ -29,3 +29,120 @@ pub fn real_eigenvalues(k: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
     let values = m.eigenvalues().ok()?;
     Some(values.iter().map(|z| Complex::new(z.re, z.im)).collect())
 }
+
+fn to_faer(m: &DMatrix<f64>) -> faer::Mat<f64> {
+    faer::Mat::<f64>::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
+}
+
+/// The eigenvalues of a real symmetric matrix (its lower triangle),
+/// ascending; `None` when an entry is not finite or faer's iteration did not
+/// converge.
+///
+/// ```
+/// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
+/// let ev = zeitlin::eigen::symmetric_eigenvalues(&m).unwrap();
+/// assert!((ev[0] - 1.0).abs() < 1e-15 && (ev[1] - 3.0).abs() < 1e-15);
+/// ```
+pub fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
+    if m.nrows() != m.ncols() || m.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    if m.nrows() == 0 {
+        return Some(vec![]);
+    }
+    to_faer(m).self_adjoint_eigenvalues(faer::Side::Lower).ok()
+}
+
+/// `lambda_max(Q, P)` for symmetric `Q` and `P ≻ 0`, by the Cholesky factor
+/// of `P` (`C = L^-1 Q L^-T`); `None` when `P` is not numerically positive
+/// definite or a value is not finite.
+///
+/// ```
+/// // P = [[2, 1], [1, 2]], Q = [[1, 0], [0, 0]]: det(Q - l P) = 3 l^2 - 2 l, l = 2/3
+/// let p = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
+/// let q = nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.0]);
+/// assert!((zeitlin::eigen::largest_generalized(&p, &q).unwrap() - 2.0 / 3.0).abs() < 1e-15);
+/// ```
+pub fn largest_generalized(p: &DMatrix<f64>, q: &DMatrix<f64>) -> Option<f64> {
+    let n = p.nrows();
+    if n == 0 || p.iter().chain(q.iter()).any(|x| !x.is_finite()) {
+        return None;
+    }
+    let l = p.clone().cholesky()?.l();
+    let lq = l.solve_lower_triangular(q)?;
+    let c = l.solve_lower_triangular(&lq.transpose())?;
+    let c = (&c + c.transpose()) * 0.5;
+    symmetric_eigenvalues(&c)?.last().copied()
+}
+
+/// `lambda_max / lambda_min` of a symmetric positive definite matrix
+/// (infinite when the smallest eigenvalue is not resolved above rounding).
+///
+/// ```
+/// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, 1.0]);
+/// assert!((zeitlin::eigen::condition_number(&m) - 4.0).abs() < 1e-14);
+/// ```
+pub fn condition_number(m: &DMatrix<f64>) -> f64 {
+    match symmetric_eigenvalues(m) {
+        Some(ev) if !ev.is_empty() => {
+            let (lo, hi) = (ev[0], ev.iter().fold(0.0f64, |a, x| a.max(x.abs())));
+            if lo > hi * 1e-15 {
+                hi / lo
+            } else {
+                f64::INFINITY
+            }
+        }
+        _ => f64::INFINITY,
+    }
+}
+
+type C = Complex<f64>;
+
+fn to_faer_c(m: &DMatrix<C>) -> faer::Mat<C> {
+    faer::Mat::<C>::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
+}
+
+fn from_faer_c(m: faer::MatRef<'_, C>) -> DMatrix<C> {
+    DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
+}
+
+/// The product of two complex matrices by faer (nalgebra multiplies complex
+/// matrices without a blocked kernel: at N = 1024 some ten times slower).
+///
+/// ```
+/// use nalgebra::{Complex, DMatrix};
+/// let a = DMatrix::from_fn(3, 2, |i, j| Complex::new(i as f64, j as f64));
+/// let b = DMatrix::from_fn(2, 4, |i, j| Complex::new(1.0 + j as f64, -(i as f64)));
+/// assert!((zeitlin::eigen::complex_product(&a, &b) - &a * &b).norm() < 1e-14);
+/// ```
+pub fn complex_product(a: &DMatrix<C>, b: &DMatrix<C>) -> DMatrix<C> {
+    assert_eq!(a.ncols(), b.nrows(), "dimension mismatch in product");
+    let c = to_faer_c(a) * to_faer_c(b);
+    from_faer_c(c.as_ref())
+}
+
+/// The eigen-decomposition of a Hermitian matrix (its lower triangle) by
+/// faer: eigenvalues ascending and the unitary `U` with `H = U diag U^*`;
+/// `None` when an entry is not finite or the iteration did not converge.
+///
+/// ```
+/// use nalgebra::{Complex, DMatrix};
+/// // [[2, i], [-i, 2]]: eigenvalues 1 and 3
+/// let h = DMatrix::from_row_slice(2, 2, &[Complex::new(2.0, 0.0), Complex::new(0.0, 1.0), Complex::new(0.0, -1.0), Complex::new(2.0, 0.0)]);
+/// let (values, u) = zeitlin::eigen::hermitian_eigen(&h).unwrap();
+/// assert!((values[0] - 1.0).abs() < 1e-14 && (values[1] - 3.0).abs() < 1e-14);
+/// let d = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(values.iter().map(|v| Complex::new(*v, 0.0)).collect()));
+/// assert!((&u * d * u.adjoint() - h).norm() < 1e-14);
+/// ```
+pub fn hermitian_eigen(h: &DMatrix<C>) -> Option<(Vec<f64>, DMatrix<C>)> {
+    let n = h.nrows();
+    if n != h.ncols() || h.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
+        return None;
+    }
+    if n == 0 {
+        return Some((vec![], DMatrix::zeros(0, 0)));
+    }
+    let e = to_faer_c(h).self_adjoint_eigen(faer::Side::Lower).ok()?;
+    let values: Vec<f64> = (0..n).map(|i| e.S()[i].re).collect();
+    Some((values, from_faer_c(e.U())))
+}

@@ -5,6 +5,9 @@
 //!
 //! * [`laplacian`]: the Hoppe–Yau Laplacian on one off-diagonal (tridiagonal);
 //! * [`zonal`]: zonal harmonics `T_{l0}` and the quantisation of a profile `omega(z)`;
+//! * [`general`]: equilibria and noise given as matrices: the checks, the zonal frame of a
+//!   tilted zonal state, and a dense analysis of states zonal in no frame;
+//! * [`sphere`]: quflow's real spherical-harmonic basis `T_lm`, spin matrices and rotations;
 //! * [`analysis`]: the per-block energy–Casimir–momentum form, `Q`, and `Sigma^2`;
 //! * [`isospectral`]: Monte Carlo of the full nonlinear model with the
 //!   Casimir-preserving stochastic isospectral midpoint, and an `O(N^2)` stream solve.
@@ -16,6 +19,8 @@
 
 pub mod analysis;
 pub mod eigen;
+pub mod general;
 pub mod isospectral;
 pub mod laplacian;
+pub mod sphere;
 pub mod zonal;
