@@ -197,3 +197,121 @@ fn the_cli_certifies_checks_and_refuses_tampering() {
         assert!(stderr(&out).contains(path), "{path}: {}", stderr(&out));
     }
 }
+
+/// A `.npy` file as NumPy writes it (format 1.0: magic, header length,
+/// the header dict padded with spaces to a multiple of 64 bytes and ended
+/// by a newline, then the little-endian data), written here by hand rather
+/// than by the crate the engine reads with.
+fn npy_bytes(w: &nalgebra::DMatrix<nalgebra::Complex<f64>>, fortran: bool, descr: &str) -> Vec<u8> {
+    let (r, c) = w.shape();
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': ({r}, {c}), }}",
+        if fortran { "True" } else { "False" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    let at = |k: usize| if fortran { w[(k % r, k / r)] } else { w[(k / c, k % c)] };
+    for k in 0..r * c {
+        let z = at(k);
+        out.extend_from_slice(&z.re.to_le_bytes());
+        if descr == "<c16" {
+            out.extend_from_slice(&z.im.to_le_bytes());
+        }
+    }
+    out
+}
+
+fn write_bytes(dir: &std::path::Path, name: &str, bytes: &[u8]) {
+    std::fs::File::create(dir.join(name)).unwrap().write_all(bytes).unwrap();
+}
+
+/// A state and noise read from `.npy` files (C and Fortran order) give the
+/// certificate of the same fields given by harmonics; the files are read
+/// relative to the spec's folder (and the certificate's, by check), a
+/// changed file fails the check, and paths that leave the folder, missing
+/// files, wrong shapes, real arrays, Hermitian matrices and non-npy bytes
+/// are bad input naming the field.
+#[test]
+fn npy_fields_read_relative_to_the_spec_and_are_pinned_by_their_hash() {
+    let n = 12;
+    let rows = json!([[1, 0, 0.8], [1, 1, 0.6], [3, 2, 0.0]]);
+    let noise_rows = json!([[1, 0, 0.08], [1, 1, 0.06]]);
+    let to_rows = |v: &Value| -> Vec<(usize, i64, f64)> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|r| (r[0].as_u64().unwrap() as usize, r[1].as_i64().unwrap(), r[2].as_f64().unwrap()))
+            .collect()
+    };
+    let w = zeitlin::sphere::from_harmonics(n, &to_rows(&rows)).unwrap();
+    let x = zeitlin::sphere::from_harmonics(n, &to_rows(&noise_rows)).unwrap();
+    let dir = std::env::temp_dir().join(format!("verify-zeitlin-npy-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("states")).unwrap();
+    write_bytes(&dir, "states/w.npy", &npy_bytes(&w, false, "<c16"));
+    write_bytes(&dir, "states/wf.npy", &npy_bytes(&w, true, "<c16"));
+    write_bytes(&dir, "states/x.npy", &npy_bytes(&x, false, "<c16"));
+    let by_harmonics = certify(
+        &json!({"name": "h", "zeitlin": {"N": n, "equilibrium": {"harmonics": rows}, "noise": [{"harmonics": noise_rows}]}}),
+    );
+    for file in ["states/w.npy", "states/wf.npy"] {
+        let spec =
+            json!({"name": "h", "zeitlin": {"N": n, "equilibrium": {"npy": file}, "noise": [{"npy": "states/x.npy"}]}});
+        let spec_file = dir.join("spec.json");
+        std::fs::write(&spec_file, spec.to_string()).unwrap();
+        let cert_file = dir.join("spec.cert.json");
+        // From another working directory: the paths are the spec's.
+        let out = Command::new(env!("CARGO_BIN_EXE_verify"))
+            .args(["certify", spec_file.to_str().unwrap(), "-o", cert_file.to_str().unwrap()])
+            .current_dir(std::env::temp_dir())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        let cert: Value = serde_json::from_str(&std::fs::read_to_string(&cert_file).unwrap()).unwrap();
+        for key in ["verdict", "level", "sigma2", "frame", "form"] {
+            assert_eq!(cert[key], by_harmonics[key], "{file}: {key}");
+        }
+        assert_eq!(cert["model"]["files"][0]["path"], file);
+        assert_eq!(cert["model"]["files"][0]["sha256"].as_str().unwrap().len(), 64);
+        let out = verify(&["check", cert_file.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    }
+    // The file changes after the certificate was written: check fails.
+    let cert_file = dir.join("spec.cert.json");
+    write_bytes(&dir, "states/wf.npy", &npy_bytes(&(&w * nalgebra::Complex::new(1.0 + 1e-7, 0.0)), true, "<c16"));
+    let out = verify(&["check", cert_file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("$.model.files[0].sha256"), "{}", stderr(&out));
+    // Bad files and paths.
+    let hermitian = &w * nalgebra::Complex::new(0.0, 1.0);
+    write_bytes(&dir, "states/hermitian.npy", &npy_bytes(&hermitian, false, "<c16"));
+    write_bytes(&dir, "states/real.npy", &npy_bytes(&w, false, "<f8"));
+    write_bytes(&dir, "states/small.npy", &npy_bytes(&zeitlin::sphere::harmonic(4, 1, 0).unwrap(), false, "<c16"));
+    write_bytes(&dir, "states/junk.npy", b"not an array");
+    let cases = [
+        ("../w.npy", "no '..'"),
+        ("/etc/passwd.npy", "not absolute"),
+        ("states/w.txt", "relative path to a .npy file"),
+        ("states/missing.npy", "cannot read"),
+        ("states", "relative path to a .npy file"),
+        ("states/small.npy", "expected [12, 12]"),
+        ("states/real.npy", "complex128"),
+        ("states/hermitian.npy", "not skew-Hermitian"),
+        ("states/junk.npy", "not a .npy file"),
+    ];
+    for (file, words) in cases {
+        let spec = json!({"name": "h", "zeitlin": {"N": n, "equilibrium": {"npy": file}, "noise": []}});
+        let e = spec::zeitlin_spec_from_value_in(spec.clone(), Some(&dir)).expect_err(file);
+        assert_eq!(e.path, "$.zeitlin.equilibrium.npy", "{e}");
+        assert!(e.message.contains(words), "{file}: {e}");
+        let spec_file = dir.join("bad.json");
+        std::fs::write(&spec_file, spec.to_string()).unwrap();
+        let out = verify(&["certify", spec_file.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(stderr(&out).contains("$.zeitlin.equilibrium.npy"), "{}", stderr(&out));
+    }
+}

@@ -20,7 +20,7 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use serde_json::Value;
-use spec::{check_certificate, parse_any_spec, CheckError};
+use spec::{check_certificate_in, parse_any_spec_in, CheckError};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -118,7 +118,8 @@ fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failur
         paths::check_output_file(path, "-o")?;
     }
     let text = read(spec_path)?;
-    let spec = parse_any_spec(&text).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
+    let spec = parse_any_spec_in(&text, spec_path.parent())
+        .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
     let cert = spec.certify();
     let pretty = spec::to_pretty_json(&cert);
     match output {
@@ -167,9 +168,9 @@ fn summary(cert: &Value) -> String {
 
 /// Whether `text` is a spec rather than a certificate: a JSON object with
 /// no `spec` field that the spec parser accepts.
-fn is_a_spec(text: &str) -> bool {
+fn is_a_spec(text: &str, base: Option<&Path>) -> bool {
     serde_json::from_str::<Value>(text).is_ok_and(|v| v.get("spec").is_none() && v.is_object())
-        && parse_any_spec(text).is_ok()
+        && parse_any_spec_in(text, base).is_ok()
 }
 
 fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
@@ -189,7 +190,7 @@ fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
                 continue;
             }
         };
-        if is_a_spec(&text) {
+        if is_a_spec(&text, path.parent()) {
             bad(format!(
                 "{}: this is a spec, not a certificate: run `verify certify {} -o CERT` first, then check CERT",
                 path.display(),
@@ -197,7 +198,7 @@ fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
             ));
             continue;
         }
-        match check_certificate(&text) {
+        match check_certificate_in(&text, path.parent()) {
             Ok(report) => {
                 // Display prints every digit of 3e300 or 3e-300: exponent form there
                 let s2 = report

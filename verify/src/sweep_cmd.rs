@@ -5,7 +5,7 @@ use crate::messages::{excerpt, quoting};
 use crate::paths::{check_output_file, ensure_output_dir};
 use crate::{read, Failure};
 use clap::Args;
-use spec::{parse_any_spec, ParamRange};
+use spec::{parse_any_spec_in, ParamRange};
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -115,7 +115,8 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         ensure_output_dir(dir, "--plot")?;
     }
     let text = read(&args.spec)?;
-    let spec = parse_any_spec(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
+    let spec =
+        parse_any_spec_in(&text, args.spec.parent()).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let ranges: Vec<ParamRange> = if args.params.is_empty() {
         spec.sweep().ranges.clone()
     } else {

@@ -17,7 +17,7 @@ use crate::{read, Failure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde_json::Value;
-use spec::{parse_any_spec, Annotation, AnySpec};
+use spec::{parse_any_spec_in, Annotation, AnySpec};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -81,8 +81,8 @@ pub fn plot_files(
     out: &Path,
     shade: Option<Shade>,
 ) -> Result<Vec<PathBuf>, Failure> {
-    let spec =
-        parse_any_spec(&read(spec_path)?).map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
+    let spec = parse_any_spec_in(&read(spec_path)?, spec_path.parent())
+        .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
     let known = spec.parameter_names();
     let tag = sweep::spec_tag(&spec);
     let mut untagged = 0usize;

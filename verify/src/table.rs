@@ -4,7 +4,7 @@ use crate::messages::{cut_message, excerpt};
 use crate::paths::write_atomic;
 use crate::Failure;
 use serde_json::Value;
-use spec::{check_certificate, parse_any_spec, CheckError};
+use spec::{check_certificate_in, parse_any_spec_in, CheckError};
 use std::path::{Path, PathBuf};
 
 /// A number (or the string "infinity") in a compact form.
@@ -58,7 +58,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
     let (mut bad, mut failed) = (0, 0);
     for path in &specs {
         let text = std::fs::read_to_string(path)?;
-        let spec = match parse_any_spec(&text) {
+        let spec = match parse_any_spec_in(&text, path.parent()) {
             Ok(s) => s,
             Err(e) => {
                 bad += 1;
@@ -77,7 +77,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
         }
         let status = match std::fs::read_to_string(&cpath) {
             Err(_) => "missing".to_string(),
-            Ok(t) => match check_certificate(&t) {
+            Ok(t) => match check_certificate_in(&t, cpath.parent()) {
                 Ok(_) => "checked".to_string(),
                 Err(CheckError::Failed { path, message }) => {
                     failed += 1;

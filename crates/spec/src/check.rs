@@ -66,8 +66,14 @@ pub struct CheckReport {
 
 /// Check a certificate given as JSON text.
 pub fn check_certificate(text: &str) -> Result<CheckReport, CheckError> {
+    check_certificate_in(text, None)
+}
+
+/// [`check_certificate`] for a certificate in the folder `base`: the files
+/// its spec names (a Zeitlin field's `.npy`) are relative to it.
+pub fn check_certificate_in(text: &str, base: Option<&std::path::Path>) -> Result<CheckReport, CheckError> {
     let value: Value = crate::json::parse_json(text).map_err(CheckError::BadInput)?;
-    check_certificate_value(&value)
+    check_certificate_value_in(&value, base)
 }
 
 /// Check a typed certificate (one built in Rust or read with
@@ -87,6 +93,11 @@ pub fn check_document(doc: &CertificateDocument) -> Result<CheckReport, CheckErr
 
 /// Check a certificate given as a JSON value.
 pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> {
+    check_certificate_value_in(cert, None)
+}
+
+/// [`check_certificate_value`] with the spec's files relative to `base`.
+pub fn check_certificate_value_in(cert: &Value, base: Option<&std::path::Path>) -> Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
     if map.get("spec").is_some_and(crate::is_fluid_spec) {
         #[cfg(feature = "fluid")]
@@ -99,7 +110,7 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
     }
     if map.get("spec").is_some_and(crate::is_zeitlin_spec) {
         #[cfg(feature = "fluid")]
-        return crate::zeitlin::check_zeitlin_certificate(cert);
+        return crate::zeitlin::check_zeitlin_certificate_in(cert, base);
         #[cfg(not(feature = "fluid"))]
         return Err(CheckError::BadInput(SpecError::new(
             "$.spec.zeitlin",

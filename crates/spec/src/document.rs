@@ -784,10 +784,11 @@ pub struct ZeitlinDoc {
     /// `[-1, 1]`, quantised as quflow does (`W_e = sum_l a_l T_l0`, `a_l` its
     /// Legendre coefficients up to `l = N - 1`; the mean `a_0` is dropped:
     /// `W` is trace-free), or `{"harmonics": [[l, m, value], ...]}` in
-    /// quflow's real spherical-harmonic basis (`W_e = sum value T_lm`).
+    /// quflow's real spherical-harmonic basis (`W_e = sum value T_lm`), or
+    /// `{"npy": "file.npy"}`, the matrix itself.
     pub equilibrium: ZeitlinField,
     /// Noise stream functions (at most 256), each a zonal profile `xi_i(z)`
-    /// quantised the same way, or `{"harmonics": ...}`.
+    /// quantised the same way, `{"harmonics": ...}` or `{"npy": ...}`.
     pub noise: Vec<ZeitlinField>,
 }
 
@@ -800,6 +801,20 @@ pub enum ZeitlinField {
     Profile(Expression),
     /// Spherical-harmonic coefficients.
     Harmonics(HarmonicsDoc),
+    /// A matrix in a `.npy` file.
+    Npy(NpyDoc),
+}
+
+/// A field read from a NumPy `.npy` file: an `N x N` complex128 array
+/// (C or Fortran order), skew-Hermitian as quflow's `W`
+/// (`numpy.save("W.npy", W)`). The path is relative to the spec's folder
+/// (to the certificate's when a certificate is checked), without `..`,
+/// and ends in `.npy`; the certificate records the file's SHA-256.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct NpyDoc {
+    /// The file.
+    pub npy: String,
 }
 
 impl Default for ZeitlinField {
@@ -815,11 +830,14 @@ impl<'de> Deserialize<'de> for ZeitlinField {
         match Value::deserialize(d)? {
             Value::String(s) => Ok(ZeitlinField::Profile(Expression(s))),
             Value::Number(n) => Ok(ZeitlinField::Profile(Expression(n.to_string()))),
+            Value::Object(map) if map.contains_key("npy") => serde_json::from_value::<NpyDoc>(Value::Object(map))
+                .map(ZeitlinField::Npy)
+                .map_err(|e| de::Error::custom(format!("in an npy object: {e}"))),
             v @ Value::Object(_) => serde_json::from_value::<HarmonicsDoc>(v)
                 .map(ZeitlinField::Harmonics)
                 .map_err(|e| de::Error::custom(format!("in a harmonics object: {e}"))),
             other => Err(de::Error::custom(format!(
-                "expected a zonal profile (an expression in z) or {{\"harmonics\": [[l, m, value], ...]}}, found {}",
+                "expected a zonal profile (an expression in z), {{\"harmonics\": [[l, m, value], ...]}} or {{\"npy\": \"file.npy\"}}, found {}",
                 crate::json::type_name(&other)
             ))),
         }

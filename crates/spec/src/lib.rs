@@ -58,7 +58,10 @@ mod zeitlin;
 pub use certificate::{
     certificate_json, certify, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
 };
-pub use check::{check_certificate, check_certificate_value, check_document, CheckError, CheckReport, FLOAT_TOLERANCE};
+pub use check::{
+    check_certificate, check_certificate_in, check_certificate_value, check_certificate_value_in, check_document,
+    CheckError, CheckReport, FLOAT_TOLERANCE,
+};
 pub use claims::{verify_claims, ClaimFailure};
 #[cfg(feature = "fluid")]
 pub use fluid::{
@@ -68,8 +71,9 @@ pub use fluid::{
 
 #[cfg(feature = "fluid")]
 pub use zeitlin::{
-    analyse_zeitlin, certify_zeitlin, check_zeitlin_certificate, parse_zeitlin_spec, zeitlin_certificate_document,
-    zeitlin_spec_from_value, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
+    analyse_zeitlin, certify_zeitlin, check_zeitlin_certificate, check_zeitlin_certificate_in, parse_zeitlin_spec,
+    zeitlin_certificate_document, zeitlin_spec_from_value, zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome,
+    ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
 };
 
 /// Whether a spec value is a Zeitlin spec (has a `zeitlin` object at the top).
@@ -194,6 +198,13 @@ impl AnySpec {
 /// assert!(matches!(spec::parse_any_spec(fluid).unwrap(), spec::AnySpec::Fluid(_)));
 /// ```
 pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
+    parse_any_spec_in(text, None)
+}
+
+/// [`parse_any_spec`] for a spec in the folder `base`: the files it names
+/// (a Zeitlin field's `.npy`) are relative to it (to the current folder
+/// when `None`).
+pub fn parse_any_spec_in(text: &str, base: Option<&std::path::Path>) -> Result<AnySpec, SpecError> {
     let value: serde_json::Value = json::parse_json(text)?;
     if is_fluid_spec(&value) {
         #[cfg(feature = "fluid")]
@@ -202,7 +213,7 @@ pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
         return Err(fluid_unavailable());
     } else if is_zeitlin_spec(&value) {
         #[cfg(feature = "fluid")]
-        return zeitlin_spec_from_value(value).map(|s| AnySpec::Zeitlin(Box::new(s)));
+        return zeitlin_spec_from_value_in(value, base).map(|s| AnySpec::Zeitlin(Box::new(s)));
         #[cfg(not(feature = "fluid"))]
         return Err(SpecError::new(
             "$.zeitlin",

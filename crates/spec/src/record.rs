@@ -837,6 +837,22 @@ pub struct ZeitlinModelRecord {
     pub equilibrium_coefficients: Vec<Float>,
     /// The same for each noise field's stream function.
     pub noise_coefficients: Vec<Vec<Float>>,
+    /// The `.npy` files read, with their SHA-256 (a changed file no longer
+    /// matches its certificate).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub files: Vec<ZeitlinFileRecord>,
+}
+
+/// A `.npy` file a Zeitlin spec read.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinFileRecord {
+    /// The spec field (`$.zeitlin.equilibrium`, `$.zeitlin.noise[0]`).
+    pub field: String,
+    /// The path as the spec gives it.
+    pub path: String,
+    /// SHA-256 of the file's bytes, hex.
+    pub sha256: String,
 }
 
 /// The conserved functional `eps H + C_Phi + beta J`.

@@ -20,12 +20,13 @@ use crate::document::{Count, Expression, HarmonicsDoc, Real, ZeitlinField, Zeitl
 use crate::json::{as_object, child, index, required, type_name, Result, SpecError};
 use crate::parse::Stopping;
 use crate::record::{
-    Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinDenseRecord, ZeitlinFormRecord,
-    ZeitlinFrameRecord, ZeitlinModelRecord, ZeitlinResidualsRecord,
+    Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinDenseRecord, ZeitlinFileRecord,
+    ZeitlinFormRecord, ZeitlinFrameRecord, ZeitlinModelRecord, ZeitlinResidualsRecord,
 };
 use outcome::{Verdict, VerificationLevel};
 use serde_json::Value;
 use std::collections::BTreeMap;
+use std::path::{Component, Path, PathBuf};
 use zeitlin::analysis::{analyse, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
 use zeitlin::general::{analyse_general, Frame, GeneralAnalysis, GeneralProblem, GeneralSettings};
 use zeitlin::zonal::quantise;
@@ -62,6 +63,11 @@ pub struct ZeitlinSpec {
     pub settings: GeneralSettings,
     /// The optional `sweep` section.
     pub sweep: crate::sweep::SweepSection,
+    /// The folder `.npy` paths are relative to (the current folder when
+    /// `None`).
+    pub base_dir: Option<PathBuf>,
+    /// The `.npy` files read.
+    pub files: Vec<ZeitlinFileRecord>,
 }
 
 /// What a Zeitlin spec gives.
@@ -186,8 +192,84 @@ fn harmonics(
     Ok(w)
 }
 
-/// Parse a Zeitlin spec from a JSON value.
+/// Largest size of a `.npy` file a spec may name: an `N x N` complex128
+/// array at N = [`HARMONICS_MAX_N`], plus its header.
+const MAX_NPY_BYTES: u64 = 16 * (HARMONICS_MAX_N as u64) * (HARMONICS_MAX_N as u64) + 65536;
+
+/// The matrix of a field given as a `.npy` file, and the file's record.
+fn read_npy(
+    text: &str,
+    path: &str,
+    n: usize,
+    base: Option<&Path>,
+) -> Result<(nalgebra::DMatrix<nalgebra::Complex<f64>>, ZeitlinFileRecord)> {
+    use sha2::{Digest, Sha256};
+    let npath = child(path, "npy");
+    let rel = Path::new(text);
+    let shown = exact::quote(text, 80);
+    let relative = !text.is_empty()
+        && text.len() <= 1024
+        && rel.extension().is_some_and(|e| e == "npy")
+        && rel.components().all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+    if !relative {
+        return Err(SpecError::new(
+            npath,
+            format!("{shown} must be a relative path to a .npy file, inside the spec's folder (no '..', not absolute)"),
+        ));
+    }
+    let full = base.unwrap_or(Path::new(".")).join(rel);
+    let meta = std::fs::metadata(&full)
+        .map_err(|e| SpecError::new(&npath, format!("cannot read {shown} (relative to the spec's folder): {e}")))?;
+    if !meta.is_file() {
+        return Err(SpecError::new(npath, format!("{shown} is not a file")));
+    }
+    if meta.len() > MAX_NPY_BYTES {
+        return Err(SpecError::new(
+            npath,
+            format!("{shown} has {} bytes, more than an N x N complex128 array at N = {HARMONICS_MAX_N}", meta.len()),
+        ));
+    }
+    let bytes = std::fs::read(&full).map_err(|e| SpecError::new(&npath, format!("cannot read {shown}: {e}")))?;
+    let sha256: String = Sha256::digest(&bytes).iter().map(|b| format!("{b:02x}")).collect();
+    let file = npyz::NpyFile::new(&bytes[..])
+        .map_err(|e| SpecError::new(&npath, format!("{shown} is not a .npy file: {e}")))?;
+    let shape = file.shape().to_vec();
+    if shape != [n as u64, n as u64] {
+        return Err(SpecError::new(npath, format!("{shown} has shape {shape:?}, expected [{n}, {n}] (N x N)")));
+    }
+    let fortran = file.order() == npyz::Order::Fortran;
+    let data: Vec<nalgebra::Complex<f64>> = file.into_vec().map_err(|e| {
+        SpecError::new(&npath, format!("{shown} must hold complex128 numbers ('<c16', as quflow's W): {e}"))
+    })?;
+    if data.len() != n * n {
+        return Err(SpecError::new(npath, format!("{shown} holds {} numbers, expected {}", data.len(), n * n)));
+    }
+    let w = nalgebra::DMatrix::from_fn(n, n, |i, j| if fortran { data[j * n + i] } else { data[i * n + j] });
+    if let Some(k) = w.iter().position(|z| !(z.re.is_finite() && z.im.is_finite())) {
+        return Err(SpecError::new(npath, format!("{shown}: entry ({}, {}) is not finite", k % n, k / n)));
+    }
+    let hermitian = (&w + w.adjoint()).norm() / 2.0;
+    if hermitian > 1e-12 * w.norm() {
+        return Err(SpecError::new(
+            npath,
+            format!(
+                "{shown} is not skew-Hermitian (relative Hermitian part {:.3e}): su(N) states and noise are skew-Hermitian, as quflow's W",
+                hermitian / w.norm()
+            ),
+        ));
+    }
+    Ok((w, ZeitlinFileRecord { field: path.to_string(), path: text.to_string(), sha256 }))
+}
+
+/// Parse a Zeitlin spec from a JSON value (`.npy` paths relative to the
+/// current folder).
 pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
+    zeitlin_spec_from_value_in(value, None)
+}
+
+/// Parse a Zeitlin spec from a JSON value, with `.npy` paths relative to
+/// `base` (the spec's folder; the current folder when `None`).
+pub fn zeitlin_spec_from_value_in(value: Value, base: Option<&Path>) -> Result<ZeitlinSpec> {
     let root = "$";
     if !value.is_object() {
         return Err(SpecError::new(root, format!("expected an object, found {}", type_name(&value))));
@@ -232,16 +314,18 @@ pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
     let fields: Vec<(&ZeitlinField, String)> = std::iter::once((&z.equilibrium, child(&zpath, "equilibrium")))
         .chain(z.noise.iter().enumerate().map(|(i, f)| (f, index(&noise_path, i))))
         .collect();
-    let general = fields.iter().any(|(f, _)| matches!(f, ZeitlinField::Harmonics(_)));
+    let is_matrix = |f: &ZeitlinField| matches!(f, ZeitlinField::Harmonics(_) | ZeitlinField::Npy(_));
+    let general = fields.iter().any(|(f, _)| is_matrix(f));
     if general && n > HARMONICS_MAX_N {
-        let (_, path) = fields.iter().find(|(f, _)| matches!(f, ZeitlinField::Harmonics(_))).expect("one");
+        let (_, path) = fields.iter().find(|(f, _)| is_matrix(f)).expect("one");
         return Err(SpecError::new(
             path,
-            format!("fields given by harmonics are supported up to N = {HARMONICS_MAX_N} (dense N x N matrices), got N = {n}"),
+            format!("fields given by harmonics or .npy files are supported up to N = {HARMONICS_MAX_N} (dense N x N matrices), got N = {n}"),
         ));
     }
     let mut matrices = Vec::new();
     let mut zonal_parts = Vec::new();
+    let mut files = Vec::new();
     for (field, path) in &fields {
         match field {
             ZeitlinField::Profile(e) => {
@@ -253,6 +337,12 @@ pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
             }
             ZeitlinField::Harmonics(h) => {
                 matrices.push(harmonics(h, path, n, &params)?);
+                zonal_parts.push((vec![], vec![]));
+            }
+            ZeitlinField::Npy(d) => {
+                let (w, record) = read_npy(&d.npy, path, n, base)?;
+                matrices.push(w);
+                files.push(record);
                 zonal_parts.push((vec![], vec![]));
             }
         }
@@ -274,7 +364,18 @@ pub fn zeitlin_spec_from_value(value: Value) -> Result<ZeitlinSpec> {
     };
     let names: Vec<String> = params.keys().cloned().collect();
     let sweep = crate::sweep::read_sweep_section(doc.sweep.as_ref(), &child(root, "sweep"), &names)?;
-    Ok(ZeitlinSpec { name, raw: value, input, coefficients, noise_coefficients, stopping, settings, sweep })
+    Ok(ZeitlinSpec {
+        name,
+        raw: value,
+        input,
+        coefficients,
+        noise_coefficients,
+        stopping,
+        settings,
+        sweep,
+        base_dir: base.map(Path::to_path_buf),
+        files,
+    })
 }
 
 fn read_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<GeneralSettings> {
@@ -403,12 +504,13 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
             "dW = [P, W]/hbar dt + sum_i [X_i, W]/hbar o dB^i, Delta_N P = W (Hoppe–Yau Laplacian, eigenvalues -l(l+1)), hbar = 2/sqrt(N^2 - 1), <A, B> = Re tr(A B*)/N; W_e = i diag(omega) zonal, X_i = i diag(xi_i) zonal; a perturbation splits by its off-diagonal m = 1..N-1 into independent blocks".into()
         },
         quantisation: if general {
-            "fields given by harmonics: W = sum value T_lm in quflow's real spherical-harmonic basis (shr2mat: T_lm from the eigenvectors of the Laplacian block on diagonal |m|); zonal profiles as quflow quantises them (a_l by Gauss–Legendre on 2N + 32 nodes, W = sum a_l T_l0, a_0 dropped)".into()
+            "fields given by harmonics: W = sum value T_lm in quflow's real spherical-harmonic basis (shr2mat: T_lm from the eigenvectors of the Laplacian block on diagonal |m|); fields given by .npy files: the matrix itself (files records their SHA-256); zonal profiles as quflow quantises them (a_l by Gauss–Legendre on 2N + 32 nodes, W = sum a_l T_l0, a_0 dropped)".into()
         } else {
             "quflow's: a_l = 1/2 int_{-1}^{1} f(z) sqrt(2l+1) P_l(z) dz by Gauss–Legendre on 2N + 32 nodes, W = sum_{l=1}^{N-1} a_l T_l0, T_l0 = i sqrt(N) diag(u_l) with u_l the l-th eigenvector of the zonal Laplacian block (last entry positive); a_0 (the mean) is dropped".into()
         },
         equilibrium_coefficients: listed(&spec.coefficients),
         noise_coefficients: spec.noise_coefficients.iter().map(|a| listed(a)).collect(),
+        files: spec.files.clone(),
     };
     let mut doc = ZeitlinCertificateDocument {
         certificate_version: CERTIFICATE_VERSION,
@@ -650,12 +752,18 @@ fn fill_zonal(
 /// settings, the digest, then re-derivation and comparison (floating-point
 /// fields to [`ZEITLIN_TOLERANCE`]).
 pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+    check_zeitlin_certificate_in(cert, None)
+}
+
+/// [`check_zeitlin_certificate`] with `.npy` paths relative to `base` (the
+/// certificate's folder).
+pub fn check_zeitlin_certificate_in(cert: &Value, base: Option<&Path>) -> std::result::Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     crate::check::check_engine(map)?;
     crate::document::from_value::<ZeitlinCertificateDocument>(cert)
         .map_err(|e| fail(&e.path, format!("not a certificate as this engine writes them: {}", e.message)))?;
-    let mut spec = zeitlin_spec_from_value(spec_value).map_err(|e| {
+    let mut spec = zeitlin_spec_from_value_in(spec_value, base).map_err(|e| {
         fail(
             &format!("$.spec{}", e.path.trim_start_matches('$')),
             format!("the embedded spec is not valid: {}", e.message),
@@ -669,6 +777,23 @@ pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckRepor
     };
     if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {
         return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
+    }
+    // A file the spec reads that no longer matches its recorded hash is the
+    // cause of whatever else differs: said first.
+    let recorded = cert.pointer("/model/files").and_then(Value::as_array).cloned().unwrap_or_default();
+    for (i, f) in spec.files.iter().enumerate() {
+        let then = recorded.get(i).and_then(|r| r.get("sha256")).and_then(Value::as_str);
+        if then != Some(f.sha256.as_str()) {
+            return Err(fail(
+                &format!("$.model.files[{i}].sha256"),
+                format!(
+                    "the file {} ({}) is not the one certified: its SHA-256 is now {}",
+                    exact::quote(&f.path, 80),
+                    f.field,
+                    f.sha256
+                ),
+            ));
+        }
     }
     let analysis = analyse_zeitlin(&spec);
     let expected = serde_json::to_value(zeitlin_certificate_document(&spec, &analysis)).unwrap_or_default();

@@ -176,7 +176,7 @@ impl Evaluator {
                 for (n, v) in self.names.iter().zip(values) {
                     raw["parameters"][n.as_str()] = Value::String(v.to_string());
                 }
-                match spec::zeitlin_spec_from_value(raw) {
+                match spec::zeitlin_spec_from_value_in(raw, s.base_dir.as_deref()) {
                     Ok(z) => outcome_from_certificate(&spec::certify_zeitlin(&z)),
                     Err(e) => Outcome::invalid(e),
                 }
