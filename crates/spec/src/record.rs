@@ -868,7 +868,8 @@ pub struct ZeitlinFormRecord {
     /// `Phi''` where it is free (repeated eigenvalues, the diagonal block).
     pub free_curvature: Float,
     /// Whether the minimum of `Sigma^2` over the family is attained (false
-    /// when approached at the edge of the definite arc).
+    /// when approached at the edge of the definite arc, or at the search's
+    /// bound on `beta`: monotone profiles, whose infimum over `eps = ±1` is 0).
     pub attained: bool,
 }
 

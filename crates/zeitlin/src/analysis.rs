@@ -140,7 +140,8 @@ pub struct ZeitlinAnalysis {
     /// structure (`Q = 0`).
     pub sigma2_upper: Option<f64>,
     /// Whether the minimum over the family is attained (false when it is
-    /// approached at the edge of the definite arc).
+    /// approached at the edge of the definite arc, or at the search's bound on
+    /// `beta`, as for monotone profiles, whose infimum over `eps = ±1` is 0).
     pub attained: bool,
     /// Per block (`m = 1..N-1`), at the choice.
     pub blocks: Vec<BlockResult>,
