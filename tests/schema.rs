@@ -32,6 +32,7 @@ fn committed_schemas_match_the_types() {
         ("fluid-certificate", spec::record::fluid_certificate_schema()),
         ("zeitlin-spec", spec::document::zeitlin_spec_schema()),
         ("zeitlin-certificate", spec::record::zeitlin_certificate_schema()),
+        ("large-certificate", spec::record::large_certificate_schema()),
     ];
     for (name, schema) in generated {
         // Not assert_eq: the two values are thousands of characters.
@@ -42,12 +43,15 @@ fn committed_schemas_match_the_types() {
     }
 }
 
-/// The kind of a spec: `spec` (finite-dimensional), `fluid-spec` or `zeitlin-spec`.
+/// The kind of a spec: `spec` (finite-dimensional), `fluid-spec`,
+/// `zeitlin-spec` or `large-spec` (above 64 coordinates).
 fn kind(spec: &Value) -> &'static str {
     if spec::is_fluid_spec(spec) {
         "fluid-spec"
     } else if spec::is_zeitlin_spec(spec) {
         "zeitlin-spec"
+    } else if spec::is_large_spec(spec) {
+        "large-spec"
     } else {
         "spec"
     }
@@ -61,6 +65,7 @@ fn round_trip(kind: &str, v: &Value) -> Result<Value, spec::SpecError> {
         "zeitlin-spec" => {
             serde_json::to_value(spec::document::from_value::<spec::record::ZeitlinCertificateDocument>(v)?)
         }
+        "large-spec" => serde_json::to_value(spec::document::from_value::<spec::record::LargeCertificateDocument>(v)?),
         _ => serde_json::to_value(spec::document::from_value::<spec::record::CertificateDocument>(v)?),
     }
     .unwrap())
@@ -76,7 +81,7 @@ fn fixture_certificates_match_the_certificate_types() {
         jsonschema::validator_for(&committed(&format!("{name}.schema.json"))).unwrap()
     };
     let validators: BTreeMap<&str, _> =
-        ["spec", "fluid-spec", "zeitlin-spec"].into_iter().map(|k| (k, schema_of(k))).collect();
+        ["spec", "fluid-spec", "zeitlin-spec", "large-spec"].into_iter().map(|k| (k, schema_of(k))).collect();
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     let mut dirs = vec![root().join("fixtures")];
     while let Some(dir) = dirs.pop() {
@@ -105,7 +110,8 @@ fn fixture_certificates_match_the_certificate_types() {
     assert!(
         counts.get("spec") >= Some(&5)
             && counts.get("fluid-spec") >= Some(&2)
-            && counts.get("zeitlin-spec") >= Some(&2),
+            && counts.get("zeitlin-spec") >= Some(&2)
+            && counts.get("large-spec") >= Some(&2),
         "{counts:?}"
     );
 }
@@ -138,7 +144,11 @@ fn every_fixture_is_valid_against_its_schema() {
         .collect();
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     for (path, v) in &fixtures() {
-        let kind = kind(v);
+        // A spec above 64 coordinates has the finite-dimensional spec's format.
+        let kind = match kind(v) {
+            "large-spec" => "spec",
+            k => k,
+        };
         let errors: Vec<String> = validators[kind].iter_errors(v).map(|e| e.to_string()).collect();
         assert!(errors.is_empty(), "{}: {errors:?}", path.display());
         // Each fixture is valid for exactly one of the schemas.

@@ -78,8 +78,8 @@ enum Command {
     PlotFluid(fluid_plots::PlotFluidArgs),
     /// Print the JSON Schema of specs (for editors: validation and completion).
     Schema {
-        /// Which schema: `spec` (finite-dimensional systems), `fluid-spec`, `zeitlin-spec`, `certificate` (of a finite-dimensional spec), `fluid-certificate` or `zeitlin-certificate`.
-        #[arg(value_parser = ["spec", "fluid-spec", "zeitlin-spec", "certificate", "fluid-certificate", "zeitlin-certificate"], default_value = "spec")]
+        /// Which schema: `spec` (finite-dimensional systems), `fluid-spec`, `zeitlin-spec`, `certificate` (of a finite-dimensional spec), `fluid-certificate`, `zeitlin-certificate` or `large-certificate` (of a spec above 64 coordinates).
+        #[arg(value_parser = ["spec", "fluid-spec", "zeitlin-spec", "certificate", "fluid-certificate", "zeitlin-certificate", "large-certificate"], default_value = "spec")]
         which: String,
     },
     /// Re-check certificates.
@@ -255,6 +255,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 "zeitlin-spec" => spec::document::zeitlin_spec_schema(),
                 "certificate" => spec::record::certificate_schema(),
                 "zeitlin-certificate" => spec::record::zeitlin_certificate_schema(),
+                "large-certificate" => spec::record::large_certificate_schema(),
                 _ => spec::record::fluid_certificate_schema(),
             };
             println!("{}", serde_json::to_string_pretty(&schema).unwrap_or_default());

@@ -31,6 +31,7 @@ pub mod barotropic;
 pub mod barotropic_sde;
 pub mod choice;
 pub mod constants;
+pub mod dense;
 pub mod expr;
 pub mod grid;
 pub mod interval;

@@ -117,6 +117,10 @@ pub fn check_certificate_value_in(cert: &Value, base: Option<&std::path::Path>) 
             "Zeitlin certificates need the `fluid` feature of the spec crate (on by default)",
         )));
     }
+    #[cfg(feature = "fluid")]
+    if map.get("spec").is_some_and(crate::is_large_spec) {
+        return crate::large::check_large_certificate(cert);
+    }
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     check_engine(map)?;
     // The shape first: every field of the certificate type, no other.

@@ -46,6 +46,8 @@ pub mod document;
 #[cfg(feature = "fluid")]
 mod fluid;
 mod json;
+#[cfg(feature = "fluid")]
+mod large;
 mod library;
 mod parse;
 mod pretty;
@@ -74,6 +76,12 @@ pub use zeitlin::{
     analyse_zeitlin, certify_zeitlin, check_zeitlin_certificate, check_zeitlin_certificate_in, parse_zeitlin_spec,
     zeitlin_certificate_document, zeitlin_spec_from_value, zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome,
     ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
+};
+
+#[cfg(feature = "fluid")]
+pub use large::{
+    certify_large, check_large_certificate, is_large_spec, large_certificate_document, large_spec_from_value,
+    LargeSpec, LARGE_MAX_DIMENSION, LARGE_TOLERANCE,
 };
 
 /// Whether a spec value is a Zeitlin spec (has a `zeitlin` object at the top).
@@ -111,6 +119,10 @@ pub enum AnySpec {
     /// The stochastic Zeitlin model on the sphere.
     #[cfg(feature = "fluid")]
     Zeitlin(Box<ZeitlinSpec>),
+    /// A finite-dimensional system above `algebra::MAX_DIMENSION`
+    /// coordinates (the large, floating-point pipeline).
+    #[cfg(feature = "fluid")]
+    Large(Box<LargeSpec>),
 }
 
 impl AnySpec {
@@ -122,6 +134,8 @@ impl AnySpec {
             AnySpec::Fluid(s) => &s.name,
             #[cfg(feature = "fluid")]
             AnySpec::Zeitlin(s) => &s.name,
+            #[cfg(feature = "fluid")]
+            AnySpec::Large(s) => &s.name,
         }
     }
 
@@ -133,6 +147,8 @@ impl AnySpec {
             AnySpec::Fluid(s) => &s.sweep,
             #[cfg(feature = "fluid")]
             AnySpec::Zeitlin(s) => &s.sweep,
+            #[cfg(feature = "fluid")]
+            AnySpec::Large(s) => &s.sweep,
         }
     }
 
@@ -141,6 +157,8 @@ impl AnySpec {
     pub fn parameters(&self) -> std::collections::BTreeMap<String, exact::Rational> {
         match self {
             AnySpec::Lie(s) => s.parameters.clone(),
+            #[cfg(feature = "fluid")]
+            AnySpec::Large(s) => s.parameters.clone(),
             #[cfg(feature = "fluid")]
             AnySpec::Fluid(_) | AnySpec::Zeitlin(_) => self
                 .raw()
@@ -174,6 +192,8 @@ impl AnySpec {
             AnySpec::Fluid(s) => &s.raw,
             #[cfg(feature = "fluid")]
             AnySpec::Zeitlin(s) => &s.raw,
+            #[cfg(feature = "fluid")]
+            AnySpec::Large(s) => &s.raw,
         }
     }
 
@@ -185,6 +205,8 @@ impl AnySpec {
             AnySpec::Fluid(s) => certify_fluid(s),
             #[cfg(feature = "fluid")]
             AnySpec::Zeitlin(s) => certify_zeitlin(s),
+            #[cfg(feature = "fluid")]
+            AnySpec::Large(s) => certify_large(s),
         }
     }
 }
@@ -220,6 +242,10 @@ pub fn parse_any_spec_in(text: &str, base: Option<&std::path::Path>) -> Result<A
             "Zeitlin specs need the `fluid` feature of the spec crate (on by default)",
         ));
     } else {
+        #[cfg(feature = "fluid")]
+        if is_large_spec(&value) {
+            return large_spec_from_value(value).map(|s| AnySpec::Large(Box::new(s)));
+        }
         spec_from_value(value).map(|s| AnySpec::Lie(Box::new(s)))
     }
 }

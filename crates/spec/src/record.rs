@@ -942,3 +942,83 @@ pub struct ZeitlinDenseRecord {
 pub fn zeitlin_certificate_schema() -> Value {
     serde_json::to_value(schemars::schema_for!(ZeitlinCertificateDocument)).unwrap_or(Value::Null)
 }
+
+/// The certificate of a finite-dimensional spec above
+/// `algebra::MAX_DIMENSION` coordinates, from the large pipeline (floating
+/// point: the matrices are not listed, `check` re-derives them).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: certificate of a large finite-dimensional system")]
+pub struct LargeCertificateDocument {
+    /// Version of the certificate format.
+    pub certificate_version: u64,
+    /// The engine that wrote it.
+    pub engine: Engine,
+    /// The spec's name.
+    pub name: String,
+    /// `large`.
+    pub kind: String,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Why, in a sentence.
+    pub reason: String,
+    /// What the verdict rests on (`none`: no claim).
+    pub level: LevelOrNone,
+    /// What each part rests on.
+    pub checks: BTreeMap<String, String>,
+    /// `Sigma^2` at the chosen form, when stable.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2: Option<Float>,
+    /// The infimum of `Sigma^2` over the Casimir Hessian, when `Q` does not
+    /// depend on it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub infimum: Option<Float>,
+    /// The stopping time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopping: Option<StoppingRecord>,
+    /// SHA-256 of the embedded spec's compact JSON.
+    pub spec_sha256: String,
+    /// The dimension.
+    pub dimension: u64,
+    /// What the pipeline computed on the way.
+    pub analysis: LargeAnalysisRecord,
+    /// The spec exactly as given.
+    pub spec: Value,
+}
+
+/// The large pipeline's intermediate results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LargeAnalysisRecord {
+    /// Nonzero components `[index, value]` of `ad*_{Dh} mu_e` (exact).
+    pub equilibrium_residual: Vec<(u64, ExactRational)>,
+    /// The noise fields that move the equilibrium.
+    pub incompatible_noise: Vec<u64>,
+    /// The multipliers (Casimirs, then first integrals).
+    pub multipliers: Vec<Float>,
+    /// `|G lambda + Dh| / |Dh|`.
+    pub multiplier_residual: Float,
+    /// Free multiplier directions (not searched).
+    pub family_dimension: u64,
+    /// `dim ker G^T`.
+    pub restricted_dimension: u64,
+    /// `+1`, `-1`, or 0 for no definite form.
+    pub sign: Float,
+    /// The larger relative margin of `±R` on `ker G^T` (null when not computed).
+    pub restricted_margin: Option<Float>,
+    /// Whether `Q` depends on the Casimir Hessian.
+    pub q_depends_on_casimirs: bool,
+    /// `cond(sP)` of the chosen form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition_number: Option<Float>,
+    /// `|P A + A^T P|_F / (|P|_F |A|_F)`.
+    pub drift_residual: Float,
+    /// The drift's largest real part, when its spectrum was computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth_rate: Option<Float>,
+}
+
+/// The JSON Schema of a large system's certificate.
+pub fn large_certificate_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(LargeCertificateDocument)).unwrap_or(Value::Null)
+}

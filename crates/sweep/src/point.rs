@@ -181,6 +181,16 @@ impl Evaluator {
                     Err(e) => Outcome::invalid(e),
                 }
             }
+            AnySpec::Large(s) => {
+                let mut raw = s.raw.clone();
+                for (n, v) in self.names.iter().zip(values) {
+                    raw["parameters"][n.as_str()] = Value::String(v.to_string());
+                }
+                match spec::large_spec_from_value(raw) {
+                    Ok(l) => outcome_from_certificate(&spec::certify_large(&l)),
+                    Err(e) => Outcome::invalid(e),
+                }
+            }
         }
     }
 }

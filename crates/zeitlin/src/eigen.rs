@@ -30,71 +30,7 @@ pub fn real_eigenvalues(k: &DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
     Some(values.iter().map(|z| Complex::new(z.re, z.im)).collect())
 }
 
-fn to_faer(m: &DMatrix<f64>) -> faer::Mat<f64> {
-    faer::Mat::<f64>::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
-}
-
-/// The eigenvalues of a real symmetric matrix (its lower triangle),
-/// ascending; `None` when an entry is not finite or faer's iteration did not
-/// converge.
-///
-/// ```
-/// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
-/// let ev = zeitlin::eigen::symmetric_eigenvalues(&m).unwrap();
-/// assert!((ev[0] - 1.0).abs() < 1e-15 && (ev[1] - 3.0).abs() < 1e-15);
-/// ```
-pub fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
-    if m.nrows() != m.ncols() || m.iter().any(|x| !x.is_finite()) {
-        return None;
-    }
-    if m.nrows() == 0 {
-        return Some(vec![]);
-    }
-    to_faer(m).self_adjoint_eigenvalues(faer::Side::Lower).ok()
-}
-
-/// `lambda_max(Q, P)` for symmetric `Q` and `P ≻ 0`, by the Cholesky factor
-/// of `P` (`C = L^-1 Q L^-T`); `None` when `P` is not numerically positive
-/// definite or a value is not finite.
-///
-/// ```
-/// // P = [[2, 1], [1, 2]], Q = [[1, 0], [0, 0]]: det(Q - l P) = 3 l^2 - 2 l, l = 2/3
-/// let p = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
-/// let q = nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.0]);
-/// assert!((zeitlin::eigen::largest_generalized(&p, &q).unwrap() - 2.0 / 3.0).abs() < 1e-15);
-/// ```
-pub fn largest_generalized(p: &DMatrix<f64>, q: &DMatrix<f64>) -> Option<f64> {
-    let n = p.nrows();
-    if n == 0 || p.iter().chain(q.iter()).any(|x| !x.is_finite()) {
-        return None;
-    }
-    let l = p.clone().cholesky()?.l();
-    let lq = l.solve_lower_triangular(q)?;
-    let c = l.solve_lower_triangular(&lq.transpose())?;
-    let c = (&c + c.transpose()) * 0.5;
-    symmetric_eigenvalues(&c)?.last().copied()
-}
-
-/// `lambda_max / lambda_min` of a symmetric positive definite matrix
-/// (infinite when the smallest eigenvalue is not resolved above rounding).
-///
-/// ```
-/// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, 1.0]);
-/// assert!((zeitlin::eigen::condition_number(&m) - 4.0).abs() < 1e-14);
-/// ```
-pub fn condition_number(m: &DMatrix<f64>) -> f64 {
-    match symmetric_eigenvalues(m) {
-        Some(ev) if !ev.is_empty() => {
-            let (lo, hi) = (ev[0], ev.iter().fold(0.0f64, |a, x| a.max(x.abs())));
-            if lo > hi * 1e-15 {
-                hi / lo
-            } else {
-                f64::INFINITY
-            }
-        }
-        _ => f64::INFINITY,
-    }
-}
+pub use fluid::dense::{condition_number, largest_generalized, symmetric_eigenvalues};
 
 type C = Complex<f64>;
 

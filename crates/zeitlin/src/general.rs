@@ -690,56 +690,19 @@ pub fn dense_analysis(
     let q = &q1 * eps;
     let cas = n - 1;
     let block = |m: &DMatrix<f64>, r0: usize, c0: usize, nr: usize, nc: usize| m.view((r0, c0), (nr, nc)).into_owned();
-    let (pz, pzw, pw) = (block(&p, 0, 0, off, off), block(&p, 0, off, off, cas), block(&p, off, off, cas, cas));
-    let (qz, qzw, qw) = (block(&q, 0, 0, off, off), block(&q, 0, off, off, cas), block(&q, off, off, cas, cas));
-    let pz_chol = pz.clone().cholesky().ok_or_else(|| numerical("the restricted Hessian's Cholesky factor"))?;
-    let restricted = crate::eigen::largest_generalized(&pz, &qz).ok_or_else(|| numerical("the restricted pencil"))?;
-    let infimum = restricted.max(0.0);
-    out.infimum = Some(infimum);
-    // The Schur bound: P ≻ 0 iff K ≻ K0.
-    let k0 = pzw.transpose() * pz_chol.solve(&pzw) - &pw;
+    let frame = fluid::dense::FramePencil {
+        pz: block(&p, 0, 0, off, off),
+        pzw: block(&p, 0, off, off, cas),
+        pw: block(&p, off, off, cas, cas),
+        qz: block(&q, 0, 0, off, off),
+        qzw: block(&q, 0, off, off, cas),
+        qw: block(&q, off, off, cas, cas),
+    };
     // The level-set block's natural size, added along the Casimir directions.
     let level = (lo.abs() * hi).sqrt().max(f64::MIN_POSITIVE);
-    let positive_part = |m: &DMatrix<f64>| -> Option<DMatrix<f64>> {
-        let e =
-            nalgebra::linalg::SymmetricEigen::try_new((m + m.transpose()) * 0.5, f64::EPSILON, 1000 * (m.nrows() + 1))?;
-        let d = DMatrix::from_diagonal(&e.eigenvalues.map(|x| x.max(0.0)));
-        Some(&e.eigenvectors * d * e.eigenvectors.transpose())
-    };
-    let full_p = |k: &DMatrix<f64>| -> DMatrix<f64> {
-        let mut pk = p.clone();
-        for i in 0..cas {
-            for j in 0..cas {
-                pk[(off + i, off + j)] += k[(i, j)];
-            }
-        }
-        pk
-    };
-    let k_for = |s: f64| -> Option<DMatrix<f64>> {
-        let x = &pz * s - &qz;
-        let c = &pzw * s - &qzw;
-        let xc = x.cholesky()?.solve(&c);
-        let k1 = (&qw + c.transpose() * xc) / s - &pw;
-        let k = &k1 + positive_part(&(&k0 - &k1))? + DMatrix::identity(cas, cas) * level;
-        Some((&k + k.transpose()) * 0.5)
-    };
-    // Targets just above the infimum, widened until P is conditioned.
-    let scale = infimum.max(f64::MIN_POSITIVE);
-    let mut best: Option<(f64, f64)> = None;
-    for delta in [1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1] {
-        let s = if infimum > 0.0 { infimum * (1.0 + delta) } else { delta * scale.max(1e-300) };
-        let Some(k) = k_for(s) else { continue };
-        let pk = full_p(&k);
-        let Some(sigma2) = crate::eigen::largest_generalized(&pk, &q) else { continue };
-        let cond = crate::eigen::condition_number(&pk);
-        if best.is_none_or(|(b, _)| sigma2 < b) {
-            best = Some((sigma2, cond));
-        }
-        if cond <= 1e10 {
-            break;
-        }
-    }
-    let (sigma2, cond) = best.ok_or_else(|| numerical("no Casimir Hessian made P definite"))?;
+    let c = frame.complete(level, 1e10).ok_or_else(|| numerical("no Casimir Hessian made P definite"))?;
+    out.infimum = Some(c.infimum);
+    let (sigma2, cond) = (c.sigma2, c.condition_number);
     out.sigma2 = Some(sigma2.max(0.0));
     out.condition_number = Some(cond);
     Ok(out)

@@ -1,0 +1,482 @@
+//! The energy–Casimir method for large systems, in floating point.
+//!
+//! Steps (DESIGN.md §3, with the exact engine's choices where they carry
+//! over; every dense operation by faer):
+//!
+//! 1. the equilibrium and noise residuals, exactly ([`LargeSystem`]);
+//! 2. the multipliers: `G lambda = -Dh` by the SVD of the gradient matrix
+//!    `G` (`n x r`), with its relative residual; the family's dimension is
+//!    `r - rank G` (the family is not searched: the particular solution of
+//!    least norm is used, and the result says so);
+//! 3. Finsler: the restricted Hessian `R = Z^T B Z` on `ker G^T` (`Z` from
+//!    the SVD, orthonormal), definite of one sign `s` with a relative margin
+//!    above the tolerance;
+//! 4. the linearisation `A` and the noise operators `B_i` as sparse
+//!    matrices, and `Q(P) = sym(P A~ + A~^T P + sum_i B_i^T P B_i)` with
+//!    `A~ = A + 1/2 sum B_i^2`, in `O(nnz n)`;
+//! 5. in the frame `[Z W]` (`W` orthonormal on the range of `G`) the
+//!    Casimir Hessian by the Schur completion
+//!    ([`fluid::dense::FramePencil::complete`]) when the noise keeps every
+//!    conserved quantity (then `Q` does not depend on it and the infimum over
+//!    it is `lambda_max` restricted to `ker G^T`); otherwise the reference
+//!    choice `K = (K0)_+ + m I`, unoptimised;
+//! 6. `Sigma^2 = lambda_max(sQ, sP)` by a dense generalized eigenproblem;
+//! 7. without a definite form, the eigenvalues of the dense drift decide
+//!    `linearly_unstable` (real part above `1e-6` of the spectral radius)
+//!    or `inconclusive`.
+
+use crate::system::LargeSystem;
+use crate::LargeError;
+use exact::Rational;
+use fluid::dense::{largest_generalized, product, symmetric_eigen, symmetric_eigenvalues, FramePencil};
+use nalgebra::{DMatrix, DVector};
+use outcome::{Verdict, VerificationLevel};
+use std::collections::BTreeMap;
+
+/// Settings, with documented defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LargeSettings {
+    /// A restricted Hessian counts as definite only above this relative
+    /// margin `lambda_min(sR)/max|eig R|`. Default 1e-9 (the exact engine's).
+    pub definiteness_tolerance: f64,
+    /// Largest relative residual `|G lambda + Dh| / |Dh|` for multipliers to
+    /// exist. Default 1e-9.
+    pub multiplier_tolerance: f64,
+    /// An eigenvalue of `A` proves linear instability only above this times
+    /// the spectral radius. Default 1e-6.
+    pub instability_tolerance: f64,
+    /// The Casimir Hessian is grown only while `cond(P)` stays at most this.
+    /// Default 1e10.
+    pub condition_limit: f64,
+    /// Largest dimension for the dense spectrum of the drift. Default 2048.
+    pub instability_max_dim: usize,
+}
+
+impl Default for LargeSettings {
+    fn default() -> Self {
+        LargeSettings {
+            definiteness_tolerance: 1e-9,
+            multiplier_tolerance: 1e-9,
+            instability_tolerance: 1e-6,
+            condition_limit: 1e10,
+            instability_max_dim: 2048,
+        }
+    }
+}
+
+/// Everything the pipeline found.
+#[derive(Clone, Debug)]
+pub struct LargeAnalysis {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The verification level (`exact` for the two early verdicts).
+    pub level: VerificationLevel,
+    /// One sentence explaining it.
+    pub reason: String,
+    /// `ad*_{Dh(mu_e)} mu_e`, exactly (nonzero entries).
+    pub equilibrium_residual: BTreeMap<usize, Rational>,
+    /// `ad*_{sigma_i} mu_e` per noise field (nonzero entries).
+    pub noise_residuals: Vec<BTreeMap<usize, Rational>>,
+    /// The multipliers (Casimirs, then first integrals).
+    pub multipliers: Vec<f64>,
+    /// `|G lambda + Dh| / |Dh|`.
+    pub multiplier_residual: f64,
+    /// `r - rank G`: free multiplier directions (not searched).
+    pub family_dimension: usize,
+    /// `dim ker G^T`.
+    pub restricted_dimension: usize,
+    /// `+1` or `-1` for a definite form, 0 for none.
+    pub sign: f64,
+    /// The larger of the two relative margins.
+    pub restricted_margin: f64,
+    /// Whether `Q` depends on the Casimir Hessian (the noise does not keep
+    /// every conserved quantity).
+    pub q_depends_on_casimirs: bool,
+    /// `Sigma^2` at the chosen form.
+    pub sigma2: Option<f64>,
+    /// Its infimum over the Casimir Hessian (when `Q` does not depend on it).
+    pub infimum: Option<f64>,
+    /// `cond(sP)`.
+    pub condition_number: Option<f64>,
+    /// `|P A + A^T P|_F / (|P|_F |A|_F)` at the chosen `P`.
+    pub drift_residual: f64,
+    /// The largest real part of the drift's eigenvalues (without a form).
+    pub growth_rate: Option<f64>,
+}
+
+/// A sparse matrix as a map of its nonzero entries.
+#[derive(Clone, Debug, Default)]
+struct Sparse {
+    entries: BTreeMap<(usize, usize), f64>,
+}
+
+impl Sparse {
+    fn add(&mut self, r: usize, c: usize, v: f64) {
+        if v != 0.0 {
+            *self.entries.entry((r, c)).or_insert(0.0) += v;
+        }
+    }
+
+    fn rows(&self, n: usize) -> Vec<Vec<(usize, f64)>> {
+        let mut rows = vec![Vec::new(); n];
+        for (&(r, c), &v) in &self.entries {
+            rows[r].push((c, v));
+        }
+        rows
+    }
+
+    /// `self * other`.
+    fn mul(&self, other: &Sparse, n: usize) -> Sparse {
+        let rows = other.rows(n);
+        let mut out = Sparse::default();
+        for (&(r, m), &v) in &self.entries {
+            for &(c, w) in &rows[m] {
+                out.add(r, c, v * w);
+            }
+        }
+        out
+    }
+
+    fn dense(&self, n: usize) -> DMatrix<f64> {
+        let mut d = DMatrix::zeros(n, n);
+        for (&(r, c), &v) in &self.entries {
+            d[(r, c)] += v;
+        }
+        d
+    }
+}
+
+/// `sym(P A~ + A~^T P + sum_i B_i^T P B_i)` for symmetric `P`, with sparse
+/// `A~` and `B_i`.
+fn generator_form(p: &DMatrix<f64>, a_tilde: &Sparse, noise: &[Sparse]) -> DMatrix<f64> {
+    let n = p.nrows();
+    // P A~: column c gains v P[:, r] for each entry (r, c, v).
+    let mut pa = DMatrix::zeros(n, n);
+    for (&(r, c), &v) in &a_tilde.entries {
+        let col = p.column(r) * v;
+        let mut target = pa.column_mut(c);
+        target += col;
+    }
+    let mut q = &pa + pa.transpose();
+    for b in noise {
+        // (B^T P B)_xy = sum over entries (u, x, b1), (v, y, b2) of b1 b2 P_uv.
+        let list: Vec<(usize, usize, f64)> = b.entries.iter().map(|(&(u, x), &v)| (u, x, v)).collect();
+        for &(u, x, b1) in &list {
+            for &(v, y, b2) in &list {
+                q[(x, y)] += b1 * b2 * p[(u, v)];
+            }
+        }
+    }
+    (&q + q.transpose()) * 0.5
+}
+
+fn to_f64(v: &[Rational]) -> Vec<f64> {
+    v.iter().map(exact::rational_to_f64).collect()
+}
+
+/// Run the pipeline (see the module docs).
+///
+/// ```
+/// use large::algebra::SparseAlgebra;
+/// use large::parse::{parse_sparse, SparseSymbols};
+/// use large::system::LargeSystem;
+/// use large::analysis::{analyse_large, LargeSettings};
+/// use exact::Rational;
+/// // The rigid body about its major axis (I = 3, 2, 1), noise 3/10 along it:
+/// // Sigma^2 = sigma^2 I1 (I2 - I3)/(I3 (I1 - I2)) = 0.27.
+/// let names: Vec<String> = ["P1", "P2", "P3"].iter().map(|s| s.to_string()).collect();
+/// let one = Rational::from(1);
+/// let rows = vec![(0, 1, 2, one.clone()), (1, 2, 0, one.clone()), (2, 0, 1, one.clone())];
+/// let g = SparseAlgebra::new(&names, &rows).unwrap();
+/// let s = SparseSymbols::new(&names, &Default::default());
+/// let h = parse_sparse("P1^2/6 + P2^2/4 + P3^2/2", &s).unwrap();
+/// let c = parse_sparse("(P1^2 + P2^2 + P3^2)/2", &s).unwrap();
+/// let q = |n: i64, d: i64| Rational::new_small(n, d);
+/// let system = LargeSystem::new(g, h, vec![c], vec![], vec![q(1, 1), q(0, 1), q(0, 1)], vec![vec![q(3, 10), q(0, 1), q(0, 1)]]).unwrap();
+/// let a = analyse_large(&system, &LargeSettings::default()).unwrap();
+/// assert_eq!(a.verdict, outcome::Verdict::Stable);
+/// assert!((a.sigma2.unwrap() - 0.27).abs() < 1e-7 * 0.27);
+/// ```
+pub fn analyse_large(system: &LargeSystem, settings: &LargeSettings) -> Result<LargeAnalysis, LargeError> {
+    let n = system.dim();
+    let numerical = |what: &str| LargeError::Numerical(what.to_string());
+    let mut out = LargeAnalysis {
+        verdict: Verdict::Inconclusive,
+        level: VerificationLevel::Numerical,
+        reason: String::new(),
+        equilibrium_residual: system.equilibrium_residual(),
+        noise_residuals: system.noise_residuals(),
+        multipliers: vec![],
+        multiplier_residual: 0.0,
+        family_dimension: 0,
+        restricted_dimension: 0,
+        sign: 0.0,
+        restricted_margin: f64::NEG_INFINITY,
+        q_depends_on_casimirs: false,
+        sigma2: None,
+        infimum: None,
+        condition_number: None,
+        drift_residual: 0.0,
+        growth_rate: None,
+    };
+    if !out.equilibrium_residual.is_empty() {
+        out.verdict = Verdict::NotAnEquilibrium;
+        out.level = VerificationLevel::Exact;
+        out.reason = format!(
+            "ad*_{{Dh(mu_e)}} mu_e is not zero ({} nonzero components, proved exactly): mu_e is not an equilibrium",
+            out.equilibrium_residual.len()
+        );
+        return Ok(out);
+    }
+    let incompatible: Vec<usize> =
+        (0..out.noise_residuals.len()).filter(|&i| !out.noise_residuals[i].is_empty()).collect();
+    if !incompatible.is_empty() {
+        out.verdict = Verdict::NoiseIncompatible;
+        out.level = VerificationLevel::Exact;
+        let shown: Vec<usize> = incompatible.iter().take(16).copied().collect();
+        out.reason = format!(
+            "ad*_sigma mu_e is not zero for {} noise field(s) (the first: {shown:?}; proved exactly): the noise moves the equilibrium",
+            incompatible.len()
+        );
+        return Ok(out);
+    }
+    let mu_q = system.equilibrium();
+    let mu = to_f64(mu_q);
+    let sparse_gradient = |g: BTreeMap<usize, Rational>| -> DVector<f64> {
+        let mut v = DVector::zeros(n);
+        for (i, x) in g {
+            v[i] = exact::rational_to_f64(&x);
+        }
+        v
+    };
+    let dh = sparse_gradient(system.hamiltonian().gradient_at(mu_q));
+    let hh = system.hamiltonian().hessian_at_f64(&mu);
+    let conserved = system.conserved();
+    let r = conserved.len();
+    let mut g = DMatrix::zeros(n, r);
+    for (j, k) in conserved.iter().enumerate() {
+        g.set_column(j, &sparse_gradient(k.gradient_at(mu_q)));
+    }
+    if dh.iter().chain(g.iter()).chain(hh.values()).any(|x| !x.is_finite()) {
+        return Err(numerical("a derivative at the equilibrium is not finite in double precision: rescale the system"));
+    }
+    // 2. Multipliers by the SVD of G.
+    let gf = faer::Mat::<f64>::from_fn(n, r, |i, j| g[(i, j)]);
+    let svd = gf.svd().map_err(|_| numerical("the SVD of the gradient matrix"))?;
+    let s_values: Vec<f64> = (0..r.min(n)).map(|i| svd.S()[i]).collect();
+    let top = s_values.iter().fold(0.0f64, |a, x| a.max(*x));
+    let rank = s_values.iter().filter(|&&x| x > 1e-12 * top && x > 0.0).count();
+    let u = DMatrix::from_fn(n, n, |i, j| svd.U()[(i, j)]);
+    let v = DMatrix::from_fn(r, r, |i, j| svd.V()[(i, j)]);
+    let mut lambda = DVector::zeros(r);
+    for i in 0..rank {
+        let coefficient = -u.column(i).dot(&dh) / s_values[i];
+        lambda += v.column(i) * coefficient;
+    }
+    let residual = (&g * &lambda + &dh).norm();
+    out.multiplier_residual = if dh.norm() > 0.0 { residual / dh.norm() } else { residual };
+    out.multipliers = lambda.iter().copied().collect();
+    out.family_dimension = r - rank;
+    let z = u.columns(rank, n - rank).into_owned();
+    let w = u.columns(0, rank).into_owned();
+    out.restricted_dimension = n - rank;
+    // The linearisation and the noise, sparse.
+    let algebra = system.algebra();
+    let mut a = Sparse::default();
+    let hh_rows = {
+        let mut rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+        for (&(i, j), &x) in &hh {
+            rows[i].push((j, x));
+            if i != j {
+                rows[j].push((i, x));
+            }
+        }
+        rows
+    };
+    for (ai, b, k, c) in algebra.entries() {
+        let c = exact::rational_to_f64(c);
+        // d/dmu_m of c^k_ab Dh_a(mu) mu_k = c (Hh_am mu_k + Dh_a delta_km)
+        if mu[k] != 0.0 {
+            for &(m, x) in &hh_rows[ai] {
+                a.add(b, m, c * x * mu[k]);
+            }
+        }
+        a.add(b, k, c * dh[ai]);
+    }
+    let noise: Vec<Sparse> = system
+        .noise()
+        .iter()
+        .map(|sigma| {
+            let mut bm = Sparse::default();
+            for (ai, s) in sigma.iter().enumerate() {
+                let s = exact::rational_to_f64(s);
+                if s == 0.0 {
+                    continue;
+                }
+                for &b in algebra.partners(ai) {
+                    for (k, c) in algebra.bracket(ai, b) {
+                        bm.add(b, *k, exact::rational_to_f64(c) * s);
+                    }
+                }
+            }
+            bm
+        })
+        .collect();
+    let mut a_tilde = a.clone();
+    for b in &noise {
+        for (&(r0, c0), &x) in &b.mul(b, n).entries {
+            a_tilde.add(r0, c0, 0.5 * x);
+        }
+    }
+    let no_form = |out: &mut LargeAnalysis, why: &str| -> Result<(), LargeError> {
+        if n > settings.instability_max_dim {
+            out.reason = format!(
+                "{why}; the drift's spectrum is computed only up to dimension {} (settings), so nothing more is known",
+                settings.instability_max_dim
+            );
+            return Ok(());
+        }
+        let values = crate::analysis::eigenvalues(&a.dense(n)).ok_or_else(|| numerical("the drift's eigenvalues"))?;
+        let rate = values.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
+        let radius = values.iter().map(|z| z.norm()).fold(0.0f64, f64::max);
+        if rate > settings.instability_tolerance * radius.max(f64::MIN_POSITIVE) {
+            out.verdict = Verdict::LinearlyUnstable;
+            out.growth_rate = Some(rate);
+            out.reason =
+                format!("{why}, and the drift has an eigenvalue with real part {rate:.6e} (dense, dimension {n})");
+        } else {
+            out.growth_rate = Some(0.0);
+            out.reason =
+                format!("{why}, and every eigenvalue of the drift is on the imaginary axis (to the tolerance): spectrally stable only");
+        }
+        Ok(())
+    };
+    if out.multiplier_residual > settings.multiplier_tolerance {
+        let why = format!(
+            "no multipliers make mu_e critical (relative residual {:.3e}: Dh(mu_e) is not in the span of the conserved gradients)",
+            out.multiplier_residual
+        );
+        no_form(&mut out, &why)?;
+        return Ok(out);
+    }
+    // 3. Finsler on ker G^T.
+    let mut base = DMatrix::zeros(n, n);
+    let mut add_hessian = |m: &BTreeMap<(usize, usize), f64>, scale: f64| {
+        for (&(i, j), &x) in m {
+            base[(i, j)] += scale * x;
+            if i != j {
+                base[(j, i)] += scale * x;
+            }
+        }
+    };
+    add_hessian(&hh, 1.0);
+    for (j, k) in conserved.iter().enumerate() {
+        if lambda[j] != 0.0 {
+            add_hessian(&k.hessian_at_f64(&mu), lambda[j]);
+        }
+    }
+    let bz = product(&base, &z);
+    let restricted = product(&z.transpose(), &bz);
+    let restricted = (&restricted + restricted.transpose()) * 0.5;
+    let eig = symmetric_eigenvalues(&restricted).ok_or_else(|| numerical("the restricted Hessian's eigenvalues"))?;
+    let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x.abs())));
+    let top_eig = eig.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x));
+    let (plus, minus) = if eig.is_empty() {
+        (1.0, 1.0)
+    } else if hi > 0.0 {
+        (lo / hi, -top_eig / hi)
+    } else {
+        (0.0, 0.0)
+    };
+    out.restricted_margin = plus.max(minus);
+    let sign = if plus > settings.definiteness_tolerance {
+        1.0
+    } else if minus > settings.definiteness_tolerance {
+        -1.0
+    } else {
+        0.0
+    };
+    let unsearched = if out.family_dimension > 0 {
+        format!(
+            " (the {}-dimensional family of multipliers was not searched: the least-norm multipliers were used)",
+            out.family_dimension
+        )
+    } else {
+        String::new()
+    };
+    if sign == 0.0 {
+        let why = format!(
+            "the second variation is not definite on ker G^T (best relative margin {:.3e}){unsearched}",
+            out.restricted_margin
+        );
+        no_form(&mut out, &why)?;
+        return Ok(out);
+    }
+    out.sign = sign;
+    out.q_depends_on_casimirs = !system.noise_conserves_all();
+    // 5. The frame [Z W] and the Casimir Hessian.
+    let sp = &base * sign;
+    let sq = generator_form(&sp, &a_tilde, &noise);
+    let frame_of = |m: &DMatrix<f64>| -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+        let mz = product(m, &z);
+        let mw = product(m, &w);
+        (product(&z.transpose(), &mz), product(&z.transpose(), &mw), product(&w.transpose(), &mw))
+    };
+    let (pz, pzw, pw) = frame_of(&sp);
+    let (qz, qzw, qw) = frame_of(&sq);
+    let level = (lo.abs() * hi).sqrt().max(f64::MIN_POSITIVE);
+    let frame = FramePencil { pz, pzw, pw, qz, qzw, qw };
+    let (k, sigma2, infimum) = if out.q_depends_on_casimirs {
+        // Q moves with K: the reference choice, unoptimised.
+        let l = frame.pz.clone().cholesky().ok_or_else(|| numerical("the restricted Hessian's Cholesky factor"))?;
+        let k0 = frame.pzw.transpose() * l.solve(&frame.pzw) - &frame.pw;
+        let (values, vecs) = symmetric_eigen(&k0).ok_or_else(|| numerical("the Schur bound's eigenvalues"))?;
+        let mut positive = DMatrix::zeros(rank, rank);
+        for (j, x) in values.iter().enumerate() {
+            if *x > 0.0 {
+                positive += vecs.column(j) * vecs.column(j).transpose() * *x;
+            }
+        }
+        let k = positive + DMatrix::identity(rank, rank) * level;
+        let p_full = &sp + product(&product(&w, &k), &w.transpose());
+        let q_full = generator_form(&p_full, &a_tilde, &noise);
+        let s2 = largest_generalized(&p_full, &q_full).ok_or_else(|| numerical("the generalized eigenproblem"))?;
+        (k, s2, None)
+    } else {
+        let c = frame
+            .complete(level, settings.condition_limit)
+            .ok_or_else(|| numerical("no Casimir Hessian made P definite"))?;
+        (c.k, c.sigma2, Some(c.infimum))
+    };
+    let p_full = &sp + product(&product(&w, &k), &w.transpose());
+    out.condition_number = Some(fluid::dense::condition_number(&p_full));
+    let ad = a.dense(n);
+    let drift = product(&p_full, &ad);
+    let drift = &drift + drift.transpose();
+    let scale = p_full.norm() * ad.norm();
+    out.drift_residual = if scale > 0.0 { drift.norm() / scale } else { 0.0 };
+    out.sigma2 = Some(sigma2.max(0.0));
+    out.infimum = infimum;
+    out.verdict = Verdict::Stable;
+    out.reason = format!(
+        "the second variation is {} definite on ker G^T (relative margin {:.3e}): formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t), Sigma^2 by a dense generalized eigenproblem in dimension {n}{}{unsearched}",
+        if sign > 0.0 { "positive" } else { "negative" },
+        out.restricted_margin,
+        if out.q_depends_on_casimirs { " (Q depends on the Casimir Hessian: not optimised)" } else { "" },
+    );
+    Ok(out)
+}
+
+/// The eigenvalues of a dense real matrix (faer).
+fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<nalgebra::Complex<f64>>> {
+    let n = a.nrows();
+    if a.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    if n == 0 {
+        return Some(vec![]);
+    }
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| a[(i, j)]);
+    let values = m.eigenvalues().ok()?;
+    Some(values.iter().map(|z| nalgebra::Complex::new(z.re, z.im)).collect())
+}

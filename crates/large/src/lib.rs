@@ -1,0 +1,45 @@
+//! Lie–Poisson systems beyond the exact engine's 64 dimensions.
+//!
+//! The exact engine (`casimir`, `generator`) proves everything in rational
+//! arithmetic on dense matrices; its cost grows like `n^4` and it stops at
+//! `algebra::MAX_DIMENSION = 64`. Here the same method runs for systems of
+//! thousands of coordinates given by sparse data:
+//!
+//! * [`algebra`]: structure constants stored sparsely, antisymmetry and the
+//!   Jacobi identity checked exactly on the triples where a bracket is
+//!   nonzero;
+//! * [`poly`], [`parse`]: sparse polynomials (a monomial lists only its
+//!   variables), parsed with the shared front end and the exact limits;
+//! * [`system`]: the system, with exact sparse checks: each Casimir
+//!   Poisson-commutes with every coordinate, each first integral with the
+//!   Hamiltonian, the equilibrium and the noise residuals, and which
+//!   conserved quantities the noise keeps;
+//! * [`analysis`]: the energy–Casimir method in floating point (faer):
+//!   multipliers by least squares, the Finsler test on `ker G^T`, the
+//!   Casimir Hessian by the Schur completion ([`fluid::dense::FramePencil`]),
+//!   `Q` from sparse drift and noise operators, `Sigma^2` by a dense
+//!   generalized eigenproblem, and the drift's spectrum when no form is
+//!   definite. Level `numerical`.
+
+#![warn(missing_docs)]
+
+pub mod algebra;
+pub mod analysis;
+pub mod parse;
+pub mod poly;
+pub mod system;
+
+/// Why a large system could not be built or analysed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LargeError {
+    /// The algebra is malformed (the message says how).
+    #[error("{0}")]
+    Algebra(String),
+    /// The system is malformed (the message says which part).
+    #[error("{0}")]
+    System(String),
+    /// A floating-point step failed.
+    #[error("numerical breakdown: {0}")]
+    Numerical(String),
+}
