@@ -214,3 +214,43 @@ fn large_specs_go_through_the_contract() {
         assert!(e.message.contains(words), "{path}: {e}");
     }
 }
+
+/// `Sigma^2` scales as the noise squared, exactly through the range of
+/// doubles; beyond it the verdict is inconclusive, never a false `Sigma^2 =
+/// 0`. Rescaling each Casimir by a factor from 1e-6 to 1e6 changes nothing
+/// but the multipliers (the frame on `ker G^T` is orthonormal).
+#[test]
+fn rescaling_the_noise_or_the_casimirs_moves_only_the_units() {
+    let base = chain(5, "-1/9", ["3", "2", "1"], 0, "3/10");
+    let s0 = large(&base)["sigma2"].as_f64().unwrap();
+    for (factor, k) in [("3e-151", 1e-150f64), ("3e149", 1e150), ("1.11", 3.7)] {
+        let mut v = base.clone();
+        v["parameters"]["sigma"] = json!(factor);
+        let c = large(&v);
+        assert_eq!(c["verdict"], "stable", "{factor}: {}", c["reason"]);
+        let s = c["sigma2"].as_f64().unwrap();
+        assert!((s / (k * k) - s0).abs() <= 1e-9 * s0, "{factor}: {s} vs {}", s0 * k * k);
+    }
+    for factor in ["3e-201", "3e199"] {
+        let mut v = base.clone();
+        v["parameters"]["sigma"] = json!(factor);
+        let c = large(&v);
+        assert_eq!(c["verdict"], "inconclusive", "{factor}: {}", c["reason"]);
+        assert!(c["reason"].as_str().unwrap().contains("outside the range of double precision"));
+    }
+    // Casimirs times pseudo-random factors in [1e-6, 1e6].
+    let mut v = base.clone();
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    for c in v["casimirs"].as_array_mut().unwrap() {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let e = (state % 13) as i32 - 6;
+        let text = c.as_str().unwrap().to_string();
+        *c = json!(format!("1e{e}*({text})"));
+    }
+    let c = large(&v);
+    let s = c["sigma2"].as_f64().unwrap();
+    assert!((s - s0).abs() <= 1e-9 * s0, "{s} vs {s0}");
+    assert!((c["infimum"].as_f64().unwrap() - large(&base)["infimum"].as_f64().unwrap()).abs() <= 1e-9 * s0);
+}

@@ -198,6 +198,40 @@ fn to_f64(v: &[Rational]) -> Vec<f64> {
 /// assert!((a.sigma2.unwrap() - 0.27).abs() < 1e-7 * 0.27);
 /// ```
 pub fn analyse_large(system: &LargeSystem, settings: &LargeSettings) -> Result<LargeAnalysis, LargeError> {
+    // Sigma^2 scales as the noise squared: the noise is brought to unit size
+    // by a power of two (exact), analysed, and the result scaled back, so
+    // that noise near 1e-200 or 1e200 neither underflows to a false
+    // Sigma^2 = 0 nor overflows. A result outside the double range is
+    // inconclusive, never stable.
+    // (The largest magnitude exactly: an entry of 1e-400 is not zero.)
+    let exponent = system.noise().iter().flatten().filter_map(exact::binary_exponent).max();
+    let Some(exponent) = exponent.filter(|e| *e != 0) else {
+        return analyse_normalised(system, settings);
+    };
+    let scale = exact::power_of_two(-exponent);
+    let scaled = system.with_noise(system.noise().iter().map(|f| f.iter().map(|x| x * &scale).collect()).collect());
+    let mut a = analyse_normalised(&scaled, settings)?;
+    // Residuals are exact and scale-free in their verdict; Sigma^2 scales by 2^(2 exponent).
+    let back = |x: f64| x * 2f64.powi((2 * exponent).clamp(-2000, 2000) as i32);
+    if let Some(s) = a.sigma2 {
+        let s2 = if exponent.abs() > 1000 { f64::NAN } else { back(s) };
+        if !s2.is_finite() || (s > 0.0 && s2 < f64::MIN_POSITIVE) {
+            a.verdict = Verdict::Inconclusive;
+            a.reason =
+                "a definite form was found, but Sigma^2 lies outside the range of double precision: rescale the noise"
+                    .into();
+            a.sigma2 = None;
+            a.infimum = None;
+        } else {
+            a.sigma2 = Some(s2);
+            a.infimum = a.infimum.map(back);
+        }
+    }
+    a.noise_residuals = system.noise_residuals();
+    Ok(a)
+}
+
+fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<LargeAnalysis, LargeError> {
     let n = system.dim();
     let numerical = |what: &str| LargeError::Numerical(what.to_string());
     let mut out = LargeAnalysis {

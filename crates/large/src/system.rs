@@ -96,6 +96,16 @@ impl LargeSystem {
         Ok(LargeSystem { algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise })
     }
 
+    /// The same system with other noise fields (of the same length; the
+    /// checks above do not involve the noise).
+    ///
+    /// # Panics
+    /// If a field has the wrong length.
+    pub fn with_noise(&self, noise: Vec<Vec<Rational>>) -> LargeSystem {
+        assert!(noise.iter().all(|f| f.len() == self.dim()), "noise field length");
+        LargeSystem { noise, ..self.clone() }
+    }
+
     /// The algebra.
     pub fn algebra(&self) -> &SparseAlgebra {
         &self.algebra
