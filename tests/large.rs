@@ -254,3 +254,38 @@ fn rescaling_the_noise_or_the_casimirs_moves_only_the_units() {
     assert!((s - s0).abs() <= 1e-9 * s0, "{s} vs {s0}");
     assert!((c["infimum"].as_f64().unwrap() - large(&base)["infimum"].as_f64().unwrap()).abs() <= 1e-9 * s0);
 }
+
+/// Every finite-dimensional fixture of the exact engine (builtin or given
+/// Casimirs, discovered ones included), run through the large pipeline
+/// from the same system: the same verdict, and where stable the same
+/// `Sigma^2` to 1e-5 (the large pipeline searches the multiplier family
+/// and minimises over it and the Casimir Hessian in floating point, as the
+/// exact engine does before its exact proof).
+#[test]
+fn every_exact_fixture_agrees_through_the_large_pipeline() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures");
+    let mut compared = 0;
+    let paths = [root.to_string(), format!("{root}/sweeps")]
+        .into_iter()
+        .flat_map(|d| std::fs::read_dir(d).unwrap().map(|e| e.unwrap().path()).collect::<Vec<_>>());
+    for path in paths {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        if !name.ends_with(".json") || name.ends_with(".cert.json") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let Ok(parsed) = spec::parse_spec(&text) else { continue };
+        let exact_cert: Value =
+            serde_json::from_str(&std::fs::read_to_string(path.with_extension("cert.json")).unwrap()).unwrap();
+        let system = large::system::LargeSystem::from_exact(&parsed.system).unwrap();
+        let a = large::analysis::analyse_large(&system, &large::analysis::LargeSettings::default()).unwrap();
+        assert_eq!(a.verdict.as_str(), exact_cert["verdict"], "{name}: large says {}", a.reason);
+        if a.verdict == spec::Verdict::Stable {
+            let (l, e) = (a.sigma2.unwrap(), exact_cert["sigma2"].as_f64().unwrap());
+            assert!((l - e).abs() <= 1e-5 * e.max(1e-9), "{name}: large {l}, exact {e}");
+        }
+        compared += 1;
+    }
+    // The 12 top-level specs and the 3 sweep specs.
+    assert!(compared >= 15, "{compared}");
+}

@@ -267,3 +267,40 @@ impl FramePencil {
         })
     }
 }
+
+/// `lambda_max(Q, P)` with a `P`-normalised eigenvector (for `P ≻ 0`), or,
+/// when `P` is not numerically positive definite, `Err` with a unit
+/// eigenvector of `lambda_min(P)` (the direction of a feasibility cut).
+///
+/// ```
+/// use nalgebra::DMatrix;
+/// let p = DMatrix::from_row_slice(2, 2, &[2.0, 0.0, 0.0, 1.0]);
+/// let q = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 3.0]);
+/// let (l, v) = fluid::dense::top_generalized(&p, &q).unwrap();
+/// assert!((l - 3.0).abs() < 1e-14 && (v[1].abs() - 1.0).abs() < 1e-14);
+/// let u = fluid::dense::top_generalized(&(-p), &q).unwrap_err();
+/// assert!((u.norm() - 1.0).abs() < 1e-14);
+/// ```
+pub fn top_generalized(
+    p: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+) -> Result<(f64, nalgebra::DVector<f64>), nalgebra::DVector<f64>> {
+    use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+    let n = p.nrows();
+    let fallback = || {
+        symmetric_eigen(&((p + p.transpose()) * 0.5))
+            .and_then(|(_, v)| (n > 0).then(|| v.column(0).into_owned()))
+            .unwrap_or_else(|| nalgebra::DVector::zeros(n))
+    };
+    let Some(l) = (n > 0).then(|| cholesky(p)).flatten() else { return Err(fallback()) };
+    let mut c = to_faer(q);
+    solve_lower_triangular_in_place(l.as_ref(), c.as_mut(), faer::Par::Seq);
+    let mut ct = c.transpose().to_owned();
+    solve_lower_triangular_in_place(l.as_ref(), ct.as_mut(), faer::Par::Seq);
+    let c = from_faer(ct.as_ref());
+    let Some((values, w)) = symmetric_eigen(&((&c + c.transpose()) * 0.5)) else { return Err(fallback()) };
+    let top = values[n - 1];
+    let mut v = faer::Mat::<f64>::from_fn(n, 1, |i, _| w[(i, n - 1)]);
+    solve_upper_triangular_in_place(l.transpose(), v.as_mut(), faer::Par::Seq);
+    Ok((top, nalgebra::DVector::from_fn(n, |i, _| v[(i, 0)])))
+}

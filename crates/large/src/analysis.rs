@@ -5,12 +5,13 @@
 //!
 //! 1. the equilibrium and noise residuals, exactly ([`LargeSystem`]);
 //! 2. the multipliers: `G lambda = -Dh` by the SVD of the gradient matrix
-//!    `G` (`n x r`), with its relative residual; the family's dimension is
-//!    `r - rank G` (the family is not searched: the particular solution of
-//!    least norm is used, and the result says so);
-//! 3. Finsler: the restricted Hessian `R = Z^T B Z` on `ker G^T` (`Z` from
-//!    the SVD, orthonormal), definite of one sign `s` with a relative margin
-//!    above the tolerance;
+//!    `G` (`n x r`), with its relative residual; the family is `lambda_p +
+//!    sum t_i d_i` over the null space of `G`;
+//! 3. Finsler: the restricted Hessian `R(t) = Z^T B(t) Z` on `ker G^T` (`Z`
+//!    from the SVD, orthonormal), definite of one sign `s` with a relative
+//!    margin above the tolerance, `lambda_min(s R(t))` maximised over the
+//!    family by the ellipsoid method (then, when `Q` does not depend on the
+//!    Casimir Hessian, the restricted `lambda_max` minimised over it);
 //! 4. the linearisation `A` and the noise operators `B_i` as sparse
 //!    matrices, and `Q(P) = sym(P A~ + A~^T P + sum_i B_i^T P B_i)` with
 //!    `A~ = A + 1/2 sum B_i^2`, in `O(nnz n)`;
@@ -81,7 +82,7 @@ pub struct LargeAnalysis {
     pub multipliers: Vec<f64>,
     /// `|G lambda + Dh| / |Dh|`.
     pub multiplier_residual: f64,
-    /// `r - rank G`: free multiplier directions (not searched).
+    /// `r - rank G`: free multiplier directions (searched).
     pub family_dimension: usize,
     /// `dim ker G^T`.
     pub restricted_dimension: usize,
@@ -393,35 +394,105 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         no_form(&mut out, &why)?;
         return Ok(out);
     }
-    // 3. Finsler on ker G^T.
-    let mut base = DMatrix::zeros(n, n);
-    let mut add_hessian = |m: &BTreeMap<(usize, usize), f64>, scale: f64| {
+    // 3. Finsler on ker G^T, over the family lambda(t) = lambda_p + sum t_i d_i.
+    let dense_hessian = |m: &BTreeMap<(usize, usize), f64>, scale: f64, into: &mut DMatrix<f64>| {
         for (&(i, j), &x) in m {
-            base[(i, j)] += scale * x;
+            into[(i, j)] += scale * x;
             if i != j {
-                base[(j, i)] += scale * x;
+                into[(j, i)] += scale * x;
             }
         }
     };
-    add_hessian(&hh, 1.0);
-    for (j, k) in conserved.iter().enumerate() {
-        if lambda[j] != 0.0 {
-            add_hessian(&k.hessian_at_f64(&mu), lambda[j]);
+    let hessians: Vec<BTreeMap<(usize, usize), f64>> = conserved.iter().map(|k| k.hessian_at_f64(&mu)).collect();
+    let combination = |weights: &DVector<f64>, with_h: bool| -> DMatrix<f64> {
+        let mut m = DMatrix::zeros(n, n);
+        if with_h {
+            dense_hessian(&hh, 1.0, &mut m);
         }
-    }
-    let bz = product(&base, &z);
-    let restricted = product(&z.transpose(), &bz);
-    let restricted = (&restricted + restricted.transpose()) * 0.5;
-    let eig = symmetric_eigenvalues(&restricted).ok_or_else(|| numerical("the restricted Hessian's eigenvalues"))?;
-    let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x.abs())));
-    let top_eig = eig.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x));
-    let (plus, minus) = if eig.is_empty() {
-        (1.0, 1.0)
-    } else if hi > 0.0 {
-        (lo / hi, -top_eig / hi)
-    } else {
-        (0.0, 0.0)
+        for (j, hj) in hessians.iter().enumerate() {
+            if weights[j] != 0.0 {
+                dense_hessian(hj, weights[j], &mut m);
+            }
+        }
+        m
     };
+    let restrict = |m: &DMatrix<f64>| -> DMatrix<f64> {
+        let r = product(&z.transpose(), &product(m, &z));
+        (&r + r.transpose()) * 0.5
+    };
+    let base0 = combination(&lambda, true);
+    let r0 = restrict(&base0);
+    let directions: Vec<DVector<f64>> = (rank..r).map(|j| v.column(j).into_owned()).collect();
+    let dir_hessians: Vec<DMatrix<f64>> = directions.iter().map(|d| combination(d, false)).collect();
+    let dir_restricted: Vec<DMatrix<f64>> = dir_hessians.iter().map(&restrict).collect();
+    let dir_scales: Vec<f64> = dir_restricted.iter().map(|m| m.norm().max(f64::MIN_POSITIVE)).collect();
+    let restricted_at = |t: &[f64]| -> DMatrix<f64> {
+        let mut m = r0.clone();
+        for ((ti, ri), sc) in t.iter().zip(&dir_restricted).zip(&dir_scales) {
+            m += ri * (*ti / sc);
+        }
+        m
+    };
+    // The smallest eigenvalue of s R(t), its relative margin and a supergradient.
+    let margin_at = |t: &[f64], s: f64| -> (f64, f64, Vec<f64>) {
+        let m = restricted_at(t) * s;
+        match symmetric_eigen(&m) {
+            Some((values, vecs)) if !values.is_empty() => {
+                let top = values.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                let u = vecs.column(0);
+                let grad = dir_restricted
+                    .iter()
+                    .zip(&dir_scales)
+                    .map(|(ri, sc)| s * (u.transpose() * ri * u)[(0, 0)] / sc)
+                    .collect();
+                (values[0], if top > 0.0 { values[0] / top } else { 0.0 }, grad)
+            }
+            Some(_) => (1.0, 1.0, vec![0.0; t.len()]),
+            None => (f64::NEG_INFINITY, f64::NEG_INFINITY, vec![0.0; t.len()]),
+        }
+    };
+    let f = directions.len();
+    // Maximise the concave lambda_min(s R(t)) by the ellipsoid method in a
+    // ball grown by 100 while the maximiser sits on its edge (as the exact
+    // engine's search does, casimir::search).
+    let search = |s: f64| -> (Vec<f64>, f64) {
+        let (_, rel0, _) = margin_at(&vec![0.0; f], s);
+        let mut best = (vec![0.0; f], rel0);
+        if f == 0 {
+            return best;
+        }
+        let mut best_value = f64::NEG_INFINITY;
+        let mut radius = 4.0 * r0.norm().max(1.0);
+        for _ in 0..5 {
+            let mut e = casimir::Ellipsoid::ball(&vec![0.0; f], radius);
+            for _ in 0..(60 * f).max(60) {
+                let c = e.centre().to_vec();
+                let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let g: Vec<f64> = if norm > radius {
+                    c.iter().map(|x| -x / norm).collect()
+                } else {
+                    let (value, rel, g) = margin_at(&c, s);
+                    if value > best_value {
+                        best_value = value;
+                        best = (c.clone(), rel);
+                    }
+                    g
+                };
+                if !e.cut(&g) || e.size() < 1e-12 * radius {
+                    break;
+                }
+            }
+            let norm = best.0.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if best.1 > settings.definiteness_tolerance || norm < 0.5 * radius {
+                break;
+            }
+            radius *= 100.0;
+        }
+        best
+    };
+    let (t_plus, plus) = search(1.0);
+    let (t_minus, minus) =
+        if plus > settings.definiteness_tolerance { (vec![0.0; f], f64::NEG_INFINITY) } else { search(-1.0) };
     out.restricted_margin = plus.max(minus);
     let sign = if plus > settings.definiteness_tolerance {
         1.0
@@ -430,17 +501,10 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
     } else {
         0.0
     };
-    let unsearched = if out.family_dimension > 0 {
-        format!(
-            " (the {}-dimensional family of multipliers was not searched: the least-norm multipliers were used)",
-            out.family_dimension
-        )
-    } else {
-        String::new()
-    };
+    let mut t = if sign > 0.0 { t_plus } else { t_minus };
     if sign == 0.0 {
         let why = format!(
-            "the second variation is not definite on ker G^T (best relative margin {:.3e}){unsearched}",
+            "the second variation is not definite on ker G^T for any multipliers searched (best relative margin {:.3e})",
             out.restricted_margin
         );
         no_form(&mut out, &why)?;
@@ -448,6 +512,84 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
     }
     out.sign = sign;
     out.q_depends_on_casimirs = !system.noise_conserves_all();
+    let base_at = |t: &[f64]| -> DMatrix<f64> {
+        let mut b = base0.clone();
+        for ((ti, bi), sc) in t.iter().zip(&dir_hessians).zip(&dir_scales) {
+            b += bi * (*ti / sc);
+        }
+        b
+    };
+    if f > 0 && !out.q_depends_on_casimirs {
+        // Minimise the quasi-convex restricted lambda_max(Z^T sQ Z, Z^T sP Z)
+        // over t (its infimum over K at t), by the ellipsoid method with the
+        // cut a_i = S v^T P_i v - v^T Q_i v at a definite centre and the
+        // feasibility cut u^T P_i u elsewhere (the exact engine's optimiser).
+        let q_dirs: Vec<DMatrix<f64>> = dir_hessians
+            .iter()
+            .zip(&dir_scales)
+            .map(|(bi, sc)| restrict(&generator_form(&(bi * (sign / sc)), &a_tilde, &noise)))
+            .collect();
+        let p_dirs: Vec<DMatrix<f64>> =
+            dir_restricted.iter().zip(&dir_scales).map(|(ri, sc)| ri * (sign / sc)).collect();
+        let q0 = restrict(&generator_form(&(&base0 * sign), &a_tilde, &noise));
+        let pencil_at = |t: &[f64]| -> (DMatrix<f64>, DMatrix<f64>) {
+            let mut p = &r0 * sign;
+            let mut q = q0.clone();
+            for (i, ti) in t.iter().enumerate() {
+                p += &p_dirs[i] * *ti;
+                q += &q_dirs[i] * *ti;
+            }
+            (p, q)
+        };
+        let value = |t: &[f64]| {
+            let (p, q) = pencil_at(t);
+            fluid::dense::top_generalized(&p, &q).ok().map(|(l, _)| l)
+        };
+        let start = t.clone();
+        let mut best = (start.clone(), value(&start).unwrap_or(f64::INFINITY));
+        let mut centre = start.clone();
+        let mut radius = 10.0 * (1.0 + start.iter().map(|x| x * x).sum::<f64>().sqrt());
+        for _ in 0..6 {
+            let mut e = casimir::Ellipsoid::ball(&centre, radius);
+            for _ in 0..(60 * f).max(60) {
+                let c = e.centre().to_vec();
+                let dist = c.iter().zip(&centre).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+                let g: Vec<f64> = if dist > radius {
+                    c.iter().zip(&centre).map(|(x, y)| y - x).collect()
+                } else {
+                    let (p, q) = pencil_at(&c);
+                    let quad = |m: &DMatrix<f64>, v: &DVector<f64>| (v.transpose() * m * v)[(0, 0)];
+                    match fluid::dense::top_generalized(&p, &q) {
+                        Ok((l, v)) => {
+                            if l < best.1 {
+                                best = (c.clone(), l);
+                            }
+                            (0..f).map(|i| l * quad(&p_dirs[i], &v) - quad(&q_dirs[i], &v)).collect()
+                        }
+                        Err(u) => (0..f).map(|i| quad(&p_dirs[i], &u)).collect(),
+                    }
+                };
+                if !e.cut(&g) || e.size() < 1e-13 * (radius + 1.0) {
+                    break;
+                }
+            }
+            let dist = best.0.iter().zip(&centre).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+            if dist <= 0.9 * radius || best.1 <= 0.0 {
+                break;
+            }
+            centre = best.0.clone();
+            radius *= 10.0;
+        }
+        t = best.0;
+    }
+    let base = base_at(&t);
+    let lambda: DVector<f64> =
+        directions.iter().zip(&t).zip(&dir_scales).fold(lambda.clone(), |acc, ((d, ti), sc)| acc + d * (*ti / sc));
+    out.multipliers = lambda.iter().copied().collect();
+    let restricted = restrict(&base);
+    let eig = symmetric_eigenvalues(&(&restricted * sign))
+        .ok_or_else(|| numerical("the restricted Hessian's eigenvalues"))?;
+    let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x.abs())));
     // 5. The frame [Z W] and the Casimir Hessian.
     let sp = &base * sign;
     let sq = generator_form(&sp, &a_tilde, &noise);
@@ -493,7 +635,7 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
     out.infimum = infimum;
     out.verdict = Verdict::Stable;
     out.reason = format!(
-        "the second variation is {} definite on ker G^T (relative margin {:.3e}): formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t), Sigma^2 by a dense generalized eigenproblem in dimension {n}{}{unsearched}",
+        "the second variation is {} definite on ker G^T (relative margin {:.3e}): formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t), Sigma^2 by a dense generalized eigenproblem in dimension {n}{}",
         if sign > 0.0 { "positive" } else { "negative" },
         out.restricted_margin,
         if out.q_depends_on_casimirs { " (Q depends on the Casimir Hessian: not optimised)" } else { "" },

@@ -82,6 +82,25 @@ impl SparsePoly {
         p
     }
 
+    /// The same polynomial from the exact engine's dense-monomial form.
+    ///
+    /// ```
+    /// let s = exact::Symbols::new(&["x", "y"]);
+    /// let p = exact::parse_expression("x^2*y - 3/4", &s).unwrap();
+    /// let q = large::poly::SparsePoly::from_poly(&p);
+    /// assert_eq!(q.num_terms(), 2);
+    /// assert_eq!(q.eval_f64(&[2.0, 3.0]), 11.25);
+    /// ```
+    pub fn from_poly(p: &exact::Poly) -> SparsePoly {
+        let mut out = Self::zero(p.nvars());
+        for (m, c) in p.terms() {
+            let sparse: SparseMonomial =
+                m.iter().enumerate().filter(|(_, e)| **e > 0).map(|(i, e)| (i as u32, *e)).collect();
+            out.add_term(sparse, c.clone());
+        }
+        out
+    }
+
     /// Number of variables.
     pub fn nvars(&self) -> usize {
         self.nvars

@@ -96,6 +96,21 @@ impl LargeSystem {
         Ok(LargeSystem { algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise })
     }
 
+    /// The exact engine's system, for the large pipeline (to compare the
+    /// two on the same data, or to run a small system in floating point).
+    pub fn from_exact(system: &casimir::System) -> Result<LargeSystem, LargeError> {
+        let algebra = system.algebra();
+        let sparse = SparseAlgebra::new(algebra.coordinates(), &algebra.structure_constant_rows())?;
+        LargeSystem::new(
+            sparse,
+            SparsePoly::from_poly(system.hamiltonian()),
+            system.casimirs().iter().map(SparsePoly::from_poly).collect(),
+            system.first_integrals().iter().map(SparsePoly::from_poly).collect(),
+            system.equilibrium().to_vec(),
+            system.noise().to_vec(),
+        )
+    }
+
     /// The same system with other noise fields (of the same length; the
     /// checks above do not involve the noise).
     ///

@@ -998,7 +998,7 @@ pub struct LargeAnalysisRecord {
     pub multipliers: Vec<Float>,
     /// `|G lambda + Dh| / |Dh|`.
     pub multiplier_residual: Float,
-    /// Free multiplier directions (not searched).
+    /// Free multiplier directions (searched by the ellipsoid method).
     pub family_dimension: u64,
     /// `dim ker G^T`.
     pub restricted_dimension: u64,
