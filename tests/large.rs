@@ -289,3 +289,96 @@ fn every_exact_fixture_agrees_through_the_large_pipeline() {
     // The 12 top-level specs and the 3 sweep specs.
     assert!(compared >= 15, "{compared}");
 }
+
+/// The structure constants of so(n) in the basis `E_ab = e_a e_b^T - e_b
+/// e_a^T` (`a < b`): `[E_ab, E_cd] = d_bc E_ad - d_ac E_bd - d_bd E_ac + d_ad
+/// E_bc` (as bench/large/make_so_n.py writes them).
+fn so_n(n: usize) -> (Vec<String>, Vec<Value>) {
+    let pairs: Vec<(usize, usize)> = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
+    let index = |i: usize, j: usize| -> (i64, usize) {
+        if i < j {
+            (1, pairs.iter().position(|p| *p == (i, j)).unwrap())
+        } else {
+            (-1, pairs.iter().position(|p| *p == (j, i)).unwrap())
+        }
+    };
+    let mut rows = vec![];
+    for (x, &(a, b)) in pairs.iter().enumerate() {
+        for (y, &(c, d)) in pairs.iter().enumerate().skip(x + 1) {
+            let mut out: std::collections::BTreeMap<usize, i64> = Default::default();
+            for (i, j, s, cond) in [(a, d, 1, b == c), (b, d, -1, a == c), (a, c, -1, b == d), (b, c, 1, a == d)] {
+                if cond && i != j {
+                    let (sg, k) = index(i, j);
+                    *out.entry(k).or_default() += s * sg;
+                }
+            }
+            for (k, v) in out {
+                if v != 0 {
+                    rows.push(json!([x, y, k, v]));
+                }
+            }
+        }
+    }
+    (pairs.iter().map(|(i, j)| format!("M_{i}_{j}")).collect(), rows)
+}
+
+/// The free rigid body on so(n) (Manakov inertia `J_a = a + 1`), turning in
+/// the plane of the two smallest moments, noise along it: the exact engine
+/// certifies so(4), so(5) and so(8) (6 to 28 coordinates), the large
+/// pipeline gives the same `Sigma^2` on those systems and on so(13) (78
+/// coordinates, beyond the exact engine).
+#[test]
+fn the_so_n_rigid_body_agrees_with_the_exact_engine() {
+    let spec_of = |n: usize| -> Value {
+        let (names, rows) = so_n(n);
+        let pairs: Vec<(usize, usize)> = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
+        let h: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2/{}", 2 * (i + j + 2))).collect();
+        let c: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2")).collect();
+        json!({
+            "name": format!("so{n}"),
+            "algebra": {"coordinates": names, "structure_constants": rows},
+            "parameters": {"sigma": "3/10"},
+            "hamiltonian": h.join(" + "),
+            "casimirs": [format!("({})/2", c.join(" + "))],
+            "equilibrium": pairs.iter().map(|p| json!(if *p == (0, 1) { 1 } else { 0 })).collect::<Vec<_>>(),
+            "noise": [pairs.iter().map(|p| if *p == (0, 1) { json!("sigma") } else { json!(0) }).collect::<Vec<_>>()],
+        })
+    };
+    let mut values = vec![];
+    for n in [4usize, 5, 8] {
+        let v = spec_of(n);
+        let e = exact(&v);
+        assert_eq!(e["verdict"], "stable", "so({n}): {}", e["reason"]);
+        let parsed = spec::parse_spec(&v.to_string()).unwrap();
+        let system = large::system::LargeSystem::from_exact(&parsed.system).unwrap();
+        let a = large::analysis::analyse_large(&system, &large::analysis::LargeSettings::default()).unwrap();
+        let (l, x) = (a.sigma2.unwrap(), e["sigma2"].as_f64().unwrap());
+        assert!((l - x).abs() <= 1e-9 * x, "so({n}): large {l}, exact {x}");
+        values.push(x);
+    }
+    let big = large(&spec_of(13));
+    assert_eq!(big["verdict"], "stable", "{}", big["reason"]);
+    let s = big["sigma2"].as_f64().unwrap();
+    assert!((s - values[2]).abs() <= 1e-9 * s, "so(13) {s} vs so(8) {}", values[2]);
+}
+
+/// so(40) (780 coordinates) is dense enough that the Jacobi identity is
+/// tested at random integer points: the true algebra passes, one extra
+/// structure constant is caught.
+#[test]
+fn dense_structure_constants_are_checked_at_random_points() {
+    let (names, mut rows) = so_n(40);
+    let to_rows = |rows: &[Value]| -> Vec<(usize, usize, usize, exact::Rational)> {
+        rows.iter()
+            .map(|r| {
+                let u = |i: usize| r[i].as_u64().unwrap() as usize;
+                (u(0), u(1), u(2), exact::Rational::from(r[3].as_i64().unwrap()))
+            })
+            .collect()
+    };
+    assert!(large::algebra::SparseAlgebra::new(&names, &to_rows(&rows)).is_ok());
+    // [E_01, E_23] = 0 in so(40); make it E_01.
+    rows.push(json!([0, names.iter().position(|n| n == "M_2_3").unwrap(), 0, 1]));
+    let e = large::algebra::SparseAlgebra::new(&names, &to_rows(&rows)).unwrap_err();
+    assert!(e.to_string().contains("Jacobi identity fails"), "{e}");
+}

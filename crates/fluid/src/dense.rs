@@ -236,7 +236,9 @@ impl FramePencil {
             let sigma2 = largest_generalized(&p, &q)?;
             Some(Completion { infimum, condition_number: condition_number(&p), sigma2, k })
         };
-        let reference = evaluate(positive_part(&k0)? + &margin_id)?;
+        // The reference choice K = (K0)_+ + m I: the fallback, and the scale
+        // of the targets when the infimum is 0 (formed only when needed).
+        let reference = || evaluate(positive_part(&k0)? + &margin_id);
         let k_for = |s: f64| -> Option<DMatrix<f64>> {
             let x = &self.pz * s - &self.qz;
             let c = &self.pzw * s - &self.qzw;
@@ -244,11 +246,19 @@ impl FramePencil {
             let k1 = (&self.qw + c.transpose() * xc) / s - &self.pw;
             Some(&k1 + positive_part(&(&k0 - &k1))? + &margin_id)
         };
-        let scale = if infimum > 0.0 { infimum } else { reference.sigma2.max(0.0) };
-        if scale <= 0.0 {
-            // Q ⪯ 0 at the reference: Sigma^2 = 0 is attained there.
-            return Some(reference);
-        }
+        let mut fallback: Option<Completion> = None;
+        let scale = if infimum > 0.0 {
+            infimum
+        } else {
+            let r = reference()?;
+            let s = r.sigma2.max(0.0);
+            if s <= 0.0 {
+                // Q ⪯ 0 at the reference: Sigma^2 = 0 is attained there.
+                return Some(r);
+            }
+            fallback = Some(r);
+            s
+        };
         let mut best: Option<Completion> = None;
         for delta in [1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1] {
             let s = if infimum > 0.0 { infimum * (1.0 + delta) } else { delta * scale };
@@ -258,13 +268,18 @@ impl FramePencil {
                 best = Some(c);
             }
             if conditioned {
-                break;
+                return best;
             }
         }
-        Some(match best {
-            Some(b) if b.sigma2 <= reference.sigma2 => b,
-            _ => reference,
-        })
+        // No target was conditioned: the best of them, or the reference.
+        let fallback = match fallback {
+            Some(f) => Some(f),
+            None => reference(),
+        };
+        match (best, fallback) {
+            (Some(b), Some(f)) => Some(if b.sigma2 <= f.sigma2 { b } else { f }),
+            (b, f) => b.or(f),
+        }
     }
 }
 

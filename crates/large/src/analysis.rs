@@ -421,7 +421,21 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         (&r + r.transpose()) * 0.5
     };
     let base0 = combination(&lambda, true);
-    let r0 = restrict(&base0);
+    let frame_coordinates = |m: &DMatrix<f64>| -> DMatrix<f64> {
+        let t = product(&u.transpose(), &product(m, &u));
+        (&t + t.transpose()) * 0.5
+    };
+    // U = [W Z]: the range of G first (rank columns), then ker G^T.
+    let blocks = |t: &DMatrix<f64>| -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+        let nz = n - rank;
+        (
+            t.view((rank, rank), (nz, nz)).into_owned(),
+            t.view((rank, 0), (nz, rank)).into_owned(),
+            t.view((0, 0), (rank, rank)).into_owned(),
+        )
+    };
+    let base0_frame = frame_coordinates(&base0);
+    let r0 = blocks(&base0_frame).0;
     let directions: Vec<DVector<f64>> = (rank..r).map(|j| v.column(j).into_owned()).collect();
     let dir_hessians: Vec<DMatrix<f64>> = directions.iter().map(|d| combination(d, false)).collect();
     let dir_restricted: Vec<DMatrix<f64>> = dir_hessians.iter().map(&restrict).collect();
@@ -583,26 +597,24 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         t = best.0;
     }
     let base = base_at(&t);
+    let base_frame = if t.iter().all(|x| *x == 0.0) { base0_frame } else { frame_coordinates(&base) };
     let lambda: DVector<f64> =
         directions.iter().zip(&t).zip(&dir_scales).fold(lambda.clone(), |acc, ((d, ti), sc)| acc + d * (*ti / sc));
     out.multipliers = lambda.iter().copied().collect();
-    let restricted = restrict(&base);
+    let restricted = blocks(&base_frame).0;
     let eig = symmetric_eigenvalues(&(&restricted * sign))
         .ok_or_else(|| numerical("the restricted Hessian's eigenvalues"))?;
     let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x.abs())));
-    // 5. The frame [Z W] and the Casimir Hessian.
+    // 5. The frame [Z W] = U (orthonormal, from the SVD) and the Casimir
+    // Hessian: each matrix is carried to the frame by one congruence
+    // U^T M U, whose blocks are the Z and W parts.
     let sp = &base * sign;
     let sq = generator_form(&sp, &a_tilde, &noise);
-    let frame_of = |m: &DMatrix<f64>| -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
-        let mz = product(m, &z);
-        let mw = product(m, &w);
-        (product(&z.transpose(), &mz), product(&z.transpose(), &mw), product(&w.transpose(), &mw))
-    };
-    let (pz, pzw, pw) = frame_of(&sp);
-    let (qz, qzw, qw) = frame_of(&sq);
+    let (pz, pzw, pw) = blocks(&(&base_frame * sign));
+    let (qz, qzw, qw) = blocks(&frame_coordinates(&sq));
     let level = (lo.abs() * hi).sqrt().max(f64::MIN_POSITIVE);
     let frame = FramePencil { pz, pzw, pw, qz, qzw, qw };
-    let (k, sigma2, infimum) = if out.q_depends_on_casimirs {
+    let (k, sigma2, infimum, condition) = if out.q_depends_on_casimirs {
         // Q moves with K: the reference choice, unoptimised.
         let l = frame.pz.clone().cholesky().ok_or_else(|| numerical("the restricted Hessian's Cholesky factor"))?;
         let k0 = frame.pzw.transpose() * l.solve(&frame.pzw) - &frame.pw;
@@ -617,19 +629,38 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         let p_full = &sp + product(&product(&w, &k), &w.transpose());
         let q_full = generator_form(&p_full, &a_tilde, &noise);
         let s2 = largest_generalized(&p_full, &q_full).ok_or_else(|| numerical("the generalized eigenproblem"))?;
-        (k, s2, None)
+        (k, s2, None, fluid::dense::condition_number(&p_full))
     } else {
         let c = frame
             .complete(level, settings.condition_limit)
             .ok_or_else(|| numerical("no Casimir Hessian made P definite"))?;
-        (c.k, c.sigma2, Some(c.infimum))
+        (c.k, c.sigma2, Some(c.infimum), c.condition_number)
     };
-    let p_full = &sp + product(&product(&w, &k), &w.transpose());
-    out.condition_number = Some(fluid::dense::condition_number(&p_full));
-    let ad = a.dense(n);
-    let drift = product(&p_full, &ad);
-    let drift = &drift + drift.transpose();
-    let scale = p_full.norm() * ad.norm();
+    // cond(P) is the same in the frame (U is orthogonal).
+    out.condition_number = Some(condition);
+    // The drift residual P A + A^T P with P = sB + W K W^T and sparse A:
+    // O(nnz n) plus the rank-sized part, no dense product.
+    let mut pa = DMatrix::zeros(n, n);
+    for (&(r0, c0), &x) in &a.entries {
+        let col = sp.column(r0) * x;
+        let mut target = pa.column_mut(c0);
+        target += col;
+    }
+    let mut wta = DMatrix::zeros(rank, n); // W^T A
+    for (&(r0, c0), &x) in &a.entries {
+        for i in 0..rank {
+            wta[(i, c0)] += w[(r0, i)] * x;
+        }
+    }
+    pa += &w * (&k * wta);
+    let drift = &pa + pa.transpose();
+    let p_norm = {
+        let mut pf = frame.pz.norm_squared() + 2.0 * frame.pzw.norm_squared();
+        pf += (&frame.pw + &k).norm_squared();
+        pf.sqrt()
+    };
+    let a_norm = a.entries.values().map(|x| x * x).sum::<f64>().sqrt();
+    let scale = p_norm * a_norm;
     out.drift_residual = if scale > 0.0 { drift.norm() / scale } else { 0.0 };
     out.sigma2 = Some(sigma2.max(0.0));
     out.infimum = infimum;
