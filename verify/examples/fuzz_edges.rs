@@ -341,6 +341,11 @@ fn run_spec(text: &str, counts: &Counts) {
         Err(_) => {
             bump(&counts.spec_panics);
             eprintln!("PANIC on spec: {}", &text[..text.len().min(400)]);
+            // FUZZ_DUMP=DIR keeps the whole spec, to reproduce it.
+            if let Ok(dir) = std::env::var("FUZZ_DUMP") {
+                let path = std::path::Path::new(&dir).join(format!("panic-{}.json", text.len()));
+                let _ = std::fs::write(&path, text);
+            }
         }
         Ok(None) => bump(&counts.spec_bad_input),
         Ok(Some(None)) => bump(&counts.spec_ok),

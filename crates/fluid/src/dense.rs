@@ -36,8 +36,82 @@ pub fn product(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
     from_faer((to_faer(a) * to_faer(b)).as_ref())
 }
 
+/// The power of two `s` that brings the largest entry of `m` into `[1, 2)`
+/// (1 for a zero matrix; at most `2^1000`, so a largest entry below
+/// `2^-1000` lands in `[2^-74, 1)`), or `None` when an entry is not finite.
+///
+/// Multiplying by a power of two is exact (short of underflow of entries
+/// some 1e-308 below the largest, which are negligible beside it), so a
+/// spectrum computed for `s m` and divided by `s` is that of `m`. It keeps
+/// faer's iterations away from the ends of the exponent range: its real
+/// Schur iteration indexed out of bounds on a large-system drift whose
+/// entries were near 1e-308 (a fuzzed inertia `1e-308`).
+///
+/// ```
+/// let m = nalgebra::DMatrix::from_row_slice(1, 2, &[3e-300, -1e-310]);
+/// let s = fluid::dense::unit_scale(&m).unwrap();
+/// assert!((3e-300 * s >= 1.0) && (3e-300 * s < 2.0));
+/// assert_eq!(s.log2().fract(), 0.0);
+/// assert!(fluid::dense::unit_scale(&(m * f64::NAN)).is_none());
+/// ```
+pub fn unit_scale(m: &DMatrix<f64>) -> Option<f64> {
+    let mut largest = 0.0f64;
+    for &x in m.iter() {
+        if !x.is_finite() {
+            return None;
+        }
+        largest = largest.max(x.abs());
+    }
+    if largest == 0.0 {
+        return Some(1.0);
+    }
+    // log2 is within one of the exponent e; correct it on the scaled value,
+    // applying 2^-e in two halves so that neither overflows (|e| <= 1075)
+    let mut exponent = largest.log2().floor() as i32;
+    loop {
+        let t = largest * 2f64.powi(-exponent / 2) * 2f64.powi(-exponent + exponent / 2);
+        if t >= 2.0 {
+            exponent += 1;
+        } else if t < 1.0 {
+            exponent -= 1;
+        } else {
+            break;
+        }
+    }
+    // 2^1000 is the largest scale used (2^1074 is not a double): a largest
+    // entry below 2^-1000 is brought to at least 2^-74, far from underflow
+    Some(2f64.powi(-exponent.max(-1000)))
+}
+
+/// The eigenvalues of a square real matrix (complex, in no particular
+/// order), or `None` when an entry is not finite or the iteration did not
+/// converge. The matrix is first scaled by [`unit_scale`].
+///
+/// ```
+/// // [[0, -2], [2, 0]] times 1e-300: eigenvalues ±2e-300 i
+/// let k = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, -2e-300, 2e-300, 0.0]);
+/// let ev = fluid::dense::real_eigenvalues(&k).unwrap();
+/// assert!(ev.iter().all(|z| z.re.abs() < 1e-315 && (z.im.abs() / 2e-300 - 1.0).abs() < 1e-15));
+/// assert!(fluid::dense::real_eigenvalues(&(k * f64::NAN)).is_none());
+/// ```
+pub fn real_eigenvalues(k: &DMatrix<f64>) -> Option<Vec<nalgebra::Complex<f64>>> {
+    let n = k.nrows();
+    if n != k.ncols() {
+        return None;
+    }
+    let s = unit_scale(k)?;
+    if n == 0 {
+        return Some(vec![]);
+    }
+    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| k[(i, j)] * s);
+    let values = m.eigenvalues().ok()?;
+    let values: Vec<_> = values.iter().map(|z| nalgebra::Complex::new(z.re / s, z.im / s)).collect();
+    values.iter().all(|z| z.re.is_finite() && z.im.is_finite()).then_some(values)
+}
+
 /// The eigenvalues of a symmetric matrix (its lower triangle), ascending;
 /// `None` when an entry is not finite or the iteration did not converge.
+/// The matrix is first scaled by [`unit_scale`].
 ///
 /// ```
 /// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
@@ -45,13 +119,16 @@ pub fn product(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
 /// assert!((ev[0] - 1.0).abs() < 1e-15 && (ev[1] - 3.0).abs() < 1e-15);
 /// ```
 pub fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
-    if m.nrows() != m.ncols() || m.iter().any(|x| !x.is_finite()) {
+    if m.nrows() != m.ncols() {
         return None;
     }
+    let s = unit_scale(m)?;
     if m.nrows() == 0 {
         return Some(vec![]);
     }
-    to_faer(m).self_adjoint_eigenvalues(faer::Side::Lower).ok()
+    let values = to_faer(&(m * s)).self_adjoint_eigenvalues(faer::Side::Lower).ok()?;
+    let values: Vec<f64> = values.iter().map(|x| x / s).collect();
+    values.iter().all(|x| x.is_finite()).then_some(values)
 }
 
 /// The eigen-decomposition of a symmetric matrix: eigenvalues ascending and
@@ -64,15 +141,16 @@ pub fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
 /// assert!((&v * d * v.transpose() - m).norm() < 1e-14);
 /// ```
 pub fn symmetric_eigen(m: &DMatrix<f64>) -> Option<(Vec<f64>, DMatrix<f64>)> {
-    if m.nrows() != m.ncols() || m.iter().any(|x| !x.is_finite()) {
+    if m.nrows() != m.ncols() {
         return None;
     }
+    let s = unit_scale(m)?;
     if m.nrows() == 0 {
         return Some((vec![], DMatrix::zeros(0, 0)));
     }
-    let e = to_faer(m).self_adjoint_eigen(faer::Side::Lower).ok()?;
-    let values = (0..m.nrows()).map(|i| e.S()[i]).collect();
-    Some((values, from_faer(e.U())))
+    let e = to_faer(&(m * s)).self_adjoint_eigen(faer::Side::Lower).ok()?;
+    let values: Vec<f64> = (0..m.nrows()).map(|i| e.S()[i] / s).collect();
+    values.iter().all(|x| x.is_finite()).then(|| (values, from_faer(e.U())))
 }
 
 /// `L` with `P = L L^T` (faer), or `None` when `P` is not numerically

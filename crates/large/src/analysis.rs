@@ -371,7 +371,7 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
             );
             return Ok(());
         }
-        let values = crate::analysis::eigenvalues(&a.dense(n)).ok_or_else(|| numerical("the drift's eigenvalues"))?;
+        let values = fluid::dense::real_eigenvalues(&a.dense(n)).ok_or_else(|| numerical("the drift's eigenvalues"))?;
         let rate = values.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
         let radius = values.iter().map(|z| z.norm()).fold(0.0f64, f64::max);
         if rate > settings.instability_tolerance * radius.max(f64::MIN_POSITIVE) {
@@ -672,18 +672,4 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         if out.q_depends_on_casimirs { " (Q depends on the Casimir Hessian: not optimised)" } else { "" },
     );
     Ok(out)
-}
-
-/// The eigenvalues of a dense real matrix (faer).
-fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<nalgebra::Complex<f64>>> {
-    let n = a.nrows();
-    if a.iter().any(|x| !x.is_finite()) {
-        return None;
-    }
-    if n == 0 {
-        return Some(vec![]);
-    }
-    let m = faer::Mat::<f64>::from_fn(n, n, |i, j| a[(i, j)]);
-    let values = m.eigenvalues().ok()?;
-    Some(values.iter().map(|z| nalgebra::Complex::new(z.re, z.im)).collect())
 }
