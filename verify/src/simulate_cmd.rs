@@ -6,7 +6,7 @@ use crate::messages::excerpt;
 use crate::paths::{ensure_output_dir, file_stem_noted, write_atomic, write_failure};
 use crate::plots::{write_density, write_growth, DensityChart, GrowthChart};
 use crate::Failure;
-use serde_json::{json, Value};
+use serde_json::json;
 use simulate::{EnsembleSettings, EnsembleStats, Scheme, Study, StudyError, StudySettings};
 use std::path::PathBuf;
 
@@ -217,52 +217,14 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let lyapunov = study.lyapunov;
     let times = &nonlinear.times;
     let t_end = prepared.ensemble.t_end;
-    let mu0 = &prepared.mu0;
-    let exceedance: Vec<Value> = study
-        .exceedance
-        .iter()
-        .map(|e| {
-            let certified = e.certified_until.map(|t| if t.is_infinite() { Value::from("infinity") } else { Value::from(t) });
-            json!({ "level": e.level, "certified_until": certified, "empirical_first_exceeded": e.empirical_first_exceeded })
-        })
-        .collect();
     // Outputs.
     let dir = &args.out;
     // The name is data: a safe stem keeps every file inside --out.
     let file_stem = file_stem_noted(&spec.name);
     let name = excerpt(&spec.name);
     let observable_name = &coords[observable];
-    let series = |stats: &EnsembleStats| -> Value {
-        json!({
-            "times": stats.times,
-            "mean": stats.mean,
-            "norm_mean_over_delta": stats.norm_mean.iter().map(|x| x / delta).collect::<Vec<_>>(),
-            "norm_std_error_over_delta": stats.norm_std_error.iter().map(|x| x / delta).collect::<Vec<_>>(),
-            "exceedance": stats.exceedance,
-            "casimir_drift": stats.casimir_drift,
-        })
-    };
-    let report = json!({
-        "name": spec.name,
-        "verdict": cert.json["verdict"],
-        "sigma2": sigma2,
-        "stopping_time": stopping_time,
-        "epsilon": epsilon,
-        "delta": delta,
-        "parameters": {
-            "paths": args.paths, "dt": args.dt, "t_end": t_end, "steps": nonlinear.steps, "seed": args.seed,
-            "scheme": scheme.as_str(), "observable": observable_name, "bins": args.bins,
-            "mu0": mu0, "threads": threads as u64,
-        },
-        "nonlinear": series(nonlinear),
-        "linearised": linear.as_ref().map(series),
-        "exact_moments_over_delta": exact,
-        "worst_case_over_delta": worst,
-        "bound_over_delta": bound,
-        "moment_lyapunov_exponent": lyapunov,
-        "histogram": { "range": [study.histogram_range.0, study.histogram_range.1], "counts": nonlinear.histogram },
-        "exceedance": exceedance,
-    });
+    let verdict = cert.json["verdict"].as_str().unwrap_or_default();
+    let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, threads as u64);
     let json_path = dir.join(format!("{file_stem}.json"));
     write_atomic(&json_path, spec::to_pretty_json(&report).as_bytes()).map_err(|e| write_failure(&json_path, &e))?;
     write_csv(

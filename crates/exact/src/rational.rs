@@ -249,6 +249,14 @@ impl Rational {
 }
 
 fn small_add(a: i64, b: i64, c: i64, d: i64) -> Option<Rational> {
+    // Either term zero: the other is already canonical (sums into a zero
+    // accumulator are the common case in products of matrices).
+    if a == 0 {
+        return Some(Rational(Repr::Small(c, d)));
+    }
+    if c == 0 {
+        return Some(Rational(Repr::Small(a, b)));
+    }
     if b == 1 && d == 1 {
         return a.checked_add(c).map(|n| Rational(Repr::Small(n, 1)));
     }

@@ -796,6 +796,38 @@ fn at_multipliers(
     // under a change of basis of ker G^T, its rounding is not.
     let r_inv = orthonormalising(&variation.kernel);
     let pz = congruent(&(bzz.to_dmatrix() * s), &r_inv);
+    let qz = congruent(&(qzz.to_dmatrix() * s), &r_inv);
+    // The restricted lambda_max: the infimum over K at these multipliers
+    // (K -> infinity along the conserved directions leaves only ker G^T).
+    let (restricted_max, top) = if k == 0 {
+        (f64::NEG_INFINITY, None)
+    } else {
+        let (l, v) = top_generalized(&pz, &qz).ok()?;
+        (l, Some(v))
+    };
+    // A certified lower bound for every K at these multipliers: the exact
+    // Rayleigh quotient of a rational vector of ker G^T.
+    let witness = top
+        .as_ref()
+        .filter(|_| variation.family.directions.is_empty())
+        .and_then(|v| rayleigh_lower_bound(&bzz, &qzz, sign, &(&r_inv * v)))
+        .map(|(bound, a)| (bound, variation.kernel.mul_vec(&a)));
+    let infimum = restricted_max.max(0.0);
+    let first_here = || Some((first.clone(), forms.first.clone(), first_growth.clone()));
+    if infimum.max(first_growth.sigma2) <= 0.0 {
+        // The first choice already has Sigma^2 = 0, the floor.
+        return Some(AtMultipliers { restricted_max, witness, best: first_here() });
+    }
+    let scale = if infimum > 0.0 { infimum } else { first_growth.sigma2 };
+    if t_rational == first.family_parameters.as_slice()
+        && first_growth.condition_number <= cond_limit
+        && first_growth.sigma2 <= infimum + 1.1e-12 * scale
+    {
+        // The first choice attains the infimum at these multipliers (to the
+        // tolerance the construction below accepts for delta = 0) and is
+        // conditioned: building another K could not do better.
+        return Some(AtMultipliers { restricted_max, witness, best: first_here() });
+    }
     let pzw = r_inv.transpose() * bzw.to_dmatrix() * s;
     let k0 = if k == 0 {
         -bww.to_dmatrix() * s
@@ -808,34 +840,12 @@ fn at_multipliers(
         pz,
         pzw,
         pw: bww.to_dmatrix() * s,
-        qz: congruent(&(qzz.to_dmatrix() * s), &r_inv),
+        qz,
         qzw: r_inv.transpose() * qzw.to_dmatrix() * s,
         qw: qww.to_dmatrix() * s,
         k0,
         margin,
     };
-    // The restricted lambda_max: the infimum over K at these multipliers
-    // (K -> infinity along the conserved directions leaves only ker G^T).
-    let (restricted_max, top) = if k == 0 {
-        (f64::NEG_INFINITY, None)
-    } else {
-        let (l, v) = top_generalized(&frame.pz, &frame.qz).ok()?;
-        (l, Some(v))
-    };
-    // A certified lower bound for every K at these multipliers: the exact
-    // Rayleigh quotient of a rational vector of ker G^T.
-    let witness = top
-        .as_ref()
-        .filter(|_| variation.family.directions.is_empty())
-        .and_then(|v| rayleigh_lower_bound(&bzz, &qzz, sign, &(&r_inv * v)))
-        .map(|(bound, a)| (bound, variation.kernel.mul_vec(&a)));
-    let infimum = restricted_max.max(0.0);
-    if infimum.max(first_growth.sigma2) <= 0.0 {
-        // The first choice already has Sigma^2 = 0, the floor.
-        let best = Some((first.clone(), forms.first.clone(), first_growth.clone()));
-        return Some(AtMultipliers { restricted_max, witness, best });
-    }
-    let scale = if infimum > 0.0 { infimum } else { first_growth.sigma2 };
     // Everything below is screened in floating point first (sP = sB + Y K' Y^T,
     // and sQ = sQ(B) since Q does not depend on K); only a K that passes the
     // screen is made exact, so the search costs a few small dense

@@ -32,10 +32,12 @@
 mod ensemble;
 mod kernel;
 mod model;
+mod report;
 mod scheme;
 mod study;
 
 pub use ensemble::{path_rng, run_ensemble, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
 pub use model::Model;
+pub use report::study_report;
 pub use scheme::{LinearModel, Scheme, Stepper};
 pub use study::{prepare, run, Exceedance, Prepared, Study, StudyError, StudySettings};

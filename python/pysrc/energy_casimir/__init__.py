@@ -1,0 +1,412 @@
+"""Certify the stability of stochastic Lie–Poisson equilibria from Python.
+
+The stochastic energy–Casimir method (Arnaudon, Ganaba and Holm) as the
+Rust engine ``verify`` implements it, called in-process: a spec (a dict, JSON
+text or a path) in, a :class:`Certificate` out, and :func:`check` to re-verify
+any certificate. The certificate is byte for byte what ``verify certify``
+writes, so certificates made here pass ``verify check`` and the other way
+round.
+
+>>> import energy_casimir as ec
+>>> cert = ec.certify({
+...     "name": "rigid-body", "algebra": "so3",
+...     "parameters": {"I1": 3, "I2": 2, "I3": 1, "sigma": "3/10"},
+...     "hamiltonian": "Pi1^2/(2*I1) + Pi2^2/(2*I2) + Pi3^2/(2*I3)",
+...     "equilibrium": [1, 0, 0], "noise": [["sigma", 0, 0]]})
+>>> cert.verdict, cert.level
+('stable', 'exact')
+>>> cert.sigma2_exact  # sigma^2 I1 (I2 - I3) / (I3 (I1 - I2)) = 0.09 * 3
+Fraction(27, 100)
+>>> round(cert.stopping_time(0.1, 0.001), 6)  # ln(100) / 0.27
+17.056186
+>>> ec.check(cert).verdict
+'stable'
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Union
+
+from . import _core
+from ._core import CheckError, SpecError
+
+__all__ = [
+    "Certificate",
+    "CheckError",
+    "CheckReport",
+    "SpecError",
+    "certify",
+    "check",
+    "simulate",
+    "validate",
+    "__version__",
+]
+
+__version__: str = _core.engine_version()
+
+SpecLike = Union[Dict[str, Any], str, "os.PathLike[str]"]
+
+
+def _json_default(obj: Any) -> Any:
+    """Spec values json cannot write: Fractions as exact ``"p/q"`` strings,
+    numpy arrays and scalars as lists and numbers."""
+    if isinstance(obj, Fraction):
+        return f"{obj.numerator}/{obj.denominator}"
+    if hasattr(obj, "tolist"):
+        return obj.tolist()
+    raise TypeError(f"a spec value of type {type(obj).__name__} cannot be written as JSON")
+
+
+def _read_input(obj: Any, what: str, base_dir: Optional[Union[str, "os.PathLike[str]"]]):
+    """``(json_text, base_folder)`` for a dict, JSON text or a path."""
+    if isinstance(obj, dict):
+        return json.dumps(obj, allow_nan=False, default=_json_default), base_dir
+    if isinstance(obj, os.PathLike) or (isinstance(obj, str) and not obj.lstrip().startswith("{")):
+        path = Path(obj)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as e:
+            raise FileNotFoundError(f"{what}: cannot read {str(path)!r}: {e.strerror or e}") from e
+        return text, base_dir if base_dir is not None else path.parent
+    if isinstance(obj, str):
+        return obj, base_dir
+    raise TypeError(f"{what}: expected a dict, JSON text or a path, got {type(obj).__name__}")
+
+
+def _base(base: Any) -> Optional[str]:
+    return None if base is None else os.fspath(base)
+
+
+def _rational(text: Any) -> Fraction:
+    return Fraction(str(text))
+
+
+def _float_up(q: Fraction) -> float:
+    """The least double at or above ``q`` (``float(q)`` rounds to nearest)."""
+    f = float(q)
+    if Fraction(f) < q:
+        f = math.nextafter(f, math.inf)
+    return f
+
+
+def _matrix(rows: Any):
+    import numpy as np
+
+    if rows is None:
+        return None
+    return np.array([[float(_rational(x)) for x in row] for row in rows], dtype=float).reshape(len(rows), -1)
+
+
+class Certificate:
+    """A certificate: the engine's claim about one spec, with its evidence.
+
+    Attributes mirror the certificate's JSON fields (``to_dict()`` gives all
+    of them). Matrices (``P``, ``Q``) are numpy arrays of the nearest doubles
+    to the exact rationals the certificate states; ``P_exact`` and
+    ``Q_exact`` keep them as :class:`fractions.Fraction`.
+    """
+
+    def __init__(self, data: Dict[str, Any], text: Optional[str] = None, base_dir: Optional[str] = None):
+        if not isinstance(data, dict) or "verdict" not in data:
+            raise TypeError("Certificate: expected a certificate (a dict with a 'verdict')")
+        self._data = data
+        self._text = text
+        self._base_dir = base_dir
+
+    # The claim.
+    @property
+    def name(self) -> str:
+        """The spec's name."""
+        return self._data.get("name", "")
+
+    @property
+    def verdict(self) -> str:
+        """``stable``, ``linearly_unstable``, ``inconclusive``, ``not_an_equilibrium`` or ``noise_incompatible``."""
+        return self._data["verdict"]
+
+    @property
+    def reason(self) -> str:
+        """One sentence explaining the verdict."""
+        return self._data.get("reason", "")
+
+    @property
+    def level(self) -> Optional[str]:
+        """How the claim is established: ``exact``, ``verified_float``, ``exact_structure``, ``float`` or ``numerical`` (``None``: no claim)."""
+        return self._data.get("level")
+
+    @property
+    def kind(self) -> str:
+        """``finite`` (a Lie–Poisson system), ``fluid``, ``zeitlin`` or ``large``."""
+        return self._data.get("kind", "finite")
+
+    @property
+    def sigma2(self) -> Optional[float]:
+        """The growth constant ``Sigma^2`` (when stable)."""
+        s = self._data.get("sigma2")
+        return None if s is None else float(s)
+
+    @property
+    def sigma2_exact(self) -> Optional[Fraction]:
+        """``Sigma^2`` as the exact rational the certificate proves (level ``exact``)."""
+        s = self._data.get("sigma2_exact")
+        return None if s is None else _rational(s)
+
+    @property
+    def sigma2_upper(self) -> Optional[float]:
+        """A proved upper bound on ``Sigma^2`` (level ``verified_float``)."""
+        s = self._data.get("sigma2_upper")
+        return None if s is None else float(s)
+
+    @property
+    def sigma2_bound(self) -> Optional[float]:
+        """The ``Sigma^2`` a guarantee is computed from: the exact value rounded up, else the proved upper bound, else the estimate."""
+        if self.sigma2_exact is not None:
+            return _float_up(self.sigma2_exact)
+        if self.sigma2_upper is not None:
+            return self.sigma2_upper
+        return self.sigma2
+
+    def stopping_time(self, epsilon: float, delta: float) -> float:
+        """``T(eps, delta) = ln(eps/delta) / Sigma^2`` for ``eps > delta > 0``:
+        ``P(|dmu_t|^2 > eps) <= (delta/eps) e^{Sigma^2 t}`` stays below 1 up to
+        ``T`` (``math.inf`` when ``Sigma^2 = 0``). Rounded down, from
+        :attr:`sigma2_bound`.
+
+        >>> import energy_casimir as ec
+        >>> c = ec.certify("fixtures/rigid-body-major-axis.json")
+        >>> c.stopping_time(0.1, 0.001) <= math.log(100) / 0.27
+        True
+        """
+        epsilon, delta = float(epsilon), float(delta)
+        if not (math.isfinite(epsilon) and math.isfinite(delta) and epsilon > delta > 0):
+            raise ValueError(f"stopping_time: need eps > delta > 0, got eps = {epsilon!r}, delta = {delta!r}")
+        s = self.sigma2_bound
+        if self.verdict != "stable" or s is None:
+            raise ValueError(f"stopping_time: the verdict is {self.verdict!r}, not 'stable': no stopping time is certified")
+        t = _core.stopping_time(epsilon, delta, s)
+        return math.inf if t is None else t
+
+    @property
+    def growth_rate(self) -> Optional[float]:
+        """The real part of the unstable eigenvalue of the linearised drift (``linearly_unstable``)."""
+        inst = self._data.get("instability")
+        if isinstance(inst, dict) and isinstance(inst.get("eigenvalue"), dict):
+            return float(inst["eigenvalue"]["re"])
+        return None
+
+    # The evidence.
+    @property
+    def P(self):
+        """The conserved quadratic form ``P`` (numpy array), when the certificate states it."""
+        return _matrix(self._data.get("P"))
+
+    @property
+    def Q(self):
+        """The generator's form ``Q`` with ``L(x^T P x) = x^T Q x`` (numpy array), when stated."""
+        return _matrix(self._data.get("Q"))
+
+    @property
+    def P_exact(self) -> Optional[List[List[Fraction]]]:
+        """``P`` as exact rationals."""
+        rows = self._data.get("P")
+        return None if rows is None else [[_rational(x) for x in row] for row in rows]
+
+    @property
+    def Q_exact(self) -> Optional[List[List[Fraction]]]:
+        """``Q`` as exact rationals."""
+        rows = self._data.get("Q")
+        return None if rows is None else [[_rational(x) for x in row] for row in rows]
+
+    @property
+    def casimir_choice(self) -> Optional[Dict[str, Any]]:
+        """The Casimir choice: the multipliers and the Casimir Hessian ``M`` (rational strings)."""
+        return self._data.get("casimir_choice")
+
+    @property
+    def multipliers(self) -> Optional[List[Fraction]]:
+        """The multipliers of the conserved quantities, exactly."""
+        m = (self.casimir_choice or {}).get("multipliers")
+        return None if m is None else [_rational(x) for x in m]
+
+    @property
+    def stopping(self) -> Optional[Dict[str, Any]]:
+        """The stopping-time record for the spec's ``stopping`` section."""
+        return self._data.get("stopping")
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The certificate's JSON as a dict (a deep copy)."""
+        return json.loads(self.to_json())
+
+    def to_json(self) -> str:
+        """The certificate as JSON text, exactly as ``verify certify`` writes it."""
+        if self._text is None:
+            self._text = json.dumps(self._data, indent=2)
+        return self._text
+
+    def save(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Write the certificate to ``path`` (for ``verify check``)."""
+        Path(path).write_text(self.to_json(), encoding="utf-8")
+
+    def check(self) -> "CheckReport":
+        """Re-verify this certificate (:func:`check`)."""
+        return check(self)
+
+    def __getitem__(self, key: str) -> Any:
+        return self._data[key]
+
+    def __repr__(self) -> str:
+        s2 = "" if self.sigma2 is None else f", sigma2={self.sigma2!r}"
+        return f"Certificate(name={self.name!r}, verdict={self.verdict!r}, level={self.level!r}{s2})"
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """What a successful :func:`check` established."""
+
+    name: str
+    verdict: str
+    level: Optional[str]
+    sigma2: Optional[float]
+
+
+def certify(spec: SpecLike, *, base_dir: Optional[Union[str, "os.PathLike[str]"]] = None) -> Certificate:
+    """Certify a spec: a dict, JSON text, or the path of a spec file.
+
+    The spec format is the engine's (README, ``schema/``): finite-dimensional
+    Lie–Poisson systems, fluids (``"fluid"``), the Zeitlin model
+    (``"zeitlin"``) and large systems. Files a spec names (a Zeitlin
+    ``.npy`` field) are read relative to ``base_dir``, by default the spec
+    file's folder (the current folder for a dict or text).
+
+    Raises :class:`SpecError` (``.path``, ``.message``) for invalid input.
+    The GIL is released while the engine works.
+
+    >>> import energy_casimir as ec
+    >>> ec.certify("fixtures/rigid-body-intermediate-axis.json").verdict
+    'linearly_unstable'
+    >>> try:
+    ...     ec.certify({"name": "x", "algebra": "so3", "hamiltonian": "Pi1^2",
+    ...                 "equilibrium": [1, 0], "noise": []})
+    ... except ec.SpecError as e:
+    ...     print(e.path)
+    $.equilibrium
+    """
+    text, base = _read_input(spec, "certify", base_dir)
+    out = _core.certify_text(text, _base(base))
+    return Certificate(json.loads(out), out, _base(base))
+
+
+def validate(spec: SpecLike, *, base_dir: Optional[Union[str, "os.PathLike[str]"]] = None) -> None:
+    """Parse a spec without certifying it; raises :class:`SpecError` if it is invalid."""
+    text, base = _read_input(spec, "validate", base_dir)
+    _core.validate_text(text, _base(base))
+
+
+def check(
+    certificate: Union[Certificate, Dict[str, Any], str, "os.PathLike[str]"],
+    *,
+    base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+) -> CheckReport:
+    """Re-verify a certificate (a :class:`Certificate`, a dict, JSON text or a path).
+
+    The engine re-derives everything from the embedded spec and trusts no
+    stored number. Raises :class:`CheckError` with ``.path`` (the first field
+    that fails), ``.message`` and ``.kind`` (``"failed"`` or ``"bad_input"``).
+
+    >>> import energy_casimir as ec
+    >>> d = ec.certify("fixtures/rigid-body-major-axis.json").to_dict()
+    >>> d["sigma2"] = 0.26
+    >>> try:
+    ...     ec.check(d)
+    ... except ec.CheckError as e:
+    ...     print(e.kind, e.path)
+    failed $.sigma2
+    """
+    if isinstance(certificate, Certificate):
+        text, base = certificate.to_json(), base_dir if base_dir is not None else certificate._base_dir
+    else:
+        text, base = _read_input(certificate, "check", base_dir)
+    name, verdict, level, sigma2 = _core.check_text(text, _base(base))
+    return CheckReport(name=name, verdict=verdict, level=level, sigma2=sigma2)
+
+
+def _arrays(obj: Any) -> Any:
+    """Numbers and lists of numbers as numpy arrays, recursively in dicts."""
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {k: _arrays(v) for k, v in obj.items()}
+    if isinstance(obj, list) and obj and not any(isinstance(x, (dict, str)) for x in obj):
+        try:
+            return np.asarray(obj, dtype=float)
+        except (TypeError, ValueError):
+            return obj
+    if isinstance(obj, list):
+        return [_arrays(x) for x in obj]
+    return obj
+
+
+def simulate(
+    spec: SpecLike,
+    *,
+    paths: int = 10_000,
+    dt: float = 0.01,
+    t_end: Optional[float] = None,
+    seed: int = 1,
+    outputs: int = 200,
+    bins: int = 80,
+    scheme: str = "lie",
+    observable: Optional[str] = None,
+    epsilon: Optional[float] = None,
+    delta: Optional[float] = None,
+    force: bool = False,
+    base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+) -> Dict[str, Any]:
+    """Monte Carlo of the stochastic system next to what the certificate claims.
+
+    The study of ``verify simulate`` (same defaults), in-process: the
+    nonlinear SDE from ``mu_e + sqrt(delta) v`` (``v`` the fastest-growing
+    direction of a stable equilibrium), the linearised SDE, its exact second
+    moments ``E|x_t|_P^2 / delta``, the worst start and the bound
+    ``exp(Sigma^2 t)``. Returns the report as a dict whose series are numpy
+    arrays: ``report["nonlinear"]["times"]``, ``["mean"]`` (times x
+    coordinates), ``["norm_mean_over_delta"]``, ``["norm_std_error_over_delta"]``,
+    ``["exceedance"]``; ``report["exact_moments_over_delta"]``,
+    ``report["bound_over_delta"]``, ``report["histogram"]["counts"]`` (times x
+    bins) and ``["range"]``; ``report["exceedance"]`` per level.
+
+    ``t_end`` defaults to ``8 T(eps, delta)`` kept within ``[1, 200]``. A
+    study estimated above 15 minutes is refused unless ``force=True``.
+    Raises :class:`SpecError` for an invalid spec, ``ValueError`` for
+    invalid settings. The GIL is released while it runs.
+
+    >>> import energy_casimir as ec
+    >>> r = ec.simulate("fixtures/rigid-body-major-axis.json", paths=200, t_end=2.0)
+    >>> float(r["nonlinear"]["times"][-1]), r["sigma2"]
+    (2.0, 0.27)
+    >>> bool((r["exact_moments_over_delta"] <= r["bound_over_delta"] * (1 + 1e-12)).all())
+    True
+    """
+    text, base = _read_input(spec, "simulate", base_dir)
+    out = _core.simulate_text(
+        text,
+        _base(base),
+        paths=int(paths),
+        dt=float(dt),
+        t_end=None if t_end is None else float(t_end),
+        outputs=int(outputs),
+        seed=int(seed),
+        bins=int(bins),
+        scheme=str(scheme),
+        observable=observable,
+        epsilon=None if epsilon is None else float(epsilon),
+        delta=None if delta is None else float(delta),
+        force=bool(force),
+    )
+    return _arrays(json.loads(out))

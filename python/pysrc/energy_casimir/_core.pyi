@@ -1,0 +1,41 @@
+"""Type stubs of the extension module (the Rust engine). Use the wrappers in
+``energy_casimir`` rather than these directly."""
+
+from os import PathLike
+from typing import Optional, Tuple, Union
+
+_Path = Union[str, PathLike[str]]
+
+class SpecError(ValueError):
+    """A spec is not valid input."""
+
+    path: str
+    message: str
+
+class CheckError(ValueError):
+    """A certificate failed its check."""
+
+    path: str
+    message: str
+    kind: str
+
+def certify_text(text: str, base: Optional[_Path] = None) -> str: ...
+def check_text(text: str, base: Optional[_Path] = None) -> Tuple[str, str, Optional[str], Optional[float]]: ...
+def validate_text(text: str, base: Optional[_Path] = None) -> None: ...
+def stopping_time(epsilon: float, delta: float, sigma2: float) -> Optional[float]: ...
+def simulate_text(
+    text: str,
+    base: Optional[_Path] = None,
+    paths: int = 10000,
+    dt: float = 0.01,
+    t_end: Optional[float] = None,
+    outputs: int = 200,
+    seed: int = 1,
+    bins: int = 80,
+    scheme: str = "lie",
+    observable: Optional[str] = None,
+    epsilon: Optional[float] = None,
+    delta: Optional[float] = None,
+    force: bool = False,
+) -> str: ...
+def engine_version() -> str: ...

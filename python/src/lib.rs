@@ -1,0 +1,201 @@
+//! `energy_casimir._core`: the engine's library API for Python.
+//!
+//! The Python package (`pysrc/energy_casimir`) wraps these functions; they
+//! take and return JSON text so that the certificate a Python user gets is
+//! byte for byte the one `verify certify` writes, and `check` runs the same
+//! code as `verify check`. Every call releases the GIL while the engine
+//! works (`Python::detach`), so threads certify in parallel.
+//!
+//! Errors are Python exceptions: `SpecError` (a `ValueError`) with `.path`
+//! (the JSON path, e.g. `$.noise[0][1]`) and `.message`; `CheckError` (also a
+//! `ValueError`) with `.path`, `.message` and `.kind` (`"failed"`: a claim
+//! does not hold; `"bad_input"`: the certificate or its spec is not valid).
+
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+create_exception!(
+    _core,
+    SpecError,
+    PyValueError,
+    "A spec is not valid input: `.path` is the JSON path of the field, `.message` what is wrong."
+);
+create_exception!(
+    _core,
+    CheckError,
+    PyValueError,
+    "A certificate failed its check: `.path` names the field, `.message` what differs, `.kind` is \"failed\" or \"bad_input\"."
+);
+
+/// A Python exception of type `E` with attributes set on the instance.
+fn error_with<E: pyo3::PyTypeInfo>(py: Python<'_>, text: String, attributes: &[(&str, &str)]) -> PyErr {
+    let err = PyErr::new::<E, _>(text);
+    let value = err.value(py);
+    for (name, v) in attributes {
+        // Setting an attribute on a fresh exception instance cannot fail;
+        // if it ever did, the message still carries the path.
+        let _ = value.setattr(*name, *v);
+    }
+    err
+}
+
+fn spec_error(py: Python<'_>, e: &spec::SpecError) -> PyErr {
+    error_with::<SpecError>(py, e.to_string(), &[("path", &e.path), ("message", &e.message)])
+}
+
+fn check_error(py: Python<'_>, e: &spec::CheckError) -> PyErr {
+    match e {
+        spec::CheckError::BadInput(s) => error_with::<CheckError>(
+            py,
+            e.to_string(),
+            &[("path", &s.path), ("message", &s.message), ("kind", "bad_input")],
+        ),
+        spec::CheckError::Failed { path, message } => {
+            error_with::<CheckError>(py, e.to_string(), &[("path", path), ("message", message), ("kind", "failed")])
+        }
+        // `CheckError` is non-exhaustive: a future kind keeps its message.
+        other => error_with::<CheckError>(
+            py,
+            other.to_string(),
+            &[("path", "$"), ("message", &other.to_string()), ("kind", "failed")],
+        ),
+    }
+}
+
+/// Certify a spec given as JSON text; files it names (a Zeitlin field's
+/// `.npy`) are relative to `base` (the current folder when `None`). Returns
+/// the certificate as pretty JSON text, as `verify certify` writes it.
+#[pyfunction]
+#[pyo3(signature = (text, base=None))]
+fn certify_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<String> {
+    let out =
+        py.detach(move || spec::parse_any_spec_in(&text, base.as_deref()).map(|s| spec::to_pretty_json(&s.certify())));
+    out.map_err(|e| spec_error(py, &e))
+}
+
+/// Check a certificate given as JSON text (files its spec names are relative
+/// to `base`). Returns `(name, verdict, level, sigma2)`; `level` and
+/// `sigma2` may be `None`.
+#[pyfunction]
+#[pyo3(signature = (text, base=None))]
+fn check_text(
+    py: Python<'_>,
+    text: String,
+    base: Option<PathBuf>,
+) -> PyResult<(String, String, Option<String>, Option<f64>)> {
+    let out = py.detach(move || spec::check_certificate_in(&text, base.as_deref()));
+    match out {
+        Ok(r) => Ok((r.name, r.verdict.as_str().to_string(), r.level.map(|l| l.as_str().to_string()), r.sigma2)),
+        Err(e) => Err(check_error(py, &e)),
+    }
+}
+
+/// Parse a spec (JSON text) without certifying it: `None` if it is valid,
+/// else a `SpecError`.
+#[pyfunction]
+#[pyo3(signature = (text, base=None))]
+fn validate_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<()> {
+    let out = py.detach(move || spec::parse_any_spec_in(&text, base.as_deref()).map(|_| ()));
+    out.map_err(|e| spec_error(py, &e))
+}
+
+/// `T(eps, delta) = ln(eps/delta) / Sigma^2`, rounded down (a guarantee), or
+/// `None` when `Sigma^2 = 0` (no finite stopping time). The engine's own
+/// `generator::StoppingTime`.
+#[pyfunction]
+fn stopping_time(epsilon: f64, delta: f64, sigma2: f64) -> Option<f64> {
+    generator::StoppingTime::new(epsilon, delta, sigma2).time()
+}
+
+/// Run `verify simulate`'s study of a finite-dimensional spec (JSON text):
+/// the nonlinear and the linearised ensembles, the exact second moments, the
+/// worst start and the bound. Returns the study's report as JSON text (the
+/// file `verify simulate` writes). Refuses, like the CLI, a study estimated
+/// at more than 15 minutes unless `force`.
+// One argument per Python keyword argument.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+#[pyo3(signature = (text, base=None, paths=10_000, dt=0.01, t_end=None, outputs=200, seed=1, bins=80, scheme="lie", observable=None, epsilon=None, delta=None, force=false))]
+fn simulate_text(
+    py: Python<'_>,
+    text: String,
+    base: Option<PathBuf>,
+    paths: usize,
+    dt: f64,
+    t_end: Option<f64>,
+    outputs: usize,
+    seed: u64,
+    bins: usize,
+    scheme: &str,
+    observable: Option<String>,
+    epsilon: Option<f64>,
+    delta: Option<f64>,
+    force: bool,
+) -> PyResult<String> {
+    let scheme = simulate::Scheme::from_name(scheme)
+        .ok_or_else(|| PyValueError::new_err(format!("scheme: {scheme:?} is not 'lie' or 'heun'")))?;
+    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))? {
+        spec::AnySpec::Lie(s) => s,
+        _ => return Err(PyValueError::new_err(
+            "simulate runs finite-dimensional specs (fluid, Zeitlin and large specs are certified, not simulated here)",
+        )),
+    };
+    let out = py.detach(move || -> Result<String, String> {
+        let cert = spec::certify(&spec);
+        let coords = spec.system.algebra().coordinates();
+        let observable = match &observable {
+            Some(name) => Some(coords.iter().position(|c| c == name).ok_or_else(|| {
+                format!("observable: unknown coordinate {name:?} (coordinates: {})", coords.join(", "))
+            })?),
+            None => None,
+        };
+        let settings = simulate::StudySettings {
+            paths,
+            dt,
+            t_end,
+            outputs,
+            seed,
+            bins,
+            scheme,
+            observable,
+            epsilon: epsilon.or(spec.stopping.map(|s| s.epsilon)).unwrap_or(0.1),
+            delta: delta.or(spec.stopping.map(|s| s.delta)).unwrap_or(1e-3),
+        };
+        let prepared = simulate::prepare(&spec.system, &cert.analysis, &settings).map_err(|e| e.to_string())?;
+        let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+        let estimate = prepared.estimated_seconds(cores as f64);
+        if estimate > 900.0 && !force {
+            return Err(format!(
+                "paths/dt/t_end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass force=True",
+                prepared.ensemble.path_steps(),
+                estimate / 60.0
+            ));
+        }
+        let study = simulate::run(&prepared, &|_| {}).map_err(|e| e.to_string())?;
+        let verdict = cert.json["verdict"].as_str().unwrap_or_default().to_string();
+        let report = simulate::study_report(&spec.name, &verdict, &prepared, &settings, &study, coords, cores as u64);
+        Ok(report.to_string())
+    });
+    out.map_err(PyValueError::new_err)
+}
+
+/// The engine's version, as certificates record it.
+#[pyfunction]
+fn engine_version() -> &'static str {
+    spec::ENGINE_VERSION
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SpecError", m.py().get_type::<SpecError>())?;
+    m.add("CheckError", m.py().get_type::<CheckError>())?;
+    m.add_function(wrap_pyfunction!(certify_text, m)?)?;
+    m.add_function(wrap_pyfunction!(check_text, m)?)?;
+    m.add_function(wrap_pyfunction!(validate_text, m)?)?;
+    m.add_function(wrap_pyfunction!(stopping_time, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate_text, m)?)?;
+    m.add_function(wrap_pyfunction!(engine_version, m)?)?;
+    Ok(())
+}

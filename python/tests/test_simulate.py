@@ -1,0 +1,96 @@
+"""simulate() against an independent numpy computation of the exact second
+moments of the linearised SDE, and the Monte Carlo against those."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import energy_casimir as ec
+
+FIXTURES = Path(__file__).resolve().parents[2] / "fixtures"
+
+
+def expm(m):
+    """exp(m) by scaling and squaring with a degree-24 Taylor polynomial
+    (numpy only; accurate to rounding for the small matrices here)."""
+    norm = np.abs(m).sum(axis=1).max()
+    k = max(0, int(math.ceil(math.log2(norm))) + 1) if norm > 0 else 0
+    a = m / 2.0**k
+    out, term = np.eye(len(m)), np.eye(len(m))
+    for j in range(1, 25):
+        term = term @ a / j
+        out = out + term
+    for _ in range(k):
+        out = out @ out
+    return out
+
+
+def test_exact_moments_rebuilt_in_numpy():
+    """dS/dt = A~ S + S A~^T + B S B^T with A~ = A + B^2/2 (Stratonovich to
+    Ito), S(0) = x0 x0^T, E|x_t|_P^2 = tr(P S(t)); A and B from the Euler
+    equations of the body I = (3, 2, 1) with noise 0.3 e1 about e1."""
+    cert = ec.certify(FIXTURES / "rigid-body-major-axis.json")
+    r = ec.simulate(FIXTURES / "rigid-body-major-axis.json", paths=2000, t_end=4.0, outputs=40, seed=3)
+    P = cert.P
+
+    def cross(v):
+        return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+
+    inv_i = np.diag([1 / 3, 1 / 2, 1.0])
+    pe = np.array([1.0, 0, 0])
+    A = cross(pe) @ inv_i - cross(inv_i @ pe)
+    B = -cross(np.array([0.3, 0, 0]))
+    At = A + 0.5 * B @ B
+    eye = np.eye(3)
+    # vec(A S + S A^T + B S B^T) = (I (x) A + A (x) I + B (x) B) vec(S), row-major vec.
+    L = np.kron(At, eye) + np.kron(eye, At) + np.kron(B, B)
+    x0 = np.asarray(r["parameters"]["mu0"]) - pe
+    delta = r["delta"]
+    assert x0 @ P @ x0 == pytest.approx(delta, rel=1e-12)
+    times = r["nonlinear"]["times"]
+    s0 = np.outer(x0, x0).reshape(-1)
+    ours = np.array([np.trace(P @ (expm(L * t) @ s0).reshape(3, 3)) / delta for t in times])
+    assert np.allclose(r["exact_moments_over_delta"], ours, rtol=1e-9, atol=1e-12)
+    # Started along the fastest direction: the moment starts growing at the
+    # rate Sigma^2 and stays under the bound exp(Sigma^2 t).
+    assert np.all(ours <= np.exp(0.27 * times) * (1 + 1e-12))
+    assert np.allclose(r["bound_over_delta"], np.exp(0.27 * times), rtol=1e-12)
+    # The linearised Monte Carlo agrees with the exact moments within 4
+    # standard errors (plus rounding).
+    lin = r["linearised"]
+    gap = np.abs(lin["norm_mean_over_delta"] - ours)
+    assert np.all(gap <= 4 * lin["norm_std_error_over_delta"] + 1e-9), gap.max()
+    # The histogram counts every path at every output time.
+    counts = r["histogram"]["counts"]
+    assert counts.shape == (len(times), r["parameters"]["bins"])
+    assert np.all(counts.sum(axis=1) <= 2000)
+
+
+def test_same_seed_same_paths_and_unstable_specs():
+    a = ec.simulate(FIXTURES / "rigid-body-major-axis.json", paths=100, t_end=1.0, outputs=20, seed=5)
+    b = ec.simulate(FIXTURES / "rigid-body-major-axis.json", paths=100, t_end=1.0, outputs=20, seed=5)
+    assert np.array_equal(a["nonlinear"]["mean"], b["nonlinear"]["mean"])
+    u = ec.simulate(FIXTURES / "rigid-body-intermediate-axis.json", paths=100, t_end=1.0, outputs=20)
+    assert u["verdict"] == "linearly_unstable" and u["sigma2"] is None and u["linearised"] is None
+
+
+@pytest.mark.parametrize(
+    "kwargs, text",
+    [
+        ({"scheme": "euler"}, "scheme"),
+        ({"observable": "Gamma1"}, "observable"),
+        ({"epsilon": 1e-4, "delta": 1e-3}, "delta"),
+        ({"paths": 10**9, "dt": 1e-4, "t_end": 200.0}, "force=True"),
+    ],
+)
+def test_bad_settings_are_value_errors(kwargs, text):
+    with pytest.raises(ValueError) as e:
+        ec.simulate(FIXTURES / "rigid-body-major-axis.json", **kwargs)
+    assert text in str(e.value)
+
+
+def test_fluid_specs_are_not_simulated_here():
+    with pytest.raises(ValueError):
+        ec.simulate(FIXTURES / "fluids" / "channel-sin-walls.json", paths=10)

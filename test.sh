@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The README's test command: the Rust test suite, then the Python package's.
+#
+# The Python part builds the extension (python/, PyO3 + maturin, abi3) into a
+# private virtual environment under target/python-venv, installing maturin,
+# pytest, numpy and matplotlib (for examples/rigid_body.py) there from PyPI
+# when they are missing, and runs the pytest suite (python/tests) and the
+# package's doc examples from the repository root (they read fixtures/).
+# Arguments go to `cargo test --workspace`.
+# PYTHON_TESTS=0 skips the Python part.
+set -euo pipefail
+cd "$(dirname "$0")"
+cargo test --workspace "$@"
+if [ "${PYTHON_TESTS:-1}" = "0" ]; then
+  exit 0
+fi
+venv="$PWD/target/python-venv"
+if [ ! -x "$venv/bin/python" ]; then
+  python3 -m venv "$venv"
+fi
+if ! "$venv/bin/python" -c 'import maturin, pytest, numpy, matplotlib' 2>/dev/null; then
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "maturin>=1.9,<2" "pytest>=7" numpy matplotlib
+fi
+# One target folder for both workspaces: the engine's crates built in
+# release for `verify` are reused by the extension.
+export CARGO_TARGET_DIR="$PWD/target"
+VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --release --quiet -m python/Cargo.toml
+"$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests --doctest-modules --pyargs energy_casimir
