@@ -257,6 +257,87 @@ fn shards_concatenate_to_the_whole_sweep_and_random_samples_repeat() {
     }
 }
 
+/// Shards run as separate processes (as Slurm array tasks would), then
+/// `verify merge`: one file in index order with exactly the lines of the
+/// unsharded sweep. The rigid-body triangle has a sweep domain, so the
+/// completeness check must skip the points outside it. A missing shard, a
+/// line of another plan and two different results for one point are
+/// refused (exit 1); the same shard given twice is harmless.
+#[test]
+fn merge_checks_identity_duplicates_and_completeness() {
+    let spec = fixture_path("sweeps/rigid-body-triangle.json");
+    let spec_s = spec.to_str().unwrap();
+    let small = ["--param", "I1=1/100:1/2:12", "--param", "I2=1/100:1/2:12", "--numeric"];
+    let whole = tmp("triangle-whole.jsonl");
+    assert!(sweep_to("sweeps/rigid-body-triangle.json", &whole, &small).status.success());
+    let shards: Vec<PathBuf> = (0..3).map(|k| tmp(&format!("triangle{k}.jsonl"))).collect();
+    let children: Vec<_> = shards
+        .iter()
+        .enumerate()
+        .map(|(k, path)| {
+            let shard = format!("{k}/3");
+            let mut args = vec!["sweep", spec_s, "-o", path.to_str().unwrap(), "--shard", &shard];
+            args.extend_from_slice(&small);
+            Command::new(env!("CARGO_BIN_EXE_verify")).args(&args).stderr(Stdio::null()).spawn().unwrap()
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().unwrap().success());
+    }
+    let merge = |files: &[&Path], out: &Path, extra: &[&str]| -> Output {
+        let mut args = vec!["merge", spec_s, "-o", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        args.push("--lines");
+        args.extend(files.iter().map(|f| f.to_str().unwrap()));
+        verify(&args)
+    };
+    let parts: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
+    let merged = tmp("triangle-merged.jsonl");
+    let o = merge(&parts, &merged, &small);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(line_set(&[&merged]), line_set(&[&whole]));
+    let indices: Vec<u64> = records(&merged).iter().map(|r| r["index"].as_u64().unwrap()).collect();
+    assert!(indices.windows(2).all(|w| w[0] < w[1]), "index order");
+    assert!(indices.len() < 144, "the domain leaves some of the 12 x 12 points out");
+
+    // The same shard twice: dropped, same output.
+    let twice = tmp("triangle-twice.jsonl");
+    let o = merge(&[parts[0], parts[1], parts[2], parts[2]], &twice, &small);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("repeated lines dropped"), "{}", stderr(&o));
+    assert_eq!(lines_of(&twice), lines_of(&merged));
+
+    // A missing shard.
+    let o = merge(&parts[..2], &tmp("triangle-missing.jsonl"), &small);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("incomplete"), "{}", stderr(&o));
+    assert!(!tmp("triangle-missing.jsonl").exists(), "no output for an incomplete merge");
+
+    // Another plan (the exact level is another sweep id).
+    let o = merge(&parts, &tmp("triangle-exact.jsonl"), &small[..4]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("belongs to sweep"), "{}", stderr(&o));
+
+    // Two different results for one point.
+    let forged = tmp("triangle-forged.jsonl");
+    let mut lines = lines_of(parts[0]);
+    let mut r: Value = serde_json::from_str(&lines[0]).unwrap();
+    r["verdict"] = "inconclusive".into();
+    lines.push(r.to_string());
+    std::fs::write(&forged, lines.join("\n") + "\n").unwrap();
+    let o = merge(&[&forged, parts[1], parts[2]], &tmp("triangle-conflict.jsonl"), &small);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("two different results"), "{}", stderr(&o));
+
+    // A truncated last line (an interrupted shard) is bad input.
+    let cut = tmp("triangle-cut.jsonl");
+    let text = std::fs::read_to_string(parts[0]).unwrap();
+    std::fs::write(&cut, &text[..text.len() - 20]).unwrap();
+    let o = merge(&[&cut, parts[1], parts[2]], &tmp("triangle-cut-out.jsonl"), &small);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--resume"), "{}", stderr(&o));
+}
+
 /// The numeric level gives the same verdicts and Sigma^2 (to 1e-9) as the
 /// exact level, and says `numerical`.
 #[test]

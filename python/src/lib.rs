@@ -15,6 +15,8 @@ use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Duration;
 
 create_exception!(
     _core,
@@ -181,6 +183,133 @@ fn simulate_text(
     out.map_err(PyValueError::new_err)
 }
 
+/// Run `work` on a worker thread while this (the calling, usually the main)
+/// thread, without the GIL, wakes every 100 ms to honour Ctrl-C
+/// (`check_signals`, which only the main thread can) and to call
+/// `progress(done, total)` when `done` moved. On an interrupt `cancel` is
+/// set; `work` must then stop soon, and the interrupt is raised.
+fn interruptible<R: Send>(
+    py: Python<'_>,
+    total: u64,
+    progress: Option<&Bound<'_, PyAny>>,
+    work: impl FnOnce(&AtomicBool, &AtomicU64) -> R + Send,
+) -> PyResult<R> {
+    let cancel = AtomicBool::new(false);
+    let done = AtomicU64::new(0);
+    let finished = AtomicBool::new(false);
+    let mut interrupt: Option<PyErr> = None;
+    let mut reported = u64::MAX;
+    let result = std::thread::scope(|scope| -> PyResult<R> {
+        let worker = scope.spawn(|| {
+            let r = work(&cancel, &done);
+            finished.store(true, Ordering::Release);
+            r
+        });
+        while !finished.load(Ordering::Acquire) {
+            py.detach(|| std::thread::sleep(Duration::from_millis(100)));
+            if interrupt.is_none() {
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::Release);
+                    interrupt = Some(e);
+                }
+            }
+            let now = done.load(Ordering::Relaxed);
+            if let (Some(cb), None) = (progress, &interrupt) {
+                if now != reported {
+                    reported = now;
+                    if let Err(e) = cb.call1((now, total)) {
+                        cancel.store(true, Ordering::Release);
+                        interrupt = Some(e);
+                    }
+                }
+            }
+        }
+        py.detach(|| worker.join()).map_err(|_| PyValueError::new_err("the engine's worker thread failed"))
+    })?;
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    if let Some(cb) = progress {
+        cb.call1((done.load(Ordering::Relaxed), total))?;
+    }
+    Ok(result)
+}
+
+/// A sink for sweep lines that refuses to take more once `cancel` is set,
+/// which stops the sweep after the chunks in flight.
+struct CancellableSink<'a> {
+    lines: Vec<u8>,
+    cancel: &'a AtomicBool,
+}
+
+impl std::io::Write for CancellableSink<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.cancel.load(Ordering::Acquire) {
+            // Not `ErrorKind::Interrupted`: `write_all` retries those forever.
+            return Err(std::io::Error::other("stopped: interrupted or the progress callback raised"));
+        }
+        self.lines.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Certify a spec (JSON text) over a grid or random points of its
+/// parameters (`params`: `NAME=START:STOP:COUNT` each; empty: the spec's
+/// own `sweep` ranges), in parallel. Returns the sweep's JSON lines (those
+/// of `verify sweep`, in completion order). Ctrl-C stops it;
+/// `progress(done, total)` is called from the calling thread.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+#[pyo3(signature = (text, base=None, params=vec![], random=None, seed=0, numeric=false, shard=None, progress=None))]
+fn sweep_text(
+    py: Python<'_>,
+    text: String,
+    base: Option<PathBuf>,
+    params: Vec<String>,
+    random: Option<u64>,
+    seed: u64,
+    numeric: bool,
+    shard: Option<String>,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<String> {
+    let spec = spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))?;
+    let ranges: Vec<spec::ParamRange> = if params.is_empty() {
+        spec.sweep().ranges.clone()
+    } else {
+        params
+            .iter()
+            .map(|p| spec::ParamRange::parse(p).map_err(|e| PyValueError::new_err(format!("params: {}", e.0))))
+            .collect::<PyResult<_>>()?
+    };
+    let names: Vec<String> = ranges.iter().map(|r| r.name.clone()).collect();
+    let sampling = match random {
+        Some(points) => sweep::Sampling::Random { points, seed },
+        None => sweep::Sampling::Grid,
+    };
+    let plan = sweep::Plan::new(ranges, sampling).map_err(|e| PyValueError::new_err(format!("params: {e}")))?;
+    let level = if numeric { sweep::Level::Numeric } else { sweep::Level::Spec };
+    let id = sweep::sweep_id(&spec, &plan, level);
+    let evaluator =
+        sweep::Evaluator::new(spec, names, level).map_err(|e| PyValueError::new_err(format!("params: {e}")))?;
+    let shard = match &shard {
+        Some(s) => sweep::Shard::parse(s).map_err(|e| PyValueError::new_err(format!("shard {s:?}: {e}")))?,
+        None => sweep::Shard::ALL,
+    };
+    let total = plan.len();
+    let out = interruptible(py, total, progress.as_ref(), |cancel, done| {
+        let mut sink = CancellableSink { lines: vec![], cancel };
+        let tick = |n: u64| {
+            done.fetch_add(n, Ordering::Relaxed);
+        };
+        sweep::run(&evaluator, &plan, &id, shard, &sweep::Done::none(), &mut sink, &tick).map(|_| sink.lines)
+    })?;
+    let lines = out.map_err(|e| PyValueError::new_err(format!("the sweep stopped: {e}")))?;
+    String::from_utf8(lines).map_err(|_| PyValueError::new_err("the sweep wrote text that is not UTF-8"))
+}
+
 /// The engine's version, as certificates record it.
 #[pyfunction]
 fn engine_version() -> &'static str {
@@ -196,6 +325,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate_text, m)?)?;
     m.add_function(wrap_pyfunction!(stopping_time, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_text, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_text, m)?)?;
     m.add_function(wrap_pyfunction!(engine_version, m)?)?;
     Ok(())
 }

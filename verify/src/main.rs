@@ -31,6 +31,7 @@ use std::process::ExitCode;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod fluid_plots;
+mod merge_cmd;
 mod messages;
 mod paths;
 mod plots;
@@ -72,6 +73,8 @@ enum Command {
     Simulate(simulate_cmd::SimulateArgs),
     /// Certify a spec over a grid or random samples of its parameters (one JSON line per point).
     Sweep(sweep_cmd::SweepArgs),
+    /// Join the line files of a sharded sweep into one, checking identity, duplicates and completeness.
+    Merge(merge_cmd::MergeArgs),
     /// Stability maps and Sigma^2 / T charts from sweep lines.
     PlotSweep(sweep_plots::PlotSweepArgs),
     /// Charts from fluid certificates (Sigma^2 per x-mode, convergence, Galilean shift).
@@ -264,6 +267,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Some(Command::Simulate(args)) => simulate_cmd::run(&args),
         Some(Command::PlotFluid(args)) => fluid_plots::run(&args),
         Some(Command::Sweep(args)) => sweep_cmd::run(&args),
+        Some(Command::Merge(args)) => merge_cmd::run(&args),
         Some(Command::PlotSweep(args)) => sweep_plots::run(&args),
         None => table::fixtures_table(&fixtures_dir(cli.fixtures), cli.write)
             .context("running the fixtures")

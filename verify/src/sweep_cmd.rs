@@ -12,9 +12,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use sweep::{Done, Evaluator, Level, Plan, Sampling, Shard};
 
-/// Options of `verify sweep`.
+/// The plan of a sweep: the spec, the ranges, grid or random points, the
+/// level. `verify sweep` runs it; `verify merge` re-derives it to check
+/// that shard files make up exactly this sweep.
 #[derive(Args, Debug)]
-pub struct SweepArgs {
+pub struct PlanArgs {
     /// The spec (JSON). Its optional `sweep` section gives default ranges,
     /// boundaries and reference constants for the plots.
     pub spec: PathBuf,
@@ -31,8 +33,19 @@ pub struct SweepArgs {
     /// Seed of --random (the same seed gives the same points).
     #[arg(long, default_value_t = 0, requires = "random")]
     pub seed: u64,
+    /// Floating-point verdicts only (settings.exact = false): much faster,
+    /// level `numerical`.
+    #[arg(long)]
+    pub numeric: bool,
+}
+
+/// Options of `verify sweep`.
+#[derive(Args, Debug)]
+pub struct SweepArgs {
+    #[command(flatten)]
+    pub plan: PlanArgs,
     /// Only the points whose index is K modulo N (split a sweep across
-    /// machines; concatenate the outputs).
+    /// machines or Slurm array tasks; `verify merge` joins the outputs).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
     /// Write the lines here (default: stdout).
@@ -42,13 +55,44 @@ pub struct SweepArgs {
     /// missing points.
     #[arg(long, requires = "output")]
     pub resume: bool,
-    /// Floating-point verdicts only (settings.exact = false): much faster,
-    /// level `numerical`.
-    #[arg(long)]
-    pub numeric: bool,
     /// After the sweep, draw the charts into this directory (needs --output).
     #[arg(long, requires = "output")]
     pub plot: Option<PathBuf>,
+}
+
+/// A sweep's plan made concrete: the evaluator, the points, the id.
+pub(crate) struct PlannedSweep {
+    pub evaluator: Evaluator,
+    pub plan: Plan,
+    pub id: String,
+}
+
+/// Read the spec and build the plan, the evaluator and the sweep's id.
+pub(crate) fn planned(args: &PlanArgs) -> Result<PlannedSweep, Failure> {
+    let text = read(&args.spec)?;
+    let spec =
+        parse_any_spec_in(&text, args.spec.parent()).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
+    let ranges: Vec<ParamRange> = if args.params.is_empty() {
+        spec.sweep().ranges.clone()
+    } else {
+        args.params
+            .iter()
+            .map(|p| ParamRange::parse(p).map_err(|m| bad(format!("--param {}", quoting(m.0, p)))))
+            .collect::<Result<_, _>>()?
+    };
+    let names: Vec<String> = ranges.iter().map(|r| r.name.clone()).collect();
+    let sampling = match args.random {
+        Some(points) => Sampling::Random { points, seed: args.seed },
+        None => Sampling::Grid,
+    };
+    let plan = Plan::new(ranges, sampling).map_err(|m| {
+        bad(format!("{}: {}", args.spec.display(), names.iter().fold(m.to_string(), |m, n| quoting(m, n))))
+    })?;
+    let level = if args.numeric { Level::Numeric } else { Level::Spec };
+    let id = sweep::sweep_id(&spec, &plan, level);
+    let evaluator = Evaluator::new(spec, names.clone(), level)
+        .map_err(|m| bad(format!("--param: {}", names.iter().fold(m.to_string(), |m, n| quoting(m, n)))))?;
+    Ok(PlannedSweep { evaluator, plan, id })
 }
 
 fn bad(m: impl Into<String>) -> Failure {
@@ -114,29 +158,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     if let Some(dir) = &args.plot {
         ensure_output_dir(dir, "--plot")?;
     }
-    let text = read(&args.spec)?;
-    let spec =
-        parse_any_spec_in(&text, args.spec.parent()).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
-    let ranges: Vec<ParamRange> = if args.params.is_empty() {
-        spec.sweep().ranges.clone()
-    } else {
-        args.params
-            .iter()
-            .map(|p| ParamRange::parse(p).map_err(|m| bad(format!("--param {}", quoting(m.0, p)))))
-            .collect::<Result<_, _>>()?
-    };
-    let names: Vec<String> = ranges.iter().map(|r| r.name.clone()).collect();
-    let sampling = match args.random {
-        Some(points) => Sampling::Random { points, seed: args.seed },
-        None => Sampling::Grid,
-    };
-    let plan = Plan::new(ranges, sampling).map_err(|m| {
-        bad(format!("{}: {}", args.spec.display(), names.iter().fold(m.to_string(), |m, n| quoting(m, n))))
-    })?;
-    let level = if args.numeric { Level::Numeric } else { Level::Spec };
-    let id = sweep::sweep_id(&spec, &plan, level);
-    let evaluator = Evaluator::new(spec, names.clone(), level)
-        .map_err(|m| bad(format!("--param: {}", names.iter().fold(m.to_string(), |m, n| quoting(m, n)))))?;
+    let PlannedSweep { evaluator, plan, id } = planned(&args.plan)?;
     let shard = match &args.shard {
         Some(s) => Shard::parse(s).map_err(|m| bad(format!("--shard '{}': {m}", excerpt(s))))?,
         None => Shard::ALL,
@@ -177,7 +199,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         eprintln!("  {} points lie outside the spec's sweep domain (no line)", summary.outside_domain);
     }
     if let (Some(dir), Some(out)) = (&args.plot, &args.output) {
-        crate::sweep_plots::plot_files(std::slice::from_ref(out), &args.spec, dir, None)?;
+        crate::sweep_plots::plot_files(std::slice::from_ref(out), &args.plan.spec, dir, None)?;
     }
     if summary.invalid > 0 {
         return Err(bad(format!(

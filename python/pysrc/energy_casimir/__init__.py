@@ -31,7 +31,7 @@ import os
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _core
 from ._core import CheckError, SpecError
@@ -44,6 +44,7 @@ __all__ = [
     "certify",
     "check",
     "simulate",
+    "sweep",
     "validate",
     "__version__",
 ]
@@ -410,3 +411,96 @@ def simulate(
         force=bool(force),
     )
     return _arrays(json.loads(out))
+
+
+def _range_text(name: str, r: Any) -> str:
+    """``NAME=START:STOP:COUNT`` from ``(start, stop, count)`` or a string."""
+    if isinstance(r, str):
+        return f"{name}={r}"
+    try:
+        start, stop, count = r
+    except (TypeError, ValueError):
+        raise ValueError(f"params[{name!r}]: expected (start, stop, count) or 'START:STOP:COUNT', got {r!r}") from None
+
+    def number(x: Any) -> str:
+        if isinstance(x, Fraction):
+            return f"{x.numerator}/{x.denominator}"
+        if isinstance(x, float) and not math.isfinite(x):
+            raise ValueError(f"params[{name!r}]: {x!r} is not a finite number")
+        return str(x)
+
+    return f"{name}={number(start)}:{number(stop)}:{int(count)}"
+
+
+def sweep(
+    spec: SpecLike,
+    params: Optional[Mapping[str, Any]] = None,
+    *,
+    random: Optional[int] = None,
+    seed: int = 0,
+    numeric: bool = False,
+    shard: Optional[Union[str, Tuple[int, int]]] = None,
+    progress: Optional[Callable[[int, int], Any]] = None,
+    base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+) -> Dict[str, Any]:
+    """Certify ``spec`` over a grid (or ``random`` points) of its parameters.
+
+    ``params`` maps each swept parameter to ``(start, stop, count)`` (numbers
+    or Fractions) or ``"START:STOP:COUNT"``; without it the spec's own
+    ``sweep`` ranges are used. ``numeric=True`` gives floating-point verdicts
+    (level ``numerical``, much faster). ``shard=(k, n)`` keeps the points
+    whose index is ``k`` modulo ``n``, as ``verify sweep --shard k/n``.
+
+    Returns columns in index order, ready for ``pandas.DataFrame(columns)``
+    (pandas is not needed): ``index``, one float column per parameter,
+    ``verdict``, ``level``, ``sigma2`` and ``T`` (NaN where absent), and
+    ``error`` (None unless the spec is invalid at that point), plus
+    ``lines``: the JSON lines ``verify sweep`` writes (for ``verify merge``
+    and ``verify plot-sweep``).
+
+    Ctrl-C stops the sweep (``KeyboardInterrupt``). ``progress(done,
+    total)`` is called about ten times a second from the calling thread;
+    pass ``tqdm``'s ``update`` through a small lambda to draw a bar.
+
+    >>> import energy_casimir as ec
+    >>> cols = ec.sweep("fixtures/rigid-body-major-axis.json", {"I2": ("3/2", "5/2", 3)})
+    >>> # sigma^2 (a3/a2 - 1) with a_i = 1/I_i - 1/I1, I = (3, I2, 1), sigma = 0.3:
+    >>> # a3/a2 = 2, 4, 10 at I2 = 3/2, 2, 5/2.
+    >>> [float(x) for x in cols["I2"]], [float(x) for x in cols["sigma2"]]
+    ([1.5, 2.0, 2.5], [0.09, 0.27, 0.81])
+    """
+    import numpy as np
+
+    text, base = _read_input(spec, "sweep", base_dir)
+    ranges = [_range_text(k, v) for k, v in (params or {}).items()]
+    shard_text = None
+    if shard is not None:
+        shard_text = shard if isinstance(shard, str) else f"{int(shard[0])}/{int(shard[1])}"
+    out = _core.sweep_text(
+        text,
+        _base(base),
+        params=ranges,
+        random=None if random is None else int(random),
+        seed=int(seed),
+        numeric=bool(numeric),
+        shard=shard_text,
+        progress=progress,
+    )
+    pairs = sorted(((json.loads(line), line) for line in out.splitlines() if line.strip()), key=lambda p: p[0]["index"])
+    records = [r for r, _ in pairs]
+    names: List[str] = list(records[0]["parameters"].keys()) if records else [r.split("=")[0] for r in ranges]
+    nan = float("nan")
+
+    def num(x: Any) -> float:
+        return nan if x is None or isinstance(x, str) else float(x)
+
+    columns: Dict[str, Any] = {"index": np.array([r["index"] for r in records], dtype=np.int64)}
+    for n in names:
+        columns[n] = np.array([r["parameters"][n] for r in records], dtype=float)
+    columns["verdict"] = [r.get("verdict") for r in records]
+    columns["level"] = [r.get("level") for r in records]
+    columns["sigma2"] = np.array([num(r.get("sigma2")) for r in records], dtype=float)
+    columns["T"] = np.array([num(r.get("T")) for r in records], dtype=float)
+    columns["error"] = [r.get("error") for r in records]
+    columns["lines"] = [line for _, line in pairs]
+    return columns

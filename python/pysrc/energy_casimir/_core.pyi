@@ -2,7 +2,7 @@
 ``energy_casimir`` rather than these directly."""
 
 from os import PathLike
-from typing import Optional, Tuple, Union
+from typing import Any, Callable, List, Optional, Tuple, Union
 
 _Path = Union[str, PathLike[str]]
 
@@ -39,3 +39,13 @@ def simulate_text(
     force: bool = False,
 ) -> str: ...
 def engine_version() -> str: ...
+def sweep_text(
+    text: str,
+    base: Optional[_Path] = None,
+    params: List[str] = ...,
+    random: Optional[int] = None,
+    seed: int = 0,
+    numeric: bool = False,
+    shard: Optional[str] = None,
+    progress: Optional[Callable[[int, int], Any]] = None,
+) -> str: ...

@@ -1,0 +1,144 @@
+//! `verify merge`: join the line files of a sharded sweep (`verify sweep
+//! --shard K/N -o FILE`, one per machine or Slurm array task) into one file,
+//! after checking that together they are exactly the sweep the plan
+//! describes:
+//!
+//! * **identity**: every line carries the plan's sweep id (spec, ranges,
+//!   sampling and level hashed; a line of another spec or plan is refused,
+//!   naming its file and line);
+//! * **duplicates**: a point that appears twice must carry the same result
+//!   (the same shard given twice is harmless: the copy is dropped); two
+//!   different results for one point are refused;
+//! * **completeness**: every point of the plan inside the spec's sweep
+//!   domain has its line (the missing ones are counted, with the shard that
+//!   holds the first few).
+//!
+//! The output has the lines in index order, written atomically.
+
+use crate::messages::excerpt;
+use crate::paths::{check_output_file, ensure_output_dir, write_atomic};
+use crate::sweep_cmd::{planned, PlanArgs, PlannedSweep};
+use crate::Failure;
+use clap::Args;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+
+/// Options of `verify merge`.
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// The plan the shards ran: the same spec and options as `verify sweep`.
+    #[command(flatten)]
+    pub plan: PlanArgs,
+    /// The shard files (JSON lines), any order.
+    #[arg(long = "lines", value_name = "FILE", required = true, num_args = 1..)]
+    pub lines: Vec<PathBuf>,
+    /// The merged file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also draw the charts of the merged sweep into this directory.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+fn bad(m: impl Into<String>) -> Failure {
+    Failure::BadInput(m.into())
+}
+
+/// Run `verify merge`.
+pub fn run(args: &MergeArgs) -> Result<(), Failure> {
+    check_output_file(&args.output, "-o")?;
+    if let Some(dir) = &args.plot {
+        ensure_output_dir(dir, "--plot")?;
+    }
+    let PlannedSweep { evaluator, plan, id } = planned(&args.plan)?;
+    // index -> (line, where it came from). Memory is about the size of the
+    // files (a line is about 200 bytes).
+    let mut points: BTreeMap<u64, (String, String)> = BTreeMap::new();
+    let mut dropped = 0u64;
+    for path in &args.lines {
+        let file = std::fs::File::open(path).map_err(|e| bad(format!("{}: cannot read: {e}", path.display())))?;
+        let reader = BufReader::new(file);
+        for (n, line) in reader.split(b'\n').enumerate() {
+            let at = format!("{}:{}", path.display(), n + 1);
+            let line = line.map_err(|e| bad(format!("{at}: cannot read: {e}")))?;
+            let line = String::from_utf8(line).map_err(|_| bad(format!("{at}: not UTF-8 text")))?;
+            if line.trim().is_empty() {
+                continue;
+            }
+            let value: Value = serde_json::from_str(&line).map_err(|e| {
+                bad(format!(
+                    "{at}: not a sweep line ({e}); an interrupted shard ends in a partial line: finish it with `verify sweep --resume`"
+                ))
+            })?;
+            let line_id = value.get("sweep").and_then(Value::as_str).unwrap_or("");
+            if line_id != id {
+                return Err(Failure::Failed(format!(
+                    "{at}: the line belongs to sweep '{}', not to this plan's '{id}' (another spec, other ranges, sampling or level)",
+                    excerpt(line_id)
+                )));
+            }
+            let index = value
+                .get("index")
+                .and_then(Value::as_u64)
+                .filter(|&i| i < plan.len())
+                .ok_or_else(|| bad(format!("{at}: no index of this plan's {} points", plan.len())))?;
+            match points.get(&index) {
+                Some((seen, _)) if *seen == line => dropped += 1,
+                Some((_, first)) => {
+                    return Err(Failure::Failed(format!(
+                        "point {index} has two different results: {first} and {at} (shards of different runs?)"
+                    )))
+                }
+                None => {
+                    points.insert(index, (line, at));
+                }
+            }
+        }
+    }
+    // Completeness: every point in the sweep domain has its line.
+    let mut missing = 0u64;
+    let mut examples = vec![];
+    for index in 0..plan.len() {
+        if !points.contains_key(&index) && evaluator.in_domain(&plan.point(index)) {
+            missing += 1;
+            if examples.len() < 5 {
+                examples.push(index);
+            }
+        }
+    }
+    if missing > 0 {
+        let list: Vec<String> = examples.iter().map(u64::to_string).collect();
+        return Err(Failure::Failed(format!(
+            "incomplete: {missing} of the plan's {} points have no line (indices {}{}); the shard --shard K/N holds the indices equal to K modulo N: run or resume the shards that hold them",
+            plan.len(),
+            list.join(", "),
+            if missing > 5 { ", ..." } else { "" }
+        )));
+    }
+    let mut text = String::new();
+    let mut verdicts: BTreeMap<String, u64> = BTreeMap::new();
+    for (line, _) in points.values() {
+        text.push_str(line);
+        text.push('\n');
+        let v: Value = serde_json::from_str(line).unwrap_or_default();
+        let verdict = v.get("verdict").and_then(Value::as_str).unwrap_or("error");
+        *verdicts.entry(verdict.to_string()).or_default() += 1;
+    }
+    write_atomic(&args.output, text.as_bytes())
+        .map_err(|e| Failure::Failed(format!("-o {}: cannot write: {e}", args.output.display())))?;
+    let counts: Vec<String> = verdicts.iter().map(|(v, c)| format!("{v} {c}")).collect();
+    eprintln!(
+        "merged sweep {id}: {} files, {} points ({}) into {}{}",
+        args.lines.len(),
+        points.len(),
+        counts.join(", "),
+        args.output.display(),
+        if dropped > 0 { format!("; {dropped} repeated lines dropped") } else { String::new() }
+    );
+    if let Some(dir) = &args.plot {
+        crate::sweep_plots::plot_files(std::slice::from_ref(&args.output), &args.plan.spec, dir, None)?;
+    }
+    Ok(())
+}
