@@ -115,11 +115,12 @@ fn stopping_time(epsilon: f64, delta: f64, sigma2: f64) -> Option<f64> {
 /// the nonlinear and the linearised ensembles, the exact second moments, the
 /// worst start and the bound. Returns the study's report as JSON text (the
 /// file `verify simulate` writes). Refuses, like the CLI, a study estimated
-/// at more than 15 minutes unless `force`.
+/// at more than 15 minutes unless `force`. Ctrl-C stops it;
+/// `progress(done, total)` counts paths, from the calling thread.
 // One argument per Python keyword argument.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (text, base=None, paths=10_000, dt=0.01, t_end=None, outputs=200, seed=1, bins=80, scheme="lie", observable=None, epsilon=None, delta=None, force=false))]
+#[pyo3(signature = (text, base=None, paths=10_000, dt=0.01, t_end=None, outputs=200, seed=1, bins=80, scheme="lie", observable=None, epsilon=None, delta=None, force=false, progress=None))]
 fn simulate_text(
     py: Python<'_>,
     text: String,
@@ -135,6 +136,7 @@ fn simulate_text(
     epsilon: Option<f64>,
     delta: Option<f64>,
     force: bool,
+    progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<String> {
     let scheme = simulate::Scheme::from_name(scheme)
         .ok_or_else(|| PyValueError::new_err(format!("scheme: {scheme:?} is not 'lie' or 'heun'")))?;
@@ -144,43 +146,51 @@ fn simulate_text(
             "simulate runs finite-dimensional specs (fluid, Zeitlin and large specs are certified, not simulated here)",
         )),
     };
-    let out = py.detach(move || -> Result<String, String> {
-        let cert = spec::certify(&spec);
-        let coords = spec.system.algebra().coordinates();
-        let observable = match &observable {
-            Some(name) => Some(coords.iter().position(|c| c == name).ok_or_else(|| {
-                format!("observable: unknown coordinate {name:?} (coordinates: {})", coords.join(", "))
-            })?),
-            None => None,
+    let cert = py.detach(|| spec::certify(&spec));
+    let coords = spec.system.algebra().coordinates();
+    let observable = match &observable {
+        Some(name) => Some(coords.iter().position(|c| c == name).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "observable: unknown coordinate {name:?} (coordinates: {})",
+                coords.join(", ")
+            ))
+        })?),
+        None => None,
+    };
+    let settings = simulate::StudySettings {
+        paths,
+        dt,
+        t_end,
+        outputs,
+        seed,
+        bins,
+        scheme,
+        observable,
+        epsilon: epsilon.or(spec.stopping.map(|s| s.epsilon)).unwrap_or(0.1),
+        delta: delta.or(spec.stopping.map(|s| s.delta)).unwrap_or(1e-3),
+    };
+    let prepared =
+        simulate::prepare(&spec.system, &cert.analysis, &settings).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let estimate = prepared.estimated_seconds(cores as f64);
+    if estimate > 900.0 && !force {
+        return Err(PyValueError::new_err(format!(
+            "paths/dt/t_end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass force=True",
+            prepared.ensemble.path_steps(),
+            estimate / 60.0
+        )));
+    }
+    let total = paths as u64 * prepared.ensembles();
+    let study = interruptible(py, total, progress.as_ref(), |cancel, done| {
+        let tick = |n: u64| {
+            done.fetch_add(n, Ordering::Relaxed);
         };
-        let settings = simulate::StudySettings {
-            paths,
-            dt,
-            t_end,
-            outputs,
-            seed,
-            bins,
-            scheme,
-            observable,
-            epsilon: epsilon.or(spec.stopping.map(|s| s.epsilon)).unwrap_or(0.1),
-            delta: delta.or(spec.stopping.map(|s| s.delta)).unwrap_or(1e-3),
-        };
-        let prepared = simulate::prepare(&spec.system, &cert.analysis, &settings).map_err(|e| e.to_string())?;
-        let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
-        let estimate = prepared.estimated_seconds(cores as f64);
-        if estimate > 900.0 && !force {
-            return Err(format!(
-                "paths/dt/t_end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass force=True",
-                prepared.ensemble.path_steps(),
-                estimate / 60.0
-            ));
-        }
-        let study = simulate::run(&prepared, &|_| {}).map_err(|e| e.to_string())?;
-        let verdict = cert.json["verdict"].as_str().unwrap_or_default().to_string();
-        let report = simulate::study_report(&spec.name, &verdict, &prepared, &settings, &study, coords, cores as u64);
-        Ok(report.to_string())
-    });
-    out.map_err(PyValueError::new_err)
+        simulate::run_cancellable(&prepared, &tick, cancel)
+    })?
+    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let verdict = cert.json["verdict"].as_str().unwrap_or_default();
+    let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, cores as u64);
+    Ok(report.to_string())
 }
 
 /// Run `work` on a worker thread while this (the calling, usually the main)

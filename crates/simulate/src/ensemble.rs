@@ -8,6 +8,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What is integrated.
 #[derive(Clone, Debug)]
@@ -76,6 +77,9 @@ pub enum EnsembleError {
         /// What is wrong.
         message: String,
     },
+    /// The caller asked the run to stop (Ctrl-C in the Python package).
+    #[error("stopped before the end (interrupted)")]
+    Cancelled,
 }
 
 impl EnsembleSettings {
@@ -381,6 +385,18 @@ pub fn run_ensemble(
     settings: &EnsembleSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<EnsembleStats, EnsembleError> {
+    run_ensemble_cancellable(target, settings, progress, &AtomicBool::new(false))
+}
+
+/// [`run_ensemble`] that stops when `cancel` is set: blocks of paths not
+/// yet started are skipped, and the result is [`EnsembleError::Cancelled`]
+/// once the blocks in flight end.
+pub fn run_ensemble_cancellable(
+    target: &Target<'_>,
+    settings: &EnsembleSettings,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<EnsembleStats, EnsembleError> {
     let dim = match target {
         Target::Nonlinear { model, mu0, .. } => {
             if mu0.len() != model.dim() {
@@ -408,6 +424,9 @@ pub fn run_ensemble(
     let blocks = settings.paths.div_ceil(BLOCK);
     let run_block = |block: usize| -> Accumulator {
         let mut acc = Accumulator::new(n_times, dim, settings.observable.bins);
+        if cancel.load(Ordering::Relaxed) {
+            return acc;
+        }
         let mut rec = Recorder {
             settings,
             pmat: settings.norm.as_ref().map(|(p, _)| p),
@@ -493,12 +512,18 @@ pub fn run_ensemble(
     let mut total = Accumulator::new(n_times, dim, settings.observable.bins);
     let mut start = 0;
     while start < blocks {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(EnsembleError::Cancelled);
+        }
         let end = (start + WAVE).min(blocks);
         let partial: Vec<Accumulator> = (start..end).into_par_iter().map(&run_block).collect();
         for p in &partial {
             total.merge(p);
         }
         start = end;
+    }
+    if cancel.load(Ordering::Relaxed) {
+        return Err(EnsembleError::Cancelled);
     }
     let np = settings.paths as f64;
     let norm_mean: Vec<f64> = total.norm_sum.iter().map(|s| s / np).collect();

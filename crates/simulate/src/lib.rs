@@ -36,8 +36,11 @@ mod report;
 mod scheme;
 mod study;
 
-pub use ensemble::{path_rng, run_ensemble, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
+pub use ensemble::{
+    path_rng, run_ensemble, run_ensemble_cancellable, EnsembleError, EnsembleSettings, EnsembleStats, Observable,
+    Target,
+};
 pub use model::Model;
 pub use report::study_report;
 pub use scheme::{LinearModel, Scheme, Stepper};
-pub use study::{prepare, run, Exceedance, Prepared, Study, StudyError, StudySettings};
+pub use study::{prepare, run, run_cancellable, Exceedance, Prepared, Study, StudyError, StudySettings};

@@ -10,12 +10,13 @@
 //! cost; [`run`] runs a pilot ensemble (1% of the paths, at most 200) to size
 //! the observable's histogram, then the ensembles.
 
-use crate::ensemble::{run_ensemble, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
+use crate::ensemble::{run_ensemble_cancellable, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
 use crate::model::Model;
 use crate::scheme::{LinearModel, Scheme};
 use casimir::System;
 use generator::{Analysis, SecondMoments};
 use nalgebra::DMatrix;
+use std::sync::atomic::AtomicBool;
 
 /// What a study is asked for.
 #[derive(Clone, Debug, PartialEq)]
@@ -242,11 +243,21 @@ impl Prepared<'_> {
 
 /// Run a prepared study; `tick(k)` reports `k` more finished paths.
 pub fn run(prep: &Prepared<'_>, tick: &(dyn Fn(u64) + Sync)) -> Result<Study, StudyError> {
+    run_cancellable(prep, tick, &AtomicBool::new(false))
+}
+
+/// [`run`] that stops soon after `cancel` is set, with
+/// [`EnsembleError::Cancelled`] (the blocks of paths in flight finish).
+pub fn run_cancellable(
+    prep: &Prepared<'_>,
+    tick: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<Study, StudyError> {
     let target = Target::Nonlinear { model: &prep.model, scheme: prep.scheme, mu0: prep.mu0.clone() };
     // A pilot run (1% of the paths, at most 200) finds the range the
     // observable actually explores, for the histogram.
     let pilot = EnsembleSettings { paths: (prep.ensemble.paths / 100).clamp(1, 200), ..prep.ensemble.clone() };
-    let extent = run_ensemble(&target, &pilot, &|_| {})?.observable_extent;
+    let extent = run_ensemble_cancellable(&target, &pilot, &|_| {}, cancel)?.observable_extent;
     if !(extent.0.is_finite() && extent.1.is_finite()) {
         return Err(StudyError::Escaped { index: prep.observable, extent });
     }
@@ -256,14 +267,14 @@ pub fn run(prep: &Prepared<'_>, tick: &(dyn Fn(u64) + Sync)) -> Result<Study, St
         observable: Observable { lo: centre - 1.2 * half, hi: centre + 1.2 * half, ..prep.ensemble.observable },
         ..prep.ensemble.clone()
     };
-    let nonlinear = run_ensemble(&target, &settings, tick)?;
+    let nonlinear = run_ensemble_cancellable(&target, &settings, tick, cancel)?;
     let stable = prep.analysis.stable.as_ref();
     let n = prep.x0.len();
     let linear = match (stable, &prep.analysis.linearisation) {
         (Some(_), Some(lin)) => {
             let lm = LinearModel::new(lin);
             let s = EnsembleSettings { norm: Some((prep.p.clone(), vec![0.0; n])), ..settings.clone() };
-            Some(run_ensemble(&Target::Linear { model: &lm, x0: prep.x0.clone() }, &s, tick)?)
+            Some(run_ensemble_cancellable(&Target::Linear { model: &lm, x0: prep.x0.clone() }, &s, tick, cancel)?)
         }
         _ => None,
     };

@@ -367,6 +367,7 @@ def simulate(
     epsilon: Optional[float] = None,
     delta: Optional[float] = None,
     force: bool = False,
+    progress: Optional[Callable[[int, int], Any]] = None,
     base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
 ) -> Dict[str, Any]:
     """Monte Carlo of the stochastic system next to what the certificate claims.
@@ -385,7 +386,10 @@ def simulate(
     ``t_end`` defaults to ``8 T(eps, delta)`` kept within ``[1, 200]``. A
     study estimated above 15 minutes is refused unless ``force=True``.
     Raises :class:`SpecError` for an invalid spec, ``ValueError`` for
-    invalid settings. The GIL is released while it runs.
+    invalid settings. The GIL is released while it runs; Ctrl-C stops it
+    (``KeyboardInterrupt``, after the blocks of 256 paths in flight), and
+    ``progress(done, total)`` counts paths (both ensembles), called about
+    ten times a second from the calling thread.
 
     >>> import energy_casimir as ec
     >>> r = ec.simulate("fixtures/rigid-body-major-axis.json", paths=200, t_end=2.0)
@@ -409,6 +413,7 @@ def simulate(
         epsilon=None if epsilon is None else float(epsilon),
         delta=None if delta is None else float(delta),
         force=bool(force),
+        progress=progress,
     )
     return _arrays(json.loads(out))
 

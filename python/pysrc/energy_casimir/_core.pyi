@@ -37,6 +37,7 @@ def simulate_text(
     epsilon: Optional[float] = None,
     delta: Optional[float] = None,
     force: bool = False,
+    progress: Optional[Callable[[int, int], Any]] = None,
 ) -> str: ...
 def engine_version() -> str: ...
 def sweep_text(
