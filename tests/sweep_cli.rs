@@ -329,6 +329,31 @@ fn merge_checks_identity_duplicates_and_completeness() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("two different results"), "{}", stderr(&o));
 
+    // A line moved to another index (here 0: outside the triangle's domain)
+    // is not this sweep's point.
+    let moved = tmp("triangle-moved.jsonl");
+    let mut lines = lines_of(parts[0]);
+    let mut r: Value = serde_json::from_str(&lines[0]).unwrap();
+    r["index"] = 0.into();
+    lines[0] = r.to_string();
+    std::fs::write(&moved, lines.join("\n") + "\n").unwrap();
+    let o = merge(&[&moved, parts[1], parts[2]], &tmp("triangle-moved-out.jsonl"), &small);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not the point the line states"), "{}", stderr(&o));
+
+    // A CRLF copy of a shard is the same shard.
+    let crlf = tmp("triangle-crlf.jsonl");
+    std::fs::write(&crlf, lines_of(parts[2]).join("\r\n") + "\r\n").unwrap();
+    let o = merge(&[parts[0], parts[1], parts[2], &crlf], &tmp("triangle-crlf-out.jsonl"), &small);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(lines_of(&tmp("triangle-crlf-out.jsonl")), lines_of(&merged));
+
+    // A JSON line that is not a sweep record is bad input.
+    let foreign = tmp("triangle-foreign.jsonl");
+    std::fs::write(&foreign, "{\"index\": 3}\n").unwrap();
+    let o = merge(&[parts[0], parts[1], parts[2], &foreign], &tmp("triangle-foreign-out.jsonl"), &small);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+
     // A truncated last line (an interrupted shard) is bad input.
     let cut = tmp("triangle-cut.jsonl");
     let text = std::fs::read_to_string(parts[0]).unwrap();

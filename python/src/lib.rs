@@ -19,13 +19,13 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 create_exception!(
-    _core,
+    energy_casimir._core,
     SpecError,
     PyValueError,
     "A spec is not valid input: `.path` is the JSON path of the field, `.message` what is wrong."
 );
 create_exception!(
-    _core,
+    energy_casimir._core,
     CheckError,
     PyValueError,
     "A certificate failed its check: `.path` names the field, `.message` what differs, `.kind` is \"failed\" or \"bad_input\"."
@@ -206,17 +206,34 @@ fn interruptible<R: Send>(
 ) -> PyResult<R> {
     let cancel = AtomicBool::new(false);
     let done = AtomicU64::new(0);
-    let finished = AtomicBool::new(false);
     let mut interrupt: Option<PyErr> = None;
     let mut reported = u64::MAX;
-    let result = std::thread::scope(|scope| -> PyResult<R> {
+    // Set (and the watcher woken) when `work` returns or unwinds.
+    let finished = (std::sync::Mutex::new(false), std::sync::Condvar::new());
+    struct Finished<'a>(&'a (std::sync::Mutex<bool>, std::sync::Condvar));
+    impl Drop for Finished<'_> {
+        fn drop(&mut self) {
+            *self.0 .0.lock().unwrap_or_else(|p| p.into_inner()) = true;
+            self.0 .1.notify_all();
+        }
+    }
+    let joined = std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
-            let r = work(&cancel, &done);
-            finished.store(true, Ordering::Release);
-            r
+            let _finished = Finished(&finished);
+            work(&cancel, &done)
         });
-        while !finished.load(Ordering::Acquire) {
-            py.detach(|| std::thread::sleep(Duration::from_millis(100)));
+        loop {
+            let over = py.detach(|| {
+                let (lock, wake) = &finished;
+                let guard = lock.lock().unwrap_or_else(|p| p.into_inner());
+                let (guard, _) = wake
+                    .wait_timeout_while(guard, Duration::from_millis(100), |over| !*over)
+                    .unwrap_or_else(|p| p.into_inner());
+                *guard
+            });
+            if over {
+                break;
+            }
             if interrupt.is_none() {
                 if let Err(e) = py.check_signals() {
                     cancel.store(true, Ordering::Release);
@@ -234,13 +251,22 @@ fn interruptible<R: Send>(
                 }
             }
         }
-        py.detach(|| worker.join()).map_err(|_| PyValueError::new_err("the engine's worker thread failed"))
+        py.detach(|| worker.join())
+    });
+    let result = joined.map_err(|payload| {
+        let text = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown".into());
+        pyo3::panic::PanicException::new_err(format!("the engine panicked (a bug: please report it): {text}"))
     })?;
     if let Some(e) = interrupt {
         return Err(e);
     }
-    if let Some(cb) = progress {
-        cb.call1((done.load(Ordering::Relaxed), total))?;
+    let now = done.load(Ordering::Relaxed);
+    if let (Some(cb), true) = (progress, now != reported) {
+        cb.call1((now, total))?;
     }
     Ok(result)
 }
@@ -268,8 +294,8 @@ impl std::io::Write for CancellableSink<'_> {
 
 /// Certify a spec (JSON text) over a grid or random points of its
 /// parameters (`params`: `NAME=START:STOP:COUNT` each; empty: the spec's
-/// own `sweep` ranges), in parallel. Returns the sweep's JSON lines (those
-/// of `verify sweep`, in completion order). Ctrl-C stops it;
+/// own `sweep` ranges), in parallel. Returns the swept parameters' names and
+/// the sweep's JSON lines (those of `verify sweep`, in completion order). Ctrl-C stops it;
 /// `progress(done, total)` is called from the calling thread.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
@@ -284,7 +310,7 @@ fn sweep_text(
     numeric: bool,
     shard: Option<String>,
     progress: Option<Bound<'_, PyAny>>,
-) -> PyResult<String> {
+) -> PyResult<(Vec<String>, String)> {
     let spec = spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))?;
     let ranges: Vec<spec::ParamRange> = if params.is_empty() {
         spec.sweep().ranges.clone()
@@ -303,7 +329,7 @@ fn sweep_text(
     let level = if numeric { sweep::Level::Numeric } else { sweep::Level::Spec };
     let id = sweep::sweep_id(&spec, &plan, level);
     let evaluator =
-        sweep::Evaluator::new(spec, names, level).map_err(|e| PyValueError::new_err(format!("params: {e}")))?;
+        sweep::Evaluator::new(spec, names.clone(), level).map_err(|e| PyValueError::new_err(format!("params: {e}")))?;
     let shard = match &shard {
         Some(s) => sweep::Shard::parse(s).map_err(|e| PyValueError::new_err(format!("shard {s:?}: {e}")))?,
         None => sweep::Shard::ALL,
@@ -317,7 +343,8 @@ fn sweep_text(
         sweep::run(&evaluator, &plan, &id, shard, &sweep::Done::none(), &mut sink, &tick).map(|_| sink.lines)
     })?;
     let lines = out.map_err(|e| PyValueError::new_err(format!("the sweep stopped: {e}")))?;
-    String::from_utf8(lines).map_err(|_| PyValueError::new_err("the sweep wrote text that is not UTF-8"))
+    let text = String::from_utf8(lines).map_err(|_| PyValueError::new_err("the sweep wrote text that is not UTF-8"))?;
+    Ok((names, text))
 }
 
 /// The engine's version, as certificates record it.

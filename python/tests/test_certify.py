@@ -266,3 +266,18 @@ def test_concurrent_calls_agree():
     with ThreadPoolExecutor(max_workers=4) as pool:
         reports = list(pool.map(ec.check, certs))
     assert all(r.verdict == "stable" for r in reports)
+
+
+def test_errors_pickle_with_their_fields_and_read_errors_keep_their_kind(tmp_path):
+    """Exceptions cross process boundaries (multiprocessing pickles them)."""
+    import pickle
+
+    with pytest.raises(ec.SpecError) as e:
+        ec.certify({"name": "x", "algebra": "so3", "hamiltonian": "Pi1^2", "equilibrium": [1, 0], "noise": []})
+    back = pickle.loads(pickle.dumps(e.value))
+    assert type(back) is ec.SpecError and back.path == "$.equilibrium" and back.message == e.value.message
+    assert type(e.value).__module__ == "energy_casimir._core"
+    with pytest.raises(IsADirectoryError):
+        ec.certify(tmp_path)
+    with pytest.raises(ValueError):
+        ec.certify("   ")

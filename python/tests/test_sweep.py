@@ -98,3 +98,15 @@ def test_bad_ranges_are_value_errors(params, text):
     with pytest.raises(ValueError) as e:
         ec.sweep(FIXTURES / "rigid-body-major-axis.json", params)
     assert text in str(e.value)
+
+
+def test_infinite_stopping_times_and_empty_shards():
+    """sigma = 0: Sigma^2 = 0 and T is infinite, not missing; a shard with no
+    points still has the parameter columns."""
+    cols = ec.sweep(FIXTURES / "rigid-body-major-axis.json", {"sigma": (0, "3/10", 2)})
+    assert cols["sigma2"][0] == 0 and cols["T"][0] == float("inf")
+    assert cols["T"][1] == pytest.approx(np.log(100) / 0.27)
+    empty = ec.sweep(FIXTURES / "sweeps" / "rigid-body-triangle.json", shard=(2600, 2700))
+    assert len(empty["index"]) == 0 and "I1" in empty and "I2" in empty
+    with pytest.raises(ValueError):
+        ec.sweep(FIXTURES / "rigid-body-major-axis.json", {"I2": (1, 3, 2.5)})

@@ -33,6 +33,7 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 mod fluid_plots;
 mod merge_cmd;
 mod messages;
+mod npz_out;
 mod paths;
 mod plots;
 mod simulate_cmd;

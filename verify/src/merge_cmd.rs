@@ -31,7 +31,8 @@ pub struct MergeArgs {
     /// The plan the shards ran: the same spec and options as `verify sweep`.
     #[command(flatten)]
     pub plan: PlanArgs,
-    /// The shard files (JSON lines), any order.
+    /// The shard files (JSON lines), any order. They take every value up to
+    /// the next option, so give SPEC before `--lines`.
     #[arg(long = "lines", value_name = "FILE", required = true, num_args = 1..)]
     pub lines: Vec<PathBuf>,
     /// The merged file.
@@ -40,6 +41,13 @@ pub struct MergeArgs {
     /// Also draw the charts of the merged sweep into this directory.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Also write the merged sweep as numpy arrays (`numpy.load`): `index`,
+    /// one array per parameter, `sigma2` and `T` (NaN where absent, inf for
+    /// an infinite T), and `verdict_code` (0 stable, 1 linearly_unstable,
+    /// 2 inconclusive, 3 not_an_equilibrium, 4 noise_incompatible, -1 an
+    /// invalid point).
+    #[arg(long, value_name = "FILE")]
+    pub npz: Option<PathBuf>,
 }
 
 fn bad(m: impl Into<String>) -> Failure {
@@ -63,7 +71,10 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
         for (n, line) in reader.split(b'\n').enumerate() {
             let at = format!("{}:{}", path.display(), n + 1);
             let line = line.map_err(|e| bad(format!("{at}: cannot read: {e}")))?;
-            let line = String::from_utf8(line).map_err(|_| bad(format!("{at}: not UTF-8 text")))?;
+            let mut line = String::from_utf8(line).map_err(|_| bad(format!("{at}: not UTF-8 text")))?;
+            if line.ends_with('\r') {
+                line.pop(); // a CRLF file (copied through Windows): the same line
+            }
             if line.trim().is_empty() {
                 continue;
             }
@@ -72,7 +83,9 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
                     "{at}: not a sweep line ({e}); an interrupted shard ends in a partial line: finish it with `verify sweep --resume`"
                 ))
             })?;
-            let line_id = value.get("sweep").and_then(Value::as_str).unwrap_or("");
+            let Some(line_id) = value.get("sweep").and_then(Value::as_str) else {
+                return Err(bad(format!("{at}: not a sweep record (no \"sweep\" id)")));
+            };
             if line_id != id {
                 return Err(Failure::Failed(format!(
                     "{at}: the line belongs to sweep '{}', not to this plan's '{id}' (another spec, other ranges, sampling or level)",
@@ -84,6 +97,22 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
                 .and_then(Value::as_u64)
                 .filter(|&i| i < plan.len())
                 .ok_or_else(|| bad(format!("{at}: no index of this plan's {} points", plan.len())))?;
+            // The point must be the plan's point at that index, inside the
+            // domain: a line edited to another index is not this sweep.
+            let values = plan.point(index);
+            let stated = value.get("exact_parameters").and_then(Value::as_object);
+            let same_point = stated.is_some_and(|m| {
+                m.len() == evaluator.names().len()
+                    && evaluator.names().iter().zip(&values).all(|(name, v)| {
+                        m.get(name).and_then(Value::as_str).and_then(|t| exact::parse_number(t).ok()).as_ref()
+                            == Some(v)
+                    })
+            });
+            if !same_point || !evaluator.in_domain(&values) {
+                return Err(Failure::Failed(format!(
+                    "{at}: point {index} of this plan is not the point the line states, or lies outside the sweep domain"
+                )));
+            }
             match points.get(&index) {
                 Some((seen, _)) if *seen == line => dropped += 1,
                 Some((_, first)) => {
@@ -137,6 +166,11 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
         args.output.display(),
         if dropped > 0 { format!("; {dropped} repeated lines dropped") } else { String::new() }
     );
+    if let Some(path) = &args.npz {
+        check_output_file(path, "--npz")?;
+        crate::npz_out::write_sweep_columns(path, evaluator.names(), points.values().map(|(line, _)| line.as_str()))
+            .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", path.display())))?;
+    }
     if let Some(dir) = &args.plot {
         crate::sweep_plots::plot_files(std::slice::from_ref(&args.output), &args.plan.spec, dir, None)?;
     }

@@ -54,6 +54,11 @@ pub struct SimulateArgs {
     /// Run even if the estimated cost exceeds 15 minutes.
     #[arg(long)]
     pub force: bool,
+    /// Also write NAME.npz: every series of NAME.json as a numpy array
+    /// (`numpy.load`), named by its key path (`nonlinear_mean`,
+    /// `histogram_counts`, `exact_moments_over_delta`...).
+    #[arg(long)]
+    pub npz: bool,
 }
 
 fn bad(message: String) -> Failure {
@@ -227,6 +232,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, threads as u64);
     let json_path = dir.join(format!("{file_stem}.json"));
     write_atomic(&json_path, spec::to_pretty_json(&report).as_bytes()).map_err(|e| write_failure(&json_path, &e))?;
+    if args.npz {
+        let npz_path = dir.join(format!("{file_stem}.npz"));
+        crate::npz_out::write_json_arrays(&npz_path, &report).map_err(|e| write_failure(&npz_path, &e))?;
+    }
     write_csv(
         &dir.join(format!("{file_stem}.csv")),
         nonlinear,

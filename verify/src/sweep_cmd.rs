@@ -58,6 +58,12 @@ pub struct SweepArgs {
     /// After the sweep, draw the charts into this directory (needs --output).
     #[arg(long, requires = "output")]
     pub plot: Option<PathBuf>,
+    /// After the sweep, also write its lines (all of --output, in index
+    /// order) as numpy arrays: `index`, one per parameter, `sigma2`, `T`,
+    /// `verdict_code` (0 stable, 1 linearly_unstable, 2 inconclusive,
+    /// 3 not_an_equilibrium, 4 noise_incompatible, -1 invalid).
+    #[arg(long, value_name = "FILE", requires = "output")]
+    pub npz: Option<PathBuf>,
 }
 
 /// A sweep's plan made concrete: the evaluator, the points, the id.
@@ -197,6 +203,17 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     }
     if summary.outside_domain > 0 {
         eprintln!("  {} points lie outside the spec's sweep domain (no line)", summary.outside_domain);
+    }
+    if let (Some(npz), Some(out)) = (&args.npz, &args.output) {
+        check_output_file(npz, "--npz")?;
+        let text = read(out)?;
+        let mut lines: Vec<(u64, &str)> = text
+            .lines()
+            .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok()?.get("index")?.as_u64().map(|i| (i, l)))
+            .collect();
+        lines.sort_by_key(|(i, _)| *i);
+        crate::npz_out::write_sweep_columns(npz, evaluator.names(), lines.into_iter().map(|(_, l)| l))
+            .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", npz.display())))?;
     }
     if let (Some(dir), Some(out)) = (&args.plot, &args.output) {
         crate::sweep_plots::plot_files(std::slice::from_ref(out), &args.plan.spec, dir, None)?;

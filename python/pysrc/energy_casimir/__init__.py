@@ -67,13 +67,20 @@ def _json_default(obj: Any) -> Any:
 def _read_input(obj: Any, what: str, base_dir: Optional[Union[str, "os.PathLike[str]"]]):
     """``(json_text, base_folder)`` for a dict, JSON text or a path."""
     if isinstance(obj, dict):
-        return json.dumps(obj, allow_nan=False, default=_json_default), base_dir
-    if isinstance(obj, os.PathLike) or (isinstance(obj, str) and not obj.lstrip().startswith("{")):
+        try:
+            return json.dumps(obj, allow_nan=False, default=_json_default), base_dir
+        except ValueError as e:
+            raise ValueError(f"{what}: the spec holds a NaN or an infinity, which JSON cannot carry ({e})") from None
+    if isinstance(obj, str) and not obj.strip():
+        raise ValueError(f"{what}: an empty string is neither JSON text nor a path")
+    if isinstance(obj, os.PathLike) or (isinstance(obj, str) and not obj.lstrip().startswith(("{", "["))):
         path = Path(obj)
         try:
             text = path.read_text(encoding="utf-8")
         except OSError as e:
-            raise FileNotFoundError(f"{what}: cannot read {str(path)!r}: {e.strerror or e}") from e
+            # The same kind of error (FileNotFoundError, IsADirectoryError,
+            # PermissionError...), with what was being read.
+            raise type(e)(e.errno, f"{what}: cannot read {str(path)[:200]!r}: {e.strerror or e}") from e
         return text, base_dir if base_dir is not None else path.parent
     if isinstance(obj, str):
         return obj, base_dir
@@ -434,6 +441,8 @@ def _range_text(name: str, r: Any) -> str:
             raise ValueError(f"params[{name!r}]: {x!r} is not a finite number")
         return str(x)
 
+    if isinstance(count, bool) or not float(count).is_integer() or int(count) < 1:
+        raise ValueError(f"params[{name!r}]: the count must be a positive integer, got {count!r}")
     return f"{name}={number(start)}:{number(stop)}:{int(count)}"
 
 
@@ -458,7 +467,8 @@ def sweep(
 
     Returns columns in index order, ready for ``pandas.DataFrame(columns)``
     (pandas is not needed): ``index``, one float column per parameter,
-    ``verdict``, ``level``, ``sigma2`` and ``T`` (NaN where absent), and
+    ``verdict``, ``level``, ``sigma2`` and ``T`` (NaN where absent; ``inf``
+    for ``Sigma^2 = 0``), and
     ``error`` (None unless the spec is invalid at that point), plus
     ``lines``: the JSON lines ``verify sweep`` writes (for ``verify merge``
     and ``verify plot-sweep``).
@@ -481,7 +491,7 @@ def sweep(
     shard_text = None
     if shard is not None:
         shard_text = shard if isinstance(shard, str) else f"{int(shard[0])}/{int(shard[1])}"
-    out = _core.sweep_text(
+    names, out = _core.sweep_text(
         text,
         _base(base),
         params=ranges,
@@ -493,10 +503,12 @@ def sweep(
     )
     pairs = sorted(((json.loads(line), line) for line in out.splitlines() if line.strip()), key=lambda p: p[0]["index"])
     records = [r for r, _ in pairs]
-    names: List[str] = list(records[0]["parameters"].keys()) if records else [r.split("=")[0] for r in ranges]
     nan = float("nan")
 
     def num(x: Any) -> float:
+        # "infinity": T for Sigma^2 = 0 (stable for all time), not missing.
+        if x == "infinity":
+            return math.inf
         return nan if x is None or isinstance(x, str) else float(x)
 
     columns: Dict[str, Any] = {"index": np.array([r["index"] for r in records], dtype=np.int64)}
