@@ -354,6 +354,20 @@ fn merge_checks_identity_duplicates_and_completeness() {
     let o = merge(&[parts[0], parts[1], parts[2], &foreign], &tmp("triangle-foreign-out.jsonl"), &small);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 
+    // --npz naming a file the merge reads or writes is refused before
+    // anything is written (the shard stays as it was).
+    let before = std::fs::read_to_string(parts[1]).unwrap();
+    let o =
+        merge(&parts, &tmp("triangle-npz-out.jsonl"), &[&small[..], &["--npz", parts[1].to_str().unwrap()]].concat());
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("the same file as --lines"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(parts[1]).unwrap(), before);
+    let same = tmp("triangle-same.jsonl");
+    let o =
+        sweep_to("sweeps/rigid-body-triangle.json", &same, &[&small[..], &["--npz", same.to_str().unwrap()]].concat());
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("the same file as -o"), "{}", stderr(&o));
+
     // A truncated last line (an interrupted shard) is bad input.
     let cut = tmp("triangle-cut.jsonl");
     let text = std::fs::read_to_string(parts[0]).unwrap();

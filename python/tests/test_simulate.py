@@ -2,10 +2,6 @@
 moments of the linearised SDE, and the Monte Carlo against those."""
 
 import math
-import signal
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -100,23 +96,9 @@ def test_fluid_specs_are_not_simulated_here():
         ec.simulate(FIXTURES / "fluids" / "channel-sin-walls.json", paths=10)
 
 
-def test_progress_counts_both_ensembles_and_ctrl_c_stops_a_long_run():
+def test_progress_counts_both_ensembles_and_ctrl_c_stops_a_long_run(interrupted):
     calls = []
     ec.simulate(FIXTURES / "rigid-body-major-axis.json", paths=3000, t_end=5.0, outputs=20,
                 progress=lambda done, total: calls.append((done, total)))
     assert calls[-1] == (6000, 6000)  # stable: the nonlinear and the linearised ensemble
-    code = (
-        "import energy_casimir as ec\n"
-        "print('started', flush=True)\n"
-        "ec.simulate('fixtures/rigid-body-major-axis.json', paths=400000, t_end=200.0, force=True)\n"
-        "print('finished', flush=True)\n"
-    )
-    repo = FIXTURES.parent
-    child = subprocess.Popen([sys.executable, "-c", code], cwd=repo, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True)
-    assert child.stdout.readline().strip() == "started"
-    time.sleep(2.0)
-    child.send_signal(signal.SIGINT)
-    out, err = child.communicate(timeout=120)
-    assert "finished" not in out
-    assert "KeyboardInterrupt" in err, err
+    interrupted("simulate('fixtures/rigid-body-major-axis.json', paths=400000, t_end=200.0, force=True)", 2.0)

@@ -60,6 +60,13 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
     if let Some(dir) = &args.plot {
         ensure_output_dir(dir, "--plot")?;
     }
+    if let Some(npz) = &args.npz {
+        check_output_file(npz, "--npz")?;
+        crate::paths::check_distinct(npz, "--npz", &args.output, "-o")?;
+        for input in &args.lines {
+            crate::paths::check_distinct(npz, "--npz", input, "--lines")?;
+        }
+    }
     let PlannedSweep { evaluator, plan, id } = planned(&args.plan)?;
     // index -> (line, where it came from). Memory is about the size of the
     // files (a line is about 200 bytes).
@@ -167,7 +174,6 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
         if dropped > 0 { format!("; {dropped} repeated lines dropped") } else { String::new() }
     );
     if let Some(path) = &args.npz {
-        check_output_file(path, "--npz")?;
         crate::npz_out::write_sweep_columns(path, evaluator.names(), points.values().map(|(line, _)| line.as_str()))
             .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", path.display())))?;
     }

@@ -83,6 +83,22 @@ pub fn check_output_file(path: &Path, flag: &str) -> Result<(), Failure> {
     }
 }
 
+/// Refuse a second output (`flag PATH`) that names the same file as another
+/// output or an input (`other`, shown as `other_flag`): writing it would
+/// overwrite what the run reads or writes. Compared after resolving links
+/// and `..` where the files exist, else as written.
+pub fn check_distinct(path: &Path, flag: &str, other: &Path, other_flag: &str) -> Result<(), Failure> {
+    let resolve = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    if path == other || resolve(path) == resolve(other) {
+        return Err(Failure::BadInput(format!(
+            "{flag} {}: the same file as {other_flag} {}; choose another name",
+            path.display(),
+            other.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Create an output directory named on the command line (`flag DIR`) if it
 /// is missing. A path that cannot be a directory (a file is in the way, no
 /// permission) is bad input: exit status 2, naming the flag and the path.

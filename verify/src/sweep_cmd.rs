@@ -164,6 +164,11 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     if let Some(dir) = &args.plot {
         ensure_output_dir(dir, "--plot")?;
     }
+    if let (Some(npz), Some(out)) = (&args.npz, &args.output) {
+        // Checked before the sweep runs: a bad name must not cost the sweep.
+        check_output_file(npz, "--npz")?;
+        crate::paths::check_distinct(npz, "--npz", out, "-o")?;
+    }
     let PlannedSweep { evaluator, plan, id } = planned(&args.plan)?;
     let shard = match &args.shard {
         Some(s) => Shard::parse(s).map_err(|m| bad(format!("--shard '{}': {m}", excerpt(s))))?,
@@ -205,7 +210,6 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         eprintln!("  {} points lie outside the spec's sweep domain (no line)", summary.outside_domain);
     }
     if let (Some(npz), Some(out)) = (&args.npz, &args.output) {
-        check_output_file(npz, "--npz")?;
         let text = read(out)?;
         let mut lines: Vec<(u64, &str)> = text
             .lines()
