@@ -111,14 +111,7 @@ pub fn large_spec_from_value(value: Value) -> Result<LargeSpec> {
         ));
     }
     let spath = child(&apath, "structure_constants");
-    let too_large = |i: usize, j: usize| SpecError::new(index(&index(&spath, i), j), "index is too large");
-    let mut rows = Vec::with_capacity(custom.structure_constants.len());
-    for (i, r) in custom.structure_constants.iter().enumerate() {
-        let a = usize::try_from(r.a.0).map_err(|_| too_large(i, 0))?;
-        let b = usize::try_from(r.b.0).map_err(|_| too_large(i, 1))?;
-        let k = usize::try_from(r.k.0).map_err(|_| too_large(i, 2))?;
-        rows.push((a, b, k, r.c.0.clone()));
-    }
+    let rows = crate::parse::structure_rows(custom, &spath)?;
     let algebra = SparseAlgebra::new(&custom.coordinates, &rows).map_err(|e| SpecError::new(&apath, e.to_string()))?;
     let mut parameters = BTreeMap::new();
     let ppath = child(root, "parameters");

@@ -422,6 +422,23 @@ pub(crate) fn is_identifier(s: &str) -> bool {
 
 type AlgebraRead = (LieAlgebra, Option<Vec<&'static str>>, Option<String>);
 
+/// The rows `(a, b, k, c)` of a custom algebra's structure constants, with
+/// indices as `usize` (`spath`: the JSON path of `structure_constants`).
+pub(crate) fn structure_rows(
+    custom: &crate::document::CustomAlgebra,
+    spath: &str,
+) -> Result<Vec<(usize, usize, usize, Rational)>> {
+    let too_large = |i: usize, j: usize| SpecError::new(index(&index(spath, i), j), "index is too large");
+    let mut rows = Vec::with_capacity(custom.structure_constants.len());
+    for (i, r) in custom.structure_constants.iter().enumerate() {
+        let a = usize::try_from(r.a.0).map_err(|_| too_large(i, 0))?;
+        let b = usize::try_from(r.b.0).map_err(|_| too_large(i, 1))?;
+        let k = usize::try_from(r.k.0).map_err(|_| too_large(i, 2))?;
+        rows.push((a, b, k, r.c.0.clone()));
+    }
+    Ok(rows)
+}
+
 fn read_algebra(doc: &AlgebraDoc, path: &str) -> Result<AlgebraRead> {
     match doc {
         AlgebraDoc::Builtin(name) => match builtin(name) {
@@ -438,14 +455,7 @@ fn read_algebra(doc: &AlgebraDoc, path: &str) -> Result<AlgebraRead> {
             if custom.structure_constants.len() > max_rows {
                 return Err(SpecError::new(&spath, format!("more than {max_rows} rows")));
             }
-            let too_large = |i: usize, j: usize| SpecError::new(index(&index(&spath, i), j), "index is too large");
-            let mut rows = Vec::with_capacity(custom.structure_constants.len());
-            for (i, r) in custom.structure_constants.iter().enumerate() {
-                let a = usize::try_from(r.a.0).map_err(|_| too_large(i, 0))?;
-                let b = usize::try_from(r.b.0).map_err(|_| too_large(i, 1))?;
-                let k = usize::try_from(r.k.0).map_err(|_| too_large(i, 2))?;
-                rows.push((a, b, k, r.c.0.clone()));
-            }
+            let rows = structure_rows(custom, &spath)?;
             let algebra = LieAlgebra::from_structure_constants(&label, &custom.coordinates, &rows)
                 .map_err(|e| algebra_error(e, path))?;
             Ok((algebra, None, None))
