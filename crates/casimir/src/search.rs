@@ -236,7 +236,13 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
     let family = &variation.family;
     let f = family.directions.len();
     let zero_t = vec![Rational::zero(); f];
-    let r0 = variation.restricted(&family.particular);
+    // Without free multipliers the frame blocks at the particular solution
+    // give both the restricted Hessian and, later, the Schur bound.
+    let blocks = (f == 0).then(|| variation.frame_blocks(&variation.base(&family.particular)));
+    let r0 = match &blocks {
+        Some((bzz, _, _)) => bzz.clone(),
+        None => variation.restricted(&family.particular),
+    };
     let k = r0.nrows();
     // R(t) - R(0) is linear in t; the pencil matrices are R(e_i) - R(0).
     let raw: Vec<DMatrix<f64>> = (0..f)
@@ -310,7 +316,7 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
         }
     };
     let multipliers = family.at(&t_rational);
-    match choose_m(variation, &multipliers, sign) {
+    match choose_m(variation, &multipliers, sign, blocks.as_ref()) {
         Some((m, p)) => SearchOutcome::Definite(CasimirChoice {
             sign,
             family_parameters: t_rational,
@@ -364,8 +370,7 @@ pub fn level_scale(variation: &SecondVariation, multipliers: &[Rational], sign: 
 /// directions (the Euclidean norm of the part of `v` in the range of `G`).
 pub fn conserved_margin(variation: &SecondVariation, multipliers: &[Rational], sign: Sign) -> Option<Matrix> {
     let c = decimal_near(level_scale(variation, multipliers, sign), 3)?;
-    let y = variation.independent_gradients();
-    Some(y.transpose().mul(&y).inverse()?.scale(&c))
+    Some(variation.gram_inverse().scale(&c))
 }
 
 /// `K` rounded to `digits` significant digits (short numbers in the
@@ -387,14 +392,25 @@ pub fn short_entries(k: &Matrix, digits: u32) -> Option<Matrix> {
 /// search over a scale `mu`: a definite form found in floating point is
 /// never lost here. The same `K` rounded to 3, 6, 9 and 15 digits is tried
 /// first and kept when it is still definite (short numbers).
-fn choose_m(variation: &SecondVariation, multipliers: &[Rational], sign: Sign) -> Option<(Matrix, Matrix)> {
+///
+/// `blocks` are the [`SecondVariation::frame_blocks`] of `B` at these
+/// multipliers when the caller has them.
+fn choose_m(
+    variation: &SecondVariation,
+    multipliers: &[Rational],
+    sign: Sign,
+    blocks: Option<&(Matrix, Matrix, Matrix)>,
+) -> Option<(Matrix, Matrix)> {
     let r = variation.num_conserved();
     if variation.range_columns.is_empty() {
         let base = variation.base(multipliers);
         let m = Matrix::zeros(r, r);
         return base.is_definite_with_sign(sign).then_some((m, base));
     }
-    let k0 = variation.schur_bound(multipliers)?;
+    let k0 = match blocks {
+        Some(b) => SecondVariation::schur_bound_of_blocks(b)?,
+        None => variation.schur_bound(multipliers)?,
+    };
     let d = conserved_margin(variation, multipliers, sign)?;
     let k_exact = if sign.is_positive() { k0.add(&d) } else { k0.sub(&d) };
     let mut candidates: Vec<Matrix> =

@@ -48,6 +48,19 @@ pub struct SecondVariation {
     pub kernel: Matrix,
     /// Indices of linearly independent columns of `G` spanning its range.
     pub range_columns: Vec<usize>,
+    /// `Y`, `(Y^T Y)^{-1}` and `W = Y (Y^T Y)^{-1}` (see
+    /// [`Self::complement`]), computed once: the search, the Schur bound
+    /// and the optimiser each need them.
+    frame: Frame,
+}
+
+/// The fixed parts of the frame `[Z W]`.
+#[derive(Clone, Debug)]
+struct Frame {
+    y: Matrix,
+    gram_inverse: Matrix,
+    w: Matrix,
+    z_transpose: Matrix,
 }
 
 impl SecondVariation {
@@ -66,7 +79,12 @@ impl SecondVariation {
         let kernel_vectors = gradients.transpose().null_space();
         let kernel = Matrix::from_columns(n, &kernel_vectors);
         let range_columns = gradients.pivot_columns();
-        Some(SecondVariation { gradient_h, hessian_h, gradients, hessians, family, kernel, range_columns })
+        let y = Matrix::from_fn(n, range_columns.len(), |i, j| gradients[(i, range_columns[j])].clone());
+        let gram_inverse = y.transpose().mul(&y).inverse().expect("independent columns have an invertible Gram matrix");
+        let w = y.mul(&gram_inverse);
+        let z_transpose = kernel.transpose();
+        let frame = Frame { y, gram_inverse, w, z_transpose };
+        Some(SecondVariation { gradient_h, hessian_h, gradients, hessians, family, kernel, range_columns, frame })
     }
 
     /// Dimension of the algebra.
@@ -97,35 +115,35 @@ impl SecondVariation {
 
     /// The restricted Hessian `Z^T (D^2h + sum_j lambda_j D^2K_j) Z` on `ker G^T`.
     pub fn restricted(&self, multipliers: &[Rational]) -> Matrix {
-        let z = &self.kernel;
-        z.transpose().mul(&self.base(multipliers)).mul(z)
+        self.frame.z_transpose.mul(&self.base(multipliers)).mul(&self.kernel)
     }
 
     /// `Y`: the independent conserved gradients (columns
     /// [`Self::range_columns`] of `G`), `n × rk`.
-    pub fn independent_gradients(&self) -> Matrix {
-        let cols = &self.range_columns;
-        Matrix::from_fn(self.dim(), cols.len(), |i, j| self.gradients[(i, cols[j])].clone())
+    pub fn independent_gradients(&self) -> &Matrix {
+        &self.frame.y
+    }
+
+    /// `(Y^T Y)^{-1}`.
+    pub fn gram_inverse(&self) -> &Matrix {
+        &self.frame.gram_inverse
     }
 
     /// `W = Y (Y^T Y)^{-1}`, so that `Y^T W = I`: with the kernel `Z`, the
     /// frame `T = [Z W]` splits a perturbation into its part along the
     /// level set (`a`) and its conserved-quantity increments `b = Y^T v`,
     /// and `T^T (Y K Y^T) T = diag(0, K)`.
-    pub fn complement(&self) -> Matrix {
-        let y = self.independent_gradients();
-        let gram = y.transpose().mul(&y);
-        let inv = gram.inverse().expect("independent columns have an invertible Gram matrix");
-        y.mul(&inv)
+    pub fn complement(&self) -> &Matrix {
+        &self.frame.w
     }
 
     /// The blocks `(Z^T S Z, Z^T S W, W^T S W)` of a symmetric form `S` in
     /// the frame `T = [Z W]` (see [`Self::complement`]).
-    pub fn frame_blocks(&self, s: &Matrix, w: &Matrix) -> (Matrix, Matrix, Matrix) {
-        let z = &self.kernel;
+    pub fn frame_blocks(&self, s: &Matrix) -> (Matrix, Matrix, Matrix) {
+        let (z, w, zt) = (&self.kernel, &self.frame.w, &self.frame.z_transpose);
         let sz = s.mul(z);
         let sw = s.mul(w);
-        (z.transpose().mul(&sz), z.transpose().mul(&sw), w.transpose().mul(&sw))
+        (zt.mul(&sz), zt.mul(&sw), w.transpose().mul(&sw))
     }
 
     /// The `M` (`r × r`) with `G M G^T = Y K Y^T`: `K` placed on the
@@ -150,12 +168,15 @@ impl SecondVariation {
     /// `b -> -min {v^T B v : Y^T v = b}` and does not depend on the choice of
     /// `Z` or `W`; rescaling a conserved quantity rescales its row and column.
     pub fn schur_bound(&self, multipliers: &[Rational]) -> Option<Matrix> {
-        let w = self.complement();
-        let (bzz, bzw, bww) = self.frame_blocks(&self.base(multipliers), &w);
+        Self::schur_bound_of_blocks(&self.frame_blocks(&self.base(multipliers)))
+    }
+
+    /// [`Self::schur_bound`] from the [`Self::frame_blocks`] of `B`.
+    pub fn schur_bound_of_blocks((bzz, bzw, bww): &(Matrix, Matrix, Matrix)) -> Option<Matrix> {
         if bzz.nrows() == 0 {
             return Some(bww.scale(&-Rational::from(1)));
         }
         let inv = bzz.inverse()?;
-        Some(bzw.transpose().mul(&inv).mul(&bzw).sub(&bww))
+        Some(bzw.transpose().mul(&inv).mul(bzw).sub(bww))
     }
 }

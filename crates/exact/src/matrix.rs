@@ -54,7 +54,8 @@ impl std::ops::IndexMut<(usize, usize)> for Matrix {
 impl Matrix {
     /// The zero matrix.
     pub fn zeros(rows: usize, cols: usize) -> Self {
-        Matrix { rows, cols, data: vec![Rational::zero(); rows * cols] }
+        // An iterator, not `vec![zero; n]`: that clones the element n times.
+        Matrix { rows, cols, data: std::iter::repeat_with(|| Rational::ZERO).take(rows * cols).collect() }
     }
 
     /// The identity matrix.
@@ -144,7 +145,17 @@ impl Matrix {
     pub fn symmetric_part(&self) -> Self {
         assert_eq!(self.rows, self.cols);
         let half = Rational::new_small(1, 2);
-        Self::from_fn(self.rows, self.cols, |i, j| (&self[(i, j)] + &self[(j, i)]) * &half)
+        let mut out = self.clone();
+        for i in 0..self.rows {
+            for j in i + 1..self.cols {
+                if self[(i, j)] != self[(j, i)] {
+                    let v = (&self[(i, j)] + &self[(j, i)]) * &half;
+                    out[(j, i)] = v.clone();
+                    out[(i, j)] = v;
+                }
+            }
+        }
+        out
     }
 
     /// Matrix product.
@@ -238,7 +249,7 @@ impl Matrix {
 
     /// As an nalgebra matrix of doubles.
     pub fn to_dmatrix(&self) -> nalgebra::DMatrix<f64> {
-        nalgebra::DMatrix::from_row_slice(self.rows, self.cols, &self.to_f64_vec())
+        nalgebra::DMatrix::from_fn(self.rows, self.cols, |i, j| rational_to_f64(&self[(i, j)]))
     }
 
     /// Entries as strings (`"p/q"`), row by row, for certificates.

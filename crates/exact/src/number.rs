@@ -193,6 +193,7 @@ fn parse_decimal(s: &str, whole: &str) -> Result<Rational, NumberError> {
 /// use exact::{rational_to_f64, Rational};
 /// assert_eq!(rational_to_f64(&Rational::new(1.into(), 3.into())), 1.0 / 3.0);
 /// ```
+#[inline]
 pub fn rational_to_f64(r: &Rational) -> f64 {
     if let Some(v) = r.to_f64().filter(|v| v.is_finite()) {
         return v;

@@ -788,15 +788,20 @@ fn at_multipliers(
     let base = variation.base(&multipliers);
     let base_form = (forms.at)(t_rational);
     let q_base = &base_form.q;
-    let w = variation.complement();
-    let (bzz, bzw, bww) = variation.frame_blocks(&base, &w);
-    let (qzz, qzw, qww) = variation.frame_blocks(q_base, &w);
     let s = sign.as_f64();
+    // The frame blocks in floating point (everything here is a floating-point
+    // screen; only the K finally chosen is made exact, and the witness below
+    // is evaluated exactly in the algebra's coordinates).
+    let b_f = base.to_dmatrix() * s;
+    let q_f = q_base.to_dmatrix() * s;
+    let z_f = variation.kernel.to_dmatrix();
+    let w_f = variation.complement().to_dmatrix();
     // Orthonormal coordinates of ker G^T (Z R^{-1}): K1 below is invariant
     // under a change of basis of ker G^T, its rounding is not.
     let r_inv = orthonormalising(&variation.kernel);
-    let pz = congruent(&(bzz.to_dmatrix() * s), &r_inv);
-    let qz = congruent(&(qzz.to_dmatrix() * s), &r_inv);
+    let zo = &z_f * &r_inv;
+    let pz = congruent(&b_f, &zo);
+    let qz = congruent(&q_f, &zo);
     // The restricted lambda_max: the infimum over K at these multipliers
     // (K -> infinity along the conserved directions leaves only ker G^T).
     let (restricted_max, top) = if k == 0 {
@@ -807,11 +812,9 @@ fn at_multipliers(
     };
     // A certified lower bound for every K at these multipliers: the exact
     // Rayleigh quotient of a rational vector of ker G^T.
-    let witness = top
-        .as_ref()
-        .filter(|_| variation.family.directions.is_empty())
-        .and_then(|v| rayleigh_lower_bound(&bzz, &qzz, sign, &(&r_inv * v)))
-        .map(|(bound, a)| (bound, variation.kernel.mul_vec(&a)));
+    let witness = top.as_ref().filter(|_| variation.family.directions.is_empty()).and_then(|v| {
+        rayleigh_lower_bound((&base, &b_f), (q_base, &q_f), sign, (&variation.kernel, &z_f), &(&r_inv * v))
+    });
     let infimum = restricted_max.max(0.0);
     let first_here = || Some((first.clone(), forms.first.clone(), first_growth.clone()));
     if infimum.max(first_growth.sigma2) <= 0.0 {
@@ -828,30 +831,21 @@ fn at_multipliers(
         // conditioned: building another K could not do better.
         return Some(AtMultipliers { restricted_max, witness, best: first_here() });
     }
-    let pzw = r_inv.transpose() * bzw.to_dmatrix() * s;
+    let pzw = zo.transpose() * &b_f * &w_f;
+    let pw = congruent(&b_f, &w_f);
     let k0 = if k == 0 {
-        -bww.to_dmatrix() * s
+        -&pw
     } else {
         let ch = pz.clone().cholesky()?;
-        pzw.transpose() * ch.solve(&pzw) - bww.to_dmatrix() * s
+        pzw.transpose() * ch.solve(&pzw) - &pw
     };
     let margin = casimir::conserved_margin(variation, &multipliers, sign)?.to_dmatrix();
-    let frame = FramePencil {
-        pz,
-        pzw,
-        pw: bww.to_dmatrix() * s,
-        qz,
-        qzw: r_inv.transpose() * qzw.to_dmatrix() * s,
-        qw: qww.to_dmatrix() * s,
-        k0,
-        margin,
-    };
+    let frame =
+        FramePencil { pz, pzw, pw, qz, qzw: zo.transpose() * &q_f * &w_f, qw: congruent(&q_f, &w_f), k0, margin };
     // Everything below is screened in floating point first (sP = sB + Y K' Y^T,
     // and sQ = sQ(B) since Q does not depend on K); only a K that passes the
     // screen is made exact, so the search costs a few small dense
     // eigenproblems per step instead of exact congruences.
-    let b_f = base.to_dmatrix() * s;
-    let q_f = q_base.to_dmatrix() * s;
     let y_f = variation.independent_gradients().to_dmatrix();
     let screen = |kp: &DMatrix<f64>| -> Option<(f64, f64)> {
         let p = &b_f + &y_f * kp * y_f.transpose();
@@ -943,9 +937,11 @@ fn at_multipliers(
     Some(AtMultipliers { restricted_max, witness, best })
 }
 
-/// `max(0, n^T sQ n / n^T sP n)` exactly, for `n` the floating-point top
-/// eigenvector `v` scaled to integers (`round(10^d v / |v|_inf)`): a lower
-/// bound on `lambda_max(sQ, sP)`, with the integer vector.
+/// `max(0, x^T sQ x / x^T sP x)` exactly for `x = Z n`, with `n` the
+/// floating-point top eigenvector `v` of the restricted pencil (in the
+/// coordinates of the kernel basis `Z`) scaled to integers
+/// (`round(10^d v / |v|_inf)`): a lower bound on `lambda_max(sQ, sP)` over
+/// `ker G^T`, with the vector `x`.
 ///
 /// The number of digits `d` is the fewest of 2, 4, 6, 9, 12, 15 whose
 /// quotient, evaluated in floating point, is within 1e-15 of the 15-digit
@@ -954,15 +950,25 @@ fn at_multipliers(
 /// the claim, whichever vector the floating-point screen picked: a poor
 /// pick gives a lower, still valid, bound. Integers keep the exact quadratic
 /// forms cheap: the common denominator `10^d` cancels in the quotient.
-fn rayleigh_lower_bound(p: &Matrix, q: &Matrix, sign: Sign, v: &DVector<f64>) -> Option<(Rational, Vec<Rational>)> {
+///
+/// Each matrix comes with its floating-point value (`sP`, `sQ` signed).
+fn rayleigh_lower_bound(
+    (p, pf): (&Matrix, &DMatrix<f64>),
+    (q, qf): (&Matrix, &DMatrix<f64>),
+    sign: Sign,
+    (z, z_f): (&Matrix, &DMatrix<f64>),
+    v: &DVector<f64>,
+) -> Option<(Rational, Vec<Rational>)> {
     let top = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     if top.is_nan() || top <= 0.0 || !top.is_finite() {
         return None;
     }
-    let (pf, qf) = (signed(p, sign), signed(q, sign));
     // 10^15 < 2^53: the rounded entries are exact integers in f64.
     let integers = |digits: i32| v.map(|x| (x / top * 10f64.powi(digits)).round());
-    let quotient = |n: &DVector<f64>| n.dot(&(&qf * n)) / n.dot(&(&pf * n));
+    let quotient = |n: &DVector<f64>| {
+        let x = z_f * n;
+        x.dot(&(qf * &x)) / x.dot(&(pf * &x))
+    };
     let target = quotient(&integers(15));
     let digits =
         [2, 4, 6, 9, 12, 15].into_iter().find(|&d| quotient(&integers(d)) >= target * (1.0 - 1e-15)).unwrap_or(15);
@@ -970,12 +976,13 @@ fn rayleigh_lower_bound(p: &Matrix, q: &Matrix, sign: Sign, v: &DVector<f64>) ->
     let ints: Vec<i64> = integers(digits).iter().map(|&x| x as i64).collect();
     let g = ints.iter().fold(0i64, |g, &x| num_integer::Integer::gcd(&g, &x)).max(1);
     let n: Vec<Rational> = ints.iter().map(|&x| Rational::from(x / g)).collect();
-    let quad = |m: &Matrix| n.iter().zip(m.mul_vec(&n)).fold(Rational::zero(), |acc, (a, b)| acc + a * b);
+    let x = z.mul_vec(&n);
+    let quad = |m: &Matrix| x.iter().zip(m.mul_vec(&x)).fold(Rational::zero(), |acc, (a, b)| acc + a * b);
     let (pv, qv) = (quad(p), quad(q));
     let (pv, qv) = if !sign.is_positive() { (-pv, -qv) } else { (pv, qv) };
     if !pv.is_positive() {
         return None;
     }
     let rho = qv / pv;
-    Some((if rho.is_positive() { rho } else { Rational::zero() }, n))
+    Some((if rho.is_positive() { rho } else { Rational::zero() }, x))
 }
