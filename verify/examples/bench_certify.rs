@@ -9,6 +9,11 @@
 //! certificate JSON, and the whole `certify` path end to end.
 use std::time::Instant;
 
+// The same allocator as the `verify` binary (src/main.rs), so that the
+// figures are those of the engine users run.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn per_call(reps: usize, mut f: impl FnMut()) -> f64 {
     f(); // warm-up
     let t = Instant::now();

@@ -11,8 +11,9 @@
 //!   [--shard K/N] [-o FILE [--resume]] [--numeric] [--plot DIR]` — certify
 //!   over parameter space, one JSON line per point;
 //! * `verify plot-sweep LINES... --spec SPEC [--out DIR]` — stability maps;
-//! * `verify simulate SPEC [--paths N --dt H --t-end T --observable NAME ...]` —
-//!   ensembles, exact moments and charts (SVG, PNG, JSON, CSV).
+//! * `verify simulate SPEC [--paths N --dt H --t-end T --observable NAME ...]
+//!   [--shard K/N | --merge FILES]` — ensembles, exact moments and charts
+//!   (SVG, PNG, JSON, CSV); sharded runs merge into exactly the whole run.
 //!
 //! Exit status: 0 success (whatever the verdict), 1 a certificate failed its
 //! check or an internal failure, 2 bad input (the message names the JSON path).

@@ -59,7 +59,21 @@ pub struct SimulateArgs {
     /// `histogram_counts`, `exact_moments_over_delta`...).
     #[arg(long)]
     pub npz: bool,
+    /// Run only shard K of N (K from 0): its share of the paths of each
+    /// ensemble, written as exact sums to OUT/NAME.shard-K-of-N.json for
+    /// `--merge` (a Slurm job array runs `--shard $SLURM_ARRAY_TASK_ID/N`).
+    #[arg(long, value_name = "K/N", conflicts_with = "merge")]
+    pub shard: Option<String>,
+    /// Merge the shard files of this study (written by `--shard K/N` with
+    /// the same spec and options) and write the outputs of the whole run,
+    /// identical to an unsharded run's. Give SPEC before `--merge`.
+    #[arg(long, value_name = "FILE", num_args = 1..)]
+    pub merge: Vec<PathBuf>,
 }
+
+/// What kind of file a shard file is, and its format version.
+const SHARD_KIND: &str = "simulate-shard";
+const SHARD_FORMAT: u64 = 1;
 
 fn bad(message: String) -> Failure {
     Failure::BadInput(message)
@@ -172,15 +186,42 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let (epsilon, delta, sigma2, stopping_time) =
         (prepared.epsilon, prepared.delta, prepared.sigma2, prepared.stopping_time);
     let observable = prepared.observable;
+    let shard = match &args.shard {
+        Some(text) => {
+            let s = sweep::Shard::parse(text).map_err(|m| bad(format!("--shard '{}': {m}", excerpt(text))))?;
+            Some((s.k, s.n))
+        }
+        None => None,
+    };
+    // Everything that fixes the numbers of the study: shards of one study
+    // carry the same identity, and `--merge` insists on it.
+    let raw: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
+    let identity = json!({
+        "spec_digest": spec::spec_digest(&raw),
+        "name": spec.name,
+        "paths": settings.paths,
+        "dt": settings.dt,
+        "t_end": prepared.ensemble.t_end,
+        "outputs": settings.outputs,
+        "seed": settings.seed,
+        "bins": settings.bins,
+        "scheme": settings.scheme.as_str(),
+        "observable": coords[prepared.observable],
+        "epsilon": prepared.epsilon,
+        "delta": prepared.delta,
+    });
     let threads = rayon::current_num_threads() as f64;
     // More threads than cores (RAYON_NUM_THREADS up to 4 per core) do not
     // run faster: the estimate counts the cores that work.
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get) as f64;
-    let estimate = prepared.estimated_seconds(threads.min(cores));
+    // A shard runs its share of the paths (and the whole pilot); a merge runs none.
+    let share = shard.map_or(1.0, |(_, n)| 1.0 / n as f64);
+    let estimate = if args.merge.is_empty() { prepared.estimated_seconds(threads.min(cores)) * share } else { 0.0 };
     if estimate > 900.0 && !args.force {
         return Err(bad(format!(
-            "--paths/--dt/--t-end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass --force",
-            prepared.ensemble.path_steps(),
+            "--paths/--dt/--t-end: {:.2e} path-steps would take about {:.0} minutes here; lower them, split the run (--shard K/N) or pass --force",
+            prepared.ensemble.path_steps() * share,
             estimate / 60.0
         )));
     }
@@ -203,20 +244,51 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         eprintln!(
             "note: about {:.0} s of computation ({:.2e} path-steps on {} threads)",
             estimate,
-            prepared.ensemble.path_steps(),
+            prepared.ensemble.path_steps() * share,
             threads
         );
     }
-    let bar = crate::progress_bar(args.paths as u64 * prepared.ensembles(), "{bar:40} {pos}/{len} paths ({eta} left)");
-    let tick = |k: u64| {
+    let file_stem = file_stem_noted(&spec.name);
+    let (index, count) = shard.unwrap_or((0, 1));
+    let sums = if args.merge.is_empty() {
+        let shard_paths = simulate::block_paths(args.paths, &simulate::shard_blocks(args.paths, index, count)).len();
+        let bar =
+            crate::progress_bar(shard_paths as u64 * prepared.ensembles(), "{bar:40} {pos}/{len} paths ({eta} left)");
+        let tick = |k: u64| {
+            if let Some(b) = &bar {
+                b.inc(k)
+            }
+        };
+        let never = std::sync::atomic::AtomicBool::new(false);
+        let sums = simulate::run_shard_cancellable(&prepared, index, count, &tick, &never)
+            .map_err(|e| study_failure(e, coords))?;
         if let Some(b) = &bar {
-            b.inc(k)
+            b.finish_and_clear();
         }
+        if shard.is_some() {
+            let path = args.out.join(format!("{file_stem}.shard-{index}-of-{count}.json"));
+            let document = json!({
+                "kind": SHARD_KIND,
+                "format": SHARD_FORMAT,
+                "engine": env!("CARGO_PKG_VERSION"),
+                "study": identity,
+                "shard": sums.to_json(),
+            });
+            write_atomic(&path, spec::to_pretty_json(&document).as_bytes()).map_err(|e| write_failure(&path, &e))?;
+            eprintln!(
+                "{}: shard {index} of {count}: {} paths of each ensemble; merge all {count} with `verify simulate {} [the same options] --merge FILES`; wrote {}",
+                excerpt(&spec.name),
+                sums.nonlinear.paths,
+                args.spec.display(),
+                path.display()
+            );
+            return Ok(());
+        }
+        sums
+    } else {
+        merge_shards(&args.merge, &identity, &prepared)?
     };
-    let study = simulate::run(&prepared, &tick).map_err(|e| study_failure(e, coords))?;
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
+    let study = simulate::finish(&prepared, &sums);
     let Study { nonlinear, linear, exact_over_delta: exact, worst_over_delta: worst, bound_over_delta: bound, .. } =
         &study;
     let lyapunov = study.lyapunov;
@@ -224,8 +296,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let t_end = prepared.ensemble.t_end;
     // Outputs.
     let dir = &args.out;
-    // The name is data: a safe stem keeps every file inside --out.
-    let file_stem = file_stem_noted(&spec.name);
+    // The name is data: a safe stem (above) keeps every file inside --out.
     let name = excerpt(&spec.name);
     let observable_name = &coords[observable];
     let verdict = cert.json["verdict"].as_str().unwrap_or_default();
@@ -330,6 +401,88 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         eprintln!("  P(|dmu_t|_P^2 > {}) <= {}: {certified}; {seen}", num(epsilon), num(e.level));
     }
     Ok(())
+}
+
+/// Read the shard files of a study and merge their exact sums, after
+/// checking that together they are exactly the study `identity` describes:
+/// every file is a shard of it (same spec digest and options), no shard
+/// index is given twice with different contents (the same file twice is
+/// harmless), and every index of `0..N` is there. Malformed files are bad
+/// input (exit 2); a shard of another study or an incomplete set is a
+/// failure (exit 1).
+fn merge_shards(
+    files: &[PathBuf],
+    identity: &serde_json::Value,
+    prepared: &simulate::Prepared<'_>,
+) -> Result<simulate::StudyShard, Failure> {
+    use std::collections::BTreeMap;
+    let mut shards: BTreeMap<u64, (simulate::StudyShard, String)> = BTreeMap::new();
+    let mut count: Option<(u64, String)> = None;
+    for path in files {
+        let at = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{at}: cannot read: {e}")))?;
+        let v: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| bad(format!("{at}: not JSON ({e}); was the shard interrupted?")))?;
+        if v.get("kind").and_then(serde_json::Value::as_str) != Some(SHARD_KIND) {
+            return Err(bad(format!("{at}: $.kind: not a shard of `verify simulate --shard`")));
+        }
+        if v.get("format").and_then(serde_json::Value::as_u64) != Some(SHARD_FORMAT) {
+            return Err(bad(format!("{at}: $.format: expected {SHARD_FORMAT}")));
+        }
+        let stated = v.get("study").ok_or_else(|| bad(format!("{at}: $.study: missing")))?;
+        if stated != identity {
+            let key = identity
+                .as_object()
+                .and_then(|m| m.iter().find(|(k, want)| stated.get(k.as_str()) != Some(*want)).map(|(k, _)| k.clone()))
+                .unwrap_or_else(|| "study".into());
+            return Err(Failure::Failed(format!(
+                "{at}: $.study.{key}: the shard belongs to another study (another spec or other options: {} here, {} in the file); give the options the shards ran with",
+                excerpt(&identity.get(&key).map_or(String::new(), |x| x.to_string())),
+                excerpt(&stated.get(&key).map_or("nothing".to_string(), |x| x.to_string())),
+            )));
+        }
+        let shard_json = v.get("shard").ok_or_else(|| bad(format!("{at}: $.shard: missing")))?;
+        let shard =
+            simulate::StudyShard::from_json(shard_json, "$.shard", prepared).map_err(|m| bad(format!("{at}: {m}")))?;
+        match &count {
+            Some((n, first)) if *n != shard.count => {
+                return Err(Failure::Failed(format!(
+                "{at}: a shard of {} shards, but {first} is a shard of {n}: shards of different splits do not merge",
+                shard.count
+            )))
+            }
+            Some(_) => {}
+            None => count = Some((shard.count, at.clone())),
+        }
+        match shards.get(&shard.index) {
+            Some((seen, _)) if *seen == shard => {} // the same shard twice: harmless
+            Some((_, first)) => {
+                return Err(Failure::Failed(format!(
+                    "shard {} of {} is given twice with different numbers: {first} and {at} (runs of different engines or seeds?)",
+                    shard.index, shard.count
+                )))
+            }
+            None => {
+                shards.insert(shard.index, (shard, at));
+            }
+        }
+    }
+    let n = count.map_or(0, |(n, _)| n);
+    let missing: Vec<String> = (0..n).filter(|k| !shards.contains_key(k)).map(|k| k.to_string()).collect();
+    if !missing.is_empty() {
+        let shown = missing.iter().take(10).cloned().collect::<Vec<_>>().join(", ");
+        return Err(Failure::Failed(format!(
+            "incomplete: {} of the {n} shards are missing ({shown}{}); run them with --shard K/{n}",
+            missing.len(),
+            if missing.len() > 10 { ", ..." } else { "" }
+        )));
+    }
+    let mut all = shards.into_values().map(|(s, _)| s);
+    let mut total = all.next().ok_or_else(|| bad("--merge: no shard files".into()))?;
+    for s in all {
+        total.merge(&s);
+    }
+    Ok(total)
 }
 
 fn write_csv(

@@ -1,5 +1,6 @@
 //! Parallel ensembles that keep only statistics.
 
+use crate::exact_sum::ExactSum;
 use crate::kernel::Kernel;
 use crate::model::Model;
 use crate::scheme::{LinearModel, Scheme, Stepper};
@@ -8,6 +9,8 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use serde_json::{json, Value};
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What is integrated.
@@ -152,12 +155,15 @@ impl EnsembleSettings {
         let times = steps / stride + 1;
         let blocks = self.paths.div_ceil(BLOCK).min(WAVE) as u64;
         let per_time = 8 * (o.bins as u64 + dim as u64 + 3);
-        let bytes = (blocks as f64) * (times as f64) * (per_time as f64);
+        // Plus the exact sums the blocks are added into (dim + 2 per output
+        // time, about 100 bytes each: a few 32-bit chunks).
+        let exact = (times as f64) * (dim as f64 + 2.0) * EXACT_SUM_BYTES;
+        let bytes = (blocks as f64) * (times as f64) * (per_time as f64) + exact;
         if bytes > Self::MAX_STATISTICS_BYTES as f64 {
             return bad(
                 "statistics",
                 format!(
-                    "{blocks} blocks of {BLOCK} paths x {times} output times x {} bins would hold {:.1} GB of statistics (limit {:.1} GB); lower the paths, the outputs or the bins",
+                    "{blocks} blocks of {BLOCK} paths x {times} output times x {} bins, with their exact sums, would hold {:.1} GB of statistics (limit {:.1} GB); lower the paths, the outputs or the bins",
                     o.bins,
                     bytes / 1e9,
                     Self::MAX_STATISTICS_BYTES as f64 / 1e9
@@ -212,9 +218,33 @@ pub fn path_rng(seed: u64, path: u64) -> Xoshiro256PlusPlus {
     Xoshiro256PlusPlus::seed_from_u64(seed ^ path.wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(17))
 }
 
-/// Paths per block: blocks are reduced in order, so results do not depend
-/// on how rayon schedules them.
-const BLOCK: usize = 256;
+/// Paths per block. A block's statistics are summed in floating point in
+/// path order; blocks are then added into exact sums ([`ExactSum`]), so the
+/// results depend neither on how rayon schedules the blocks nor on how the
+/// blocks are split between shards (`verify simulate --shard K/N`).
+pub const BLOCK: usize = 256;
+
+/// Bytes an [`ExactSum`] takes, for the memory estimate.
+const EXACT_SUM_BYTES: f64 = 100.0;
+
+/// The blocks of [`BLOCK`] paths that shard `index` of `count` runs: a
+/// contiguous range, the ranges of the `count` shards tiling `0..blocks`.
+///
+/// ```
+/// let paths = 10_000; // 40 blocks
+/// let ranges: Vec<_> = (0..3).map(|k| simulate::shard_blocks(paths, k, 3)).collect();
+/// assert_eq!(ranges, vec![0..13, 13..26, 26..40]);
+/// ```
+pub fn shard_blocks(paths: usize, index: u64, count: u64) -> Range<usize> {
+    let blocks = paths.div_ceil(BLOCK) as u128;
+    let (k, n) = (index as u128, count.max(1) as u128);
+    ((blocks * k / n) as usize)..((blocks * (k + 1) / n).min(blocks) as usize)
+}
+
+/// The paths of a range of blocks.
+pub fn block_paths(paths: usize, blocks: &Range<usize>) -> Range<usize> {
+    (blocks.start * BLOCK).min(paths)..(blocks.end * BLOCK).min(paths)
+}
 
 /// Blocks run (and held) at once before they are merged in order.
 const WAVE: usize = 64;
@@ -243,26 +273,217 @@ impl Accumulator {
             hi: f64::NEG_INFINITY,
         }
     }
+}
 
-    fn merge(&mut self, o: &Accumulator) {
-        for (a, b) in self.mean.iter_mut().zip(&o.mean) {
-            for (x, y) in a.iter_mut().zip(b) {
+/// The exact sufficient statistics of the paths of some blocks: sums of the
+/// state, of `|.|_P^2` and of its square at every output time (exact),
+/// histogram and exceedance counts, the largest Casimir drift and the
+/// observable's extent. Sums of disjoint sets of blocks merge exactly, in
+/// any order ([`Self::merge`]); [`Self::finish`] turns the whole ensemble's
+/// sums into [`EnsembleStats`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnsembleSums {
+    /// Paths summed.
+    pub paths: u64,
+    /// Sum of every coordinate at each output time.
+    pub mean: Vec<Vec<ExactSum>>,
+    /// Sum of `|.|_P^2` at each output time.
+    pub norm_sum: Vec<ExactSum>,
+    /// Sum of `|.|_P^4` at each output time.
+    pub norm_sumsq: Vec<ExactSum>,
+    /// Histogram counts of the observable at each output time.
+    pub histogram: Vec<Vec<u64>>,
+    /// Paths with `|.|_P^2 > eps` at each output time.
+    pub exceed: Vec<u64>,
+    /// Largest `|C(mu_t) - C(mu_0)|` at the final time.
+    pub casimir_drift: f64,
+    /// Smallest and largest value of the observable.
+    pub extent: (f64, f64),
+}
+
+/// A double in JSON: a number when finite, else `"inf"`, `"-inf"` or `"nan"`.
+fn float_json(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else if x.is_nan() {
+        json!("nan")
+    } else if x > 0.0 {
+        json!("inf")
+    } else {
+        json!("-inf")
+    }
+}
+
+fn float_from_json(v: &Value) -> Option<f64> {
+    match v {
+        Value::String(s) if s == "inf" => Some(f64::INFINITY),
+        Value::String(s) if s == "-inf" => Some(f64::NEG_INFINITY),
+        Value::String(s) if s == "nan" => Some(f64::NAN),
+        _ => v.as_f64(),
+    }
+}
+
+impl EnsembleSums {
+    /// No paths yet: `times` output times, `dim` coordinates, `bins` bins.
+    pub fn empty(times: usize, dim: usize, bins: usize) -> Self {
+        EnsembleSums {
+            paths: 0,
+            mean: vec![vec![ExactSum::new(); dim]; times],
+            norm_sum: vec![ExactSum::new(); times],
+            norm_sumsq: vec![ExactSum::new(); times],
+            histogram: vec![vec![0; bins]; times],
+            exceed: vec![0; times],
+            casimir_drift: 0.0,
+            extent: (f64::INFINITY, f64::NEG_INFINITY),
+        }
+    }
+
+    fn add_block(&mut self, b: &Accumulator, paths: u64) {
+        self.paths += paths;
+        for (a, m) in self.mean.iter_mut().zip(&b.mean) {
+            for (x, y) in a.iter_mut().zip(m) {
+                x.add(*y);
+            }
+        }
+        for (a, h) in self.histogram.iter_mut().zip(&b.histogram) {
+            for (x, y) in a.iter_mut().zip(h) {
                 *x += y;
             }
         }
-        for (a, b) in self.histogram.iter_mut().zip(&o.histogram) {
-            for (x, y) in a.iter_mut().zip(b) {
+        for k in 0..self.norm_sum.len() {
+            self.norm_sum[k].add(b.norm_sum[k]);
+            self.norm_sumsq[k].add(b.norm_sumsq[k]);
+            self.exceed[k] += b.exceed[k];
+        }
+        self.casimir_drift = self.casimir_drift.max(b.drift);
+        self.extent = (self.extent.0.min(b.lo), self.extent.1.max(b.hi));
+    }
+
+    /// Add the sums of other paths (exactly; the shapes must agree).
+    pub fn merge(&mut self, o: &EnsembleSums) {
+        self.paths += o.paths;
+        for (a, m) in self.mean.iter_mut().zip(&o.mean) {
+            for (x, y) in a.iter_mut().zip(m) {
+                x.merge(y);
+            }
+        }
+        for (a, h) in self.histogram.iter_mut().zip(&o.histogram) {
+            for (x, y) in a.iter_mut().zip(h) {
                 *x += y;
             }
         }
-        for i in 0..self.norm_sum.len() {
-            self.norm_sum[i] += o.norm_sum[i];
-            self.norm_sumsq[i] += o.norm_sumsq[i];
-            self.exceed[i] += o.exceed[i];
+        for k in 0..self.norm_sum.len() {
+            self.norm_sum[k].merge(&o.norm_sum[k]);
+            self.norm_sumsq[k].merge(&o.norm_sumsq[k]);
+            self.exceed[k] += o.exceed[k];
         }
-        self.drift = self.drift.max(o.drift);
-        self.lo = self.lo.min(o.lo);
-        self.hi = self.hi.max(o.hi);
+        self.casimir_drift = self.casimir_drift.max(o.casimir_drift);
+        self.extent = (self.extent.0.min(o.extent.0), self.extent.1.max(o.extent.1));
+    }
+
+    /// The statistics of the ensemble these sums cover (means over
+    /// [`Self::paths`]), at the output times of `settings`.
+    pub fn finish(&self, settings: &EnsembleSettings) -> EnsembleStats {
+        let steps = settings.steps();
+        let stride = (steps / settings.outputs as u64).max(1);
+        let np = self.paths.max(1) as f64;
+        let norm_mean: Vec<f64> = self.norm_sum.iter().map(|s| s.to_f64() / np).collect();
+        let norm_std_error = self
+            .norm_sumsq
+            .iter()
+            .zip(&norm_mean)
+            .map(|(sq, m)| {
+                let var = (sq.to_f64() / np - m * m).max(0.0) * np / (np - 1.0).max(1.0);
+                (var / np).sqrt()
+            })
+            .collect();
+        EnsembleStats {
+            times: (0..self.norm_sum.len()).map(|k| k as f64 * stride as f64 * settings.dt).collect(),
+            mean: self.mean.iter().map(|m| m.iter().map(|x| x.to_f64() / np).collect()).collect(),
+            histogram: self.histogram.clone(),
+            norm_mean,
+            norm_std_error,
+            exceedance: self.exceed.iter().map(|&c| c as f64 / np).collect(),
+            casimir_drift: self.casimir_drift,
+            observable_extent: self.extent,
+            paths: self.paths as usize,
+            steps,
+        }
+    }
+
+    /// The sums as JSON, every sum as its exact rational (`"p/q"`), so that
+    /// another process can [`Self::merge`] them without rounding.
+    pub fn to_json(&self) -> Value {
+        let texts = |v: &[ExactSum]| v.iter().map(ExactSum::to_text).collect::<Vec<_>>();
+        json!({
+            "paths": self.paths,
+            "mean": self.mean.iter().map(|m| texts(m)).collect::<Vec<_>>(),
+            "norm_sum": texts(&self.norm_sum),
+            "norm_sumsq": texts(&self.norm_sumsq),
+            "histogram": self.histogram,
+            "exceed": self.exceed,
+            "casimir_drift": float_json(self.casimir_drift),
+            "extent": [float_json(self.extent.0), float_json(self.extent.1)],
+        })
+    }
+
+    /// Read [`Self::to_json`], expecting `times` output times, `dim`
+    /// coordinates and `bins` bins. An error names the JSON path (under
+    /// `at`) and what is wrong.
+    pub fn from_json(v: &Value, at: &str, times: usize, dim: usize, bins: usize) -> Result<EnsembleSums, String> {
+        let field = |name: &str| v.get(name).ok_or_else(|| format!("{at}.{name}: missing"));
+        let array = |x: &Value, path: String, len: usize| -> Result<Vec<Value>, String> {
+            let a = x.as_array().ok_or_else(|| format!("{path}: expected an array"))?;
+            if a.len() != len {
+                return Err(format!("{path}: expected {len} entries, got {}", a.len()));
+            }
+            Ok(a.clone())
+        };
+        let sums = |x: &Value, path: String, len: usize| -> Result<Vec<ExactSum>, String> {
+            array(x, path.clone(), len)?
+                .iter()
+                .enumerate()
+                .map(|(i, e)| {
+                    e.as_str().and_then(ExactSum::from_text).ok_or_else(|| {
+                        format!("{path}[{i}]: expected an exact sum of doubles (\"p/q\" with q a power of two, or nan, inf, -inf)")
+                    })
+                })
+                .collect()
+        };
+        let counts = |x: &Value, path: String, len: usize| -> Result<Vec<u64>, String> {
+            array(x, path.clone(), len)?
+                .iter()
+                .enumerate()
+                .map(|(i, e)| e.as_u64().ok_or_else(|| format!("{path}[{i}]: expected a count")))
+                .collect()
+        };
+        let paths = field("paths")?.as_u64().ok_or_else(|| format!("{at}.paths: expected a count"))?;
+        let mean = array(field("mean")?, format!("{at}.mean"), times)?
+            .iter()
+            .enumerate()
+            .map(|(k, row)| sums(row, format!("{at}.mean[{k}]"), dim))
+            .collect::<Result<Vec<_>, _>>()?;
+        let histogram = array(field("histogram")?, format!("{at}.histogram"), times)?
+            .iter()
+            .enumerate()
+            .map(|(k, row)| counts(row, format!("{at}.histogram[{k}]"), bins))
+            .collect::<Result<Vec<_>, _>>()?;
+        let float = |name: &str| -> Result<f64, String> {
+            float_from_json(field(name)?).ok_or_else(|| format!("{at}.{name}: expected a number"))
+        };
+        let extent = array(field("extent")?, format!("{at}.extent"), 2)?;
+        let bound =
+            |i: usize| float_from_json(&extent[i]).ok_or_else(|| format!("{at}.extent[{i}]: expected a number"));
+        Ok(EnsembleSums {
+            paths,
+            mean,
+            norm_sum: sums(field("norm_sum")?, format!("{at}.norm_sum"), times)?,
+            norm_sumsq: sums(field("norm_sumsq")?, format!("{at}.norm_sumsq"), times)?,
+            histogram,
+            exceed: counts(field("exceed")?, format!("{at}.exceed"), times)?,
+            casimir_drift: float("casimir_drift")?,
+            extent: (bound(0)?, bound(1)?),
+        })
     }
 }
 
@@ -397,6 +618,21 @@ pub fn run_ensemble_cancellable(
     progress: &(dyn Fn(u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<EnsembleStats, EnsembleError> {
+    let all = 0..settings.paths.div_ceil(BLOCK);
+    Ok(run_blocks_cancellable(target, settings, all, progress, cancel)?.finish(settings))
+}
+
+/// The exact sums of the paths of blocks `blocks` (of [`BLOCK`] paths; see
+/// [`shard_blocks`]) of the ensemble `settings` describes: one shard of it.
+/// The shards' sums [`EnsembleSums::merge`] into exactly the sums of the
+/// whole ensemble.
+pub fn run_blocks_cancellable(
+    target: &Target<'_>,
+    settings: &EnsembleSettings,
+    blocks: Range<usize>,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<EnsembleSums, EnsembleError> {
     let dim = match target {
         Target::Nonlinear { model, mu0, .. } => {
             if mu0.len() != model.dim() {
@@ -421,7 +657,12 @@ pub fn run_ensemble_cancellable(
         Target::Nonlinear { model, .. } => model.noise_count(),
         Target::Linear { model, .. } => model.noise_count(),
     };
-    let blocks = settings.paths.div_ceil(BLOCK);
+    if blocks.start > blocks.end || blocks.end > settings.paths.div_ceil(BLOCK) {
+        return Err(EnsembleError::Invalid {
+            field: "blocks",
+            message: format!("{blocks:?} is not a range of the {} blocks", settings.paths.div_ceil(BLOCK)),
+        });
+    }
     let run_block = |block: usize| -> Accumulator {
         let mut acc = Accumulator::new(n_times, dim, settings.observable.bins);
         if cancel.load(Ordering::Relaxed) {
@@ -505,47 +746,25 @@ pub fn run_ensemble_cancellable(
         progress((last - first) as u64);
         acc
     };
-    // Blocks run in waves of WAVE and are merged in block order after each
-    // wave: the same order as merging them all at the end (so the numbers do
-    // not depend on the thread count), with memory for one wave instead of
-    // one set of statistics per block (10^6 paths held 0.69 GB).
-    let mut total = Accumulator::new(n_times, dim, settings.observable.bins);
-    let mut start = 0;
-    while start < blocks {
+    // Blocks run in waves of WAVE and are added into the exact sums after
+    // each wave, with memory for one wave instead of one set of statistics
+    // per block (10^6 paths held 0.69 GB).
+    let mut total = EnsembleSums::empty(n_times, dim, settings.observable.bins);
+    let mut start = blocks.start;
+    while start < blocks.end {
         if cancel.load(Ordering::Relaxed) {
             return Err(EnsembleError::Cancelled);
         }
-        let end = (start + WAVE).min(blocks);
+        let end = (start + WAVE).min(blocks.end);
         let partial: Vec<Accumulator> = (start..end).into_par_iter().map(&run_block).collect();
-        for p in &partial {
-            total.merge(p);
+        for (block, p) in (start..end).zip(&partial) {
+            let first = block * BLOCK;
+            total.add_block(p, ((first + BLOCK).min(settings.paths) - first) as u64);
         }
         start = end;
     }
     if cancel.load(Ordering::Relaxed) {
         return Err(EnsembleError::Cancelled);
     }
-    let np = settings.paths as f64;
-    let norm_mean: Vec<f64> = total.norm_sum.iter().map(|s| s / np).collect();
-    let norm_std_error = total
-        .norm_sumsq
-        .iter()
-        .zip(&norm_mean)
-        .map(|(sq, m)| {
-            let var = (sq / np - m * m).max(0.0) * np / (np - 1.0).max(1.0);
-            (var / np).sqrt()
-        })
-        .collect();
-    Ok(EnsembleStats {
-        times: (0..n_times).map(|k| k as f64 * stride as f64 * dt).collect(),
-        mean: total.mean.iter().map(|m| m.iter().map(|x| x / np).collect()).collect(),
-        histogram: total.histogram,
-        norm_mean,
-        norm_std_error,
-        exceedance: total.exceed.iter().map(|&c| c as f64 / np).collect(),
-        casimir_drift: total.drift,
-        observable_extent: (total.lo, total.hi),
-        paths: settings.paths,
-        steps,
-    })
+    Ok(total)
 }

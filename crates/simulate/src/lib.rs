@@ -30,6 +30,7 @@
 #![warn(missing_docs)]
 
 mod ensemble;
+mod exact_sum;
 mod kernel;
 mod model;
 mod report;
@@ -37,10 +38,14 @@ mod scheme;
 mod study;
 
 pub use ensemble::{
-    path_rng, run_ensemble, run_ensemble_cancellable, EnsembleError, EnsembleSettings, EnsembleStats, Observable,
-    Target,
+    block_paths, path_rng, run_blocks_cancellable, run_ensemble, run_ensemble_cancellable, shard_blocks, EnsembleError,
+    EnsembleSettings, EnsembleStats, EnsembleSums, Observable, Target, BLOCK,
 };
+pub use exact_sum::ExactSum;
 pub use model::Model;
 pub use report::study_report;
 pub use scheme::{LinearModel, Scheme, Stepper};
-pub use study::{prepare, run, run_cancellable, Exceedance, Prepared, Study, StudyError, StudySettings};
+pub use study::{
+    finish, prepare, run, run_cancellable, run_shard_cancellable, Exceedance, Prepared, Study, StudyError,
+    StudySettings, StudyShard,
+};

@@ -10,12 +10,16 @@
 //! cost; [`run`] runs a pilot ensemble (1% of the paths, at most 200) to size
 //! the observable's histogram, then the ensembles.
 
-use crate::ensemble::{run_ensemble_cancellable, EnsembleError, EnsembleSettings, EnsembleStats, Observable, Target};
+use crate::ensemble::{
+    run_blocks_cancellable, run_ensemble_cancellable, shard_blocks, EnsembleError, EnsembleSettings, EnsembleStats,
+    EnsembleSums, Observable, Target,
+};
 use crate::model::Model;
 use crate::scheme::{LinearModel, Scheme};
 use casimir::System;
 use generator::{Analysis, SecondMoments};
 use nalgebra::DMatrix;
+use serde_json::{json, Value};
 use std::sync::atomic::AtomicBool;
 
 /// What a study is asked for.
@@ -253,6 +257,128 @@ pub fn run_cancellable(
     tick: &(dyn Fn(u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<Study, StudyError> {
+    let whole = run_shard_cancellable(prep, 0, 1, tick, cancel)?;
+    Ok(finish(prep, &whole))
+}
+
+/// One shard of a study: the exact sums of its share of the paths of each
+/// ensemble (see [`run_shard_cancellable`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StudyShard {
+    /// Which shard (`0..count`).
+    pub index: u64,
+    /// How many shards the study was split into.
+    pub count: u64,
+    /// The histogram range, from the pilot run (the same in every shard).
+    pub histogram_range: (f64, f64),
+    /// The nonlinear ensemble's sums over this shard's paths.
+    pub nonlinear: EnsembleSums,
+    /// The linearised ensemble's sums (stable systems).
+    pub linear: Option<EnsembleSums>,
+}
+
+impl StudyShard {
+    /// Add another shard's sums (exactly).
+    pub fn merge(&mut self, other: &StudyShard) {
+        self.nonlinear.merge(&other.nonlinear);
+        if let (Some(a), Some(b)) = (self.linear.as_mut(), other.linear.as_ref()) {
+            a.merge(b);
+        }
+    }
+}
+
+impl StudyShard {
+    /// The shard as JSON (`index`, `count`, `histogram_range` and each
+    /// ensemble's [`EnsembleSums::to_json`]): what `verify simulate --shard`
+    /// writes, beside the identity of the study it belongs to.
+    pub fn to_json(&self) -> Value {
+        json!({
+            "index": self.index,
+            "count": self.count,
+            "histogram_range": [self.histogram_range.0, self.histogram_range.1],
+            "nonlinear": self.nonlinear.to_json(),
+            "linearised": self.linear.as_ref().map(EnsembleSums::to_json),
+        })
+    }
+
+    /// Read [`Self::to_json`] (found at JSON path `at`) as a shard of the
+    /// study `prep`: the shapes, the path counts of the shard's blocks and
+    /// the presence of the linearised ensemble are checked. An error names
+    /// the JSON path and what is wrong.
+    pub fn from_json(v: &Value, at: &str, prep: &Prepared<'_>) -> Result<StudyShard, String> {
+        let count_of = |name: &str| -> Result<u64, String> {
+            v.get(name).and_then(Value::as_u64).ok_or_else(|| format!("{at}.{name}: expected a count"))
+        };
+        let (index, count) = (count_of("index")?, count_of("count")?);
+        if count == 0 || index >= count {
+            return Err(format!("{at}.index: shard {index} of {count} does not exist"));
+        }
+        let range = v
+            .get("histogram_range")
+            .and_then(Value::as_array)
+            .filter(|a| a.len() == 2)
+            .and_then(|a| Some((a[0].as_f64()?, a[1].as_f64()?)))
+            .filter(|(lo, hi)| lo.is_finite() && hi.is_finite() && lo < hi)
+            .ok_or_else(|| format!("{at}.histogram_range: expected [lo, hi] with lo < hi"))?;
+        let settings = main_settings(prep, range);
+        let steps = settings.steps();
+        let times = (steps / (steps / settings.outputs as u64).max(1)) as usize + 1;
+        let (dim, bins) = (prep.x0.len(), settings.observable.bins);
+        let paths = crate::ensemble::block_paths(settings.paths, &shard_blocks(settings.paths, index, count)).len();
+        let read = |name: &str| -> Result<EnsembleSums, String> {
+            let sums = EnsembleSums::from_json(
+                v.get(name).ok_or_else(|| format!("{at}.{name}: missing"))?,
+                &format!("{at}.{name}"),
+                times,
+                dim,
+                bins,
+            )?;
+            if sums.paths != paths as u64 {
+                return Err(format!(
+                    "{at}.{name}.paths: shard {index} of {count} runs {paths} paths, the file says {}",
+                    sums.paths
+                ));
+            }
+            Ok(sums)
+        };
+        let nonlinear = read("nonlinear")?;
+        let stable = prep.analysis.stable.is_some() && prep.analysis.linearisation.is_some();
+        let linear = match (stable, v.get("linearised")) {
+            (true, _) => Some(read("linearised")?),
+            (false, None | Some(Value::Null)) => None,
+            (false, Some(_)) => return Err(format!("{at}.linearised: present, but the system is not stable")),
+        };
+        Ok(StudyShard { index, count, histogram_range: range, nonlinear, linear })
+    }
+}
+
+/// The ensembles' settings once the pilot run has fixed the histogram range.
+fn main_settings(prep: &Prepared<'_>, range: (f64, f64)) -> EnsembleSettings {
+    EnsembleSettings {
+        observable: Observable { lo: range.0, hi: range.1, ..prep.ensemble.observable },
+        ..prep.ensemble.clone()
+    }
+}
+
+/// Run shard `index` of `count` of a prepared study: the pilot run (every
+/// shard runs it whole, so all agree on the histogram range), then this
+/// shard's blocks of paths ([`crate::shard_blocks`]) of the nonlinear and,
+/// when stable, the linearised ensemble. The shards of a study,
+/// [`StudyShard::merge`]d, give exactly the sums one run finds, so
+/// [`finish`] gives the same study to the last bit whatever the split.
+pub fn run_shard_cancellable(
+    prep: &Prepared<'_>,
+    index: u64,
+    count: u64,
+    tick: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<StudyShard, StudyError> {
+    if count == 0 || index >= count {
+        return Err(StudyError::Ensemble(EnsembleError::Invalid {
+            field: "shard",
+            message: format!("shard {index} of {count} does not exist"),
+        }));
+    }
     let target = Target::Nonlinear { model: &prep.model, scheme: prep.scheme, mu0: prep.mu0.clone() };
     // A pilot run (1% of the paths, at most 200) finds the range the
     // observable actually explores, for the histogram.
@@ -263,21 +389,32 @@ pub fn run_cancellable(
     }
     let half = 0.5 * (extent.1 - extent.0).max(1e-9);
     let centre = 0.5 * (extent.0 + extent.1);
-    let settings = EnsembleSettings {
-        observable: Observable { lo: centre - 1.2 * half, hi: centre + 1.2 * half, ..prep.ensemble.observable },
-        ..prep.ensemble.clone()
-    };
-    let nonlinear = run_ensemble_cancellable(&target, &settings, tick, cancel)?;
-    let stable = prep.analysis.stable.as_ref();
-    let n = prep.x0.len();
-    let linear = match (stable, &prep.analysis.linearisation) {
+    let histogram_range = (centre - 1.2 * half, centre + 1.2 * half);
+    let settings = main_settings(prep, histogram_range);
+    let blocks = shard_blocks(settings.paths, index, count);
+    let nonlinear = run_blocks_cancellable(&target, &settings, blocks.clone(), tick, cancel)?;
+    let linear = match (prep.analysis.stable.as_ref(), &prep.analysis.linearisation) {
         (Some(_), Some(lin)) => {
             let lm = LinearModel::new(lin);
+            let n = prep.x0.len();
             let s = EnsembleSettings { norm: Some((prep.p.clone(), vec![0.0; n])), ..settings.clone() };
-            Some(run_ensemble_cancellable(&Target::Linear { model: &lm, x0: prep.x0.clone() }, &s, tick, cancel)?)
+            let target = Target::Linear { model: &lm, x0: prep.x0.clone() };
+            Some(run_blocks_cancellable(&target, &s, blocks, tick, cancel)?)
         }
         _ => None,
     };
+    Ok(StudyShard { index, count, histogram_range, nonlinear, linear })
+}
+
+/// The study from the sums of all its paths (one shard, or every shard of
+/// a split merged): the ensembles' statistics, the exact second moments of
+/// the linearised SDE, the worst start, the bound and the exceedance
+/// levels.
+pub fn finish(prep: &Prepared<'_>, sums: &StudyShard) -> Study {
+    let settings = main_settings(prep, sums.histogram_range);
+    let nonlinear = sums.nonlinear.finish(&settings);
+    let stable = prep.analysis.stable.as_ref();
+    let linear = sums.linear.as_ref().map(|l| l.finish(&settings));
     // Exact moments of the linearised SDE from x0, the worst case, the exponent.
     let moments = prep.analysis.linearisation.as_ref().map(SecondMoments::new);
     let times = &nonlinear.times;
@@ -308,8 +445,8 @@ pub fn run_cancellable(
             Exceedance { level, certified_until, empirical_first_exceeded }
         })
         .collect();
-    Ok(Study {
-        histogram_range: (settings.observable.lo, settings.observable.hi),
+    Study {
+        histogram_range: sums.histogram_range,
         nonlinear,
         linear,
         exact_over_delta,
@@ -317,5 +454,5 @@ pub fn run_cancellable(
         bound_over_delta,
         lyapunov,
         exceedance,
-    })
+    }
 }
