@@ -72,9 +72,61 @@ fn check_error(py: Python<'_>, e: &spec::CheckError) -> PyErr {
 #[pyfunction]
 #[pyo3(signature = (text, base=None))]
 fn certify_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<String> {
-    let out =
-        py.detach(move || spec::parse_any_spec_in(&text, base.as_deref()).map(|s| spec::to_pretty_json(&s.certify())));
-    out.map_err(|e| spec_error(py, &e))
+    let spec = py.detach(move || spec::parse_any_spec_in(&text, base.as_deref())).map_err(|e| spec_error(py, &e))?;
+    match spec {
+        // Finite-dimensional systems certify in micro- to milliseconds:
+        // on this thread, without the cost of another.
+        spec::AnySpec::Lie(_) => Ok(py.detach(move || spec::to_pretty_json(&spec.certify()))),
+        // Fluids, the Zeitlin model and large systems can take many seconds
+        // (a Zeitlin certificate at N = 2048: about 30 s).
+        _ => abandonable(py, move || spec::to_pretty_json(&spec.certify())),
+    }
+}
+
+/// Run `work` on its own thread while this one, without the GIL, wakes
+/// every 100 ms to honour Ctrl-C. On an interrupt the `KeyboardInterrupt`
+/// is raised at once and the work is abandoned: its thread runs to the end
+/// in the background and its result is dropped (the certification
+/// pipelines have no points where they could stop early, unlike `simulate`
+/// and `sweep`, which stop between blocks of work).
+fn abandonable<R: Send + 'static>(py: Python<'_>, work: impl FnOnce() -> R + Send + 'static) -> PyResult<R> {
+    type Slot<R> = std::sync::Mutex<Option<std::thread::Result<R>>>;
+    let shared: std::sync::Arc<(Slot<R>, std::sync::Condvar)> =
+        std::sync::Arc::new((std::sync::Mutex::new(None), std::sync::Condvar::new()));
+    let theirs = std::sync::Arc::clone(&shared);
+    std::thread::Builder::new()
+        .name("energy-casimir-certify".into())
+        .spawn(move || {
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(work));
+            let (slot, wake) = &*theirs;
+            *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(result);
+            wake.notify_all();
+        })
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot start a thread: {e}")))?;
+    loop {
+        let done = py.detach(|| {
+            let (slot, wake) = &*shared;
+            let guard = slot.lock().unwrap_or_else(|p| p.into_inner());
+            let (mut guard, _) = wake
+                .wait_timeout_while(guard, Duration::from_millis(100), |r| r.is_none())
+                .unwrap_or_else(|p| p.into_inner());
+            guard.take()
+        });
+        match done {
+            Some(Ok(r)) => return Ok(r),
+            Some(Err(payload)) => {
+                let text = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "unknown".into());
+                return Err(pyo3::panic::PanicException::new_err(format!(
+                    "the engine panicked (a bug: please report it): {text}"
+                )));
+            }
+            None => py.check_signals()?,
+        }
+    }
 }
 
 /// Check a certificate given as JSON text (files its spec names are relative
@@ -171,8 +223,11 @@ fn simulate_text(
     };
     let prepared =
         simulate::prepare(&spec.system, &cert.analysis, &settings).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    // The engine's threads (rayon: RAYON_NUM_THREADS or every core), counted
+    // only up to the cores that work, as `verify simulate` does.
+    let threads = rayon::current_num_threads();
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
-    let estimate = prepared.estimated_seconds(cores as f64);
+    let estimate = prepared.estimated_seconds(threads.min(cores) as f64);
     if estimate > 900.0 && !force {
         return Err(PyValueError::new_err(format!(
             "paths/dt/t_end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass force=True",
@@ -189,7 +244,7 @@ fn simulate_text(
     })?
     .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let verdict = cert.json["verdict"].as_str().unwrap_or_default();
-    let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, cores as u64);
+    let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, threads as u64);
     Ok(report.to_string())
 }
 

@@ -13,19 +13,23 @@ REPO = Path(__file__).resolve().parents[2]
 
 @pytest.fixture
 def interrupted():
-    """``interrupted(call, after)``: run ``energy_casimir.<call>`` in a child
-    Python from the repository root, send SIGINT ``after`` seconds into the
-    call, and assert that it ended with ``KeyboardInterrupt`` instead of
-    finishing (the call takes minutes when not interrupted)."""
+    """``interrupted(call, after, within=5)``: run ``energy_casimir.<call>``
+    in a child Python from the repository root, send SIGINT ``after``
+    seconds into the call, and assert that it ended with
+    ``KeyboardInterrupt`` within ``within`` seconds of the signal instead of
+    finishing (the call takes far longer when not interrupted; an interrupt
+    honoured only when the call returns fails the time limit)."""
 
-    def run(call: str, after: float) -> None:
+    def run(call: str, after: float, within: float = 5.0) -> None:
         code = f"import energy_casimir as ec\nprint('started', flush=True)\nec.{call}\nprint('finished', flush=True)\n"
         child = subprocess.Popen([sys.executable, "-c", code], cwd=REPO, stdout=subprocess.PIPE,
                                  stderr=subprocess.PIPE, text=True)
         assert child.stdout.readline().strip() == "started"
         time.sleep(after)
         child.send_signal(signal.SIGINT)
+        sent = time.monotonic()
         out, err = child.communicate(timeout=120)
+        assert time.monotonic() - sent < within, f"the interrupt took {time.monotonic() - sent:.1f} s"
         assert "finished" not in out
         assert "KeyboardInterrupt" in err, err
         assert child.returncode != 0

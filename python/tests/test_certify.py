@@ -281,3 +281,15 @@ def test_errors_pickle_with_their_fields_and_read_errors_keep_their_kind(tmp_pat
         ec.certify(tmp_path)
     with pytest.raises(ValueError):
         ec.certify("   ")
+
+
+def test_ctrl_c_ends_a_long_certify(interrupted):
+    """The energy–Casimir–momentum search of a Zeitlin state at N = 1024
+    takes about 10 s; SIGINT two seconds in raises KeyboardInterrupt at
+    once (the work is abandoned)."""
+    spec = {
+        "name": "zeitlin-n1024-energy",
+        "zeitlin": {"N": 1024, "equilibrium": "z + 0.3*z^3", "noise": ["0.1*z^2"]},
+        "settings": {"casimir_momentum": False},
+    }
+    interrupted(f"certify({spec!r})", 2.0)

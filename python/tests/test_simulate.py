@@ -102,3 +102,27 @@ def test_progress_counts_both_ensembles_and_ctrl_c_stops_a_long_run(interrupted)
                 progress=lambda done, total: calls.append((done, total)))
     assert calls[-1] == (6000, 6000)  # stable: the nonlinear and the linearised ensemble
     interrupted("simulate('fixtures/rigid-body-major-axis.json', paths=400000, t_end=200.0, force=True)", 2.0)
+
+
+def test_the_report_counts_the_engine_threads():
+    """RAYON_NUM_THREADS sets the engine's threads: the report records them
+    (and the time estimate counts them), as `verify simulate` does."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import energy_casimir as ec, sys; "
+        "r = ec.simulate(sys.argv[1], paths=64, t_end=1.0, outputs=10); "
+        "print(r['parameters']['threads'])"
+    )
+    for threads in ("1", "3"):
+        env = {**os.environ, "RAYON_NUM_THREADS": threads}
+        out = subprocess.run(
+            [sys.executable, "-c", code, str(FIXTURES / "rigid-body-major-axis.json")],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        assert out.stdout.strip() == threads
