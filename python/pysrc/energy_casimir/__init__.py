@@ -501,23 +501,14 @@ def sweep(
         shard=shard_text,
         progress=progress,
     )
-    pairs = sorted(((json.loads(line), line) for line in out.splitlines() if line.strip()), key=lambda p: p[0]["index"])
-    records = [r for r, _ in pairs]
-    nan = float("nan")
-
-    def num(x: Any) -> float:
-        # "infinity": T for Sigma^2 = 0 (stable for all time), not missing.
-        if x == "infinity":
-            return math.inf
-        return nan if x is None or isinstance(x, str) else float(x)
-
-    columns: Dict[str, Any] = {"index": np.array([r["index"] for r in records], dtype=np.int64)}
-    for n in names:
-        columns[n] = np.array([r["parameters"][n] for r in records], dtype=float)
-    columns["verdict"] = [r.get("verdict") for r in records]
-    columns["level"] = [r.get("level") for r in records]
-    columns["sigma2"] = np.array([num(r.get("sigma2")) for r in records], dtype=float)
-    columns["T"] = np.array([num(r.get("T")) for r in records], dtype=float)
-    columns["error"] = [r.get("error") for r in records]
-    columns["lines"] = [line for _, line in pairs]
+    index, values, verdict, level, sigma2, t, error, lines = out
+    columns: Dict[str, Any] = {"index": np.array(index, dtype=np.int64)}
+    for n, v in zip(names, values):
+        columns[n] = np.array(v, dtype=float)
+    columns["verdict"] = verdict
+    columns["level"] = level
+    columns["sigma2"] = np.array(sigma2, dtype=float)
+    columns["T"] = np.array(t, dtype=float)
+    columns["error"] = error
+    columns["lines"] = lines
     return columns

@@ -49,4 +49,16 @@ def sweep_text(
     numeric: bool = False,
     shard: Optional[str] = None,
     progress: Optional[Callable[[int, int], Any]] = None,
-) -> Tuple[List[str], str]: ...
+) -> Tuple[
+    List[str],
+    Tuple[
+        List[int],
+        List[List[float]],
+        List[Optional[str]],
+        List[Optional[str]],
+        List[float],
+        List[float],
+        List[Optional[str]],
+        List[str],
+    ],
+]: ...
