@@ -185,7 +185,7 @@ fn the_merge_refuses_what_is_not_the_study() {
         assert!(stderr(&o).contains(expected), "{what}: {}", stderr(&o));
     }
     let mut v: Value = serde_json::from_str(&text).unwrap();
-    v["shard"]["nonlinear"]["paths"] = Value::from(1);
+    v["shard"]["nonlinear"]["paths"] = Value::from(5000);
     let bad = parts.join("bad-paths.json");
     std::fs::write(&bad, v.to_string()).unwrap();
     let o = merge(&out, &[bad.to_string_lossy().into_owned()], &[]);
@@ -196,6 +196,43 @@ fn the_merge_refuses_what_is_not_the_study() {
     let o = merge(&out, &[truncated.to_string_lossy().into_owned()], &[]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("not JSON"), "{}", stderr(&o));
+
+    // Counts above the paths summed (a merge would overflow or report an
+    // exceedance above 1).
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["shard"]["nonlinear"]["histogram"][0][0] = Value::from(u64::MAX);
+    let bad = parts.join("bad-counts.json");
+    std::fs::write(&bad, v.to_string()).unwrap();
+    let o = merge(&out, &[bad.to_string_lossy().into_owned()], &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("$.shard.nonlinear.histogram[0]"), "{}", stderr(&o));
+
+    // Another histogram range (the pilot of another engine): not added.
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&files[2]).unwrap()).unwrap();
+    let lo = v["shard"]["histogram_range"][0].as_f64().unwrap();
+    v["shard"]["histogram_range"][0] = Value::from(lo - 1e-9);
+    let moved = parts.join("moved-range.json");
+    std::fs::write(&moved, v.to_string()).unwrap();
+    let mut mixed = files[..2].to_vec();
+    mixed.push(moved.to_string_lossy().into_owned());
+    let o = merge(&out, &mixed, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("histogram_range"), "{}", stderr(&o));
+
+    // A split into 10^18 shards: shard 0 has no paths; the merge counts the
+    // missing ones instead of listing them all (it used to loop 10^18 times).
+    let huge = dir("refuse-huge");
+    let mut args = options(&["--shard", "0/1000000000000000000"]);
+    args.extend(["--out".into(), huge.to_string_lossy().into_owned()]);
+    let o = run(&args, "1");
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = merge(&out, &shard_files(&huge), &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("incomplete: 999999999999999999 of the 1000000000000000000 shards are missing (1, 2, 3"),
+        "{}",
+        stderr(&o)
+    );
 
     for shard in ["3/3", "1/0", "x", "1/2/3"] {
         let mut args = options(&["--shard", shard]);

@@ -101,6 +101,9 @@ fn abandonable<R: Send + 'static>(py: Python<'_>, work: impl FnOnce() -> R + Sen
     let theirs = std::sync::Arc::clone(&shared);
     std::thread::Builder::new()
         .name("energy-casimir-certify".into())
+        // The main thread's usual 8 MiB, not a spawned thread's 2 MiB: the
+        // work used to run on the calling thread.
+        .stack_size(8 << 20)
         .spawn(move || {
             let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(work));
             let (slot, wake) = &*theirs;

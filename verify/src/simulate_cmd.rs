@@ -418,6 +418,7 @@ fn merge_shards(
     use std::collections::BTreeMap;
     let mut shards: BTreeMap<u64, (simulate::StudyShard, String)> = BTreeMap::new();
     let mut count: Option<(u64, String)> = None;
+    let mut reference: Option<((f64, f64), String, String)> = None;
     for path in files {
         let at = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{at}: cannot read: {e}")))?;
@@ -444,6 +445,20 @@ fn merge_shards(
         let shard_json = v.get("shard").ok_or_else(|| bad(format!("{at}: $.shard: missing")))?;
         let shard =
             simulate::StudyShard::from_json(shard_json, "$.shard", prepared).map_err(|m| bad(format!("{at}: {m}")))?;
+        // Shards of one study share the pilot run's histogram range and the
+        // engine that ran them (another engine may bin or integrate
+        // differently): their counts are only added when both agree.
+        let engine = v.get("engine").and_then(serde_json::Value::as_str).unwrap_or_default().to_string();
+        match &reference {
+            Some((range, eng, first)) if (*range != shard.histogram_range || *eng != engine) => {
+                return Err(Failure::Failed(format!(
+                    "{at}: $.shard.histogram_range or $.engine differs from {first}'s ({:?} from engine {eng} here {:?} from engine {engine}): shards of different engines do not merge",
+                    range, shard.histogram_range
+                )))
+            }
+            Some(_) => {}
+            None => reference = Some((shard.histogram_range, engine, at.clone())),
+        }
         match &count {
             Some((n, first)) if *n != shard.count => {
                 return Err(Failure::Failed(format!(
@@ -468,13 +483,15 @@ fn merge_shards(
         }
     }
     let n = count.map_or(0, |(n, _)| n);
-    let missing: Vec<String> = (0..n).filter(|k| !shards.contains_key(k)).map(|k| k.to_string()).collect();
-    if !missing.is_empty() {
-        let shown = missing.iter().take(10).cloned().collect::<Vec<_>>().join(", ");
+    // Counted, not listed: N comes from the files and may be huge. The first
+    // ten missing indices lie below the number of shards given plus ten.
+    let missing = n - shards.len() as u64;
+    if missing > 0 {
+        let shown: Vec<String> = (0..n).filter(|k| !shards.contains_key(k)).take(10).map(|k| k.to_string()).collect();
         return Err(Failure::Failed(format!(
-            "incomplete: {} of the {n} shards are missing ({shown}{}); run them with --shard K/{n}",
-            missing.len(),
-            if missing.len() > 10 { ", ..." } else { "" }
+            "incomplete: {missing} of the {n} shards are missing ({}{}); run them with --shard K/{n}",
+            shown.join(", "),
+            if missing > 10 { ", ..." } else { "" }
         )));
     }
     let mut all = shards.into_values().map(|(s, _)| s);

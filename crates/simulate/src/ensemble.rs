@@ -471,6 +471,17 @@ impl EnsembleSums {
         let float = |name: &str| -> Result<f64, String> {
             float_from_json(field(name)?).ok_or_else(|| format!("{at}.{name}: expected a number"))
         };
+        // No count exceeds the paths summed (so merged counts cannot overflow
+        // and no exceedance exceeds 1).
+        for (k, row) in histogram.iter().enumerate() {
+            if row.iter().try_fold(0u64, |a, &c| a.checked_add(c)).is_none_or(|total| total > paths) {
+                return Err(format!("{at}.histogram[{k}]: counts more than the {paths} paths"));
+            }
+        }
+        let exceed = counts(field("exceed")?, format!("{at}.exceed"), times)?;
+        if let Some(k) = exceed.iter().position(|&c| c > paths) {
+            return Err(format!("{at}.exceed[{k}]: more than the {paths} paths"));
+        }
         let extent = array(field("extent")?, format!("{at}.extent"), 2)?;
         let bound =
             |i: usize| float_from_json(&extent[i]).ok_or_else(|| format!("{at}.extent[{i}]: expected a number"));
@@ -480,7 +491,7 @@ impl EnsembleSums {
             norm_sum: sums(field("norm_sum")?, format!("{at}.norm_sum"), times)?,
             norm_sumsq: sums(field("norm_sumsq")?, format!("{at}.norm_sumsq"), times)?,
             histogram,
-            exceed: counts(field("exceed")?, format!("{at}.exceed"), times)?,
+            exceed,
             casimir_drift: float("casimir_drift")?,
             extent: (bound(0)?, bound(1)?),
         })

@@ -185,7 +185,7 @@ pub(super) fn analyse_generator(
             let mode = BarotropicMode::new(&fine, &coef, k, sound_speed, c);
             let s = mode.sigma2(tol)?;
             let sigma2 = s.lambda_max.max(0.0);
-            let (upper, form_verified) = verified_upper(sigma2, &s.ritz, |bar| mode.verify(bar));
+            let (upper, form_verified) = verified_upper(sigma2, &s.ritz, 0, |bar| mode.verify(bar));
             Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
         })
         .collect();

@@ -106,7 +106,11 @@ pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSetting
             // Mode::sigma2 never returns a non-finite value; flooring NaN at 0
             // would round towards "stable".
             let sigma2 = s.lambda_max.max(0.0);
-            let (upper, form_verified) = verified_upper(sigma2, &s.ritz, |bar| mode.verify(&form, &coef, bar));
+            let rung = match fine.boundary() {
+                crate::grid::Boundary::Walls => first_rung(fine.n()),
+                crate::grid::Boundary::Periodic => 0,
+            };
+            let (upper, form_verified) = verified_upper(sigma2, &s.ritz, rung, |bar| mode.verify(&form, &coef, bar));
             Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
         })
         .collect();
