@@ -296,7 +296,7 @@ pub(super) fn verified_upper(
     (None, form_verified)
 }
 
-/// The first rung of the margin ladder of [`verified_upper`] on a walls
+/// The first rung of the margin ladder of `verified_upper` on a walls
 /// grid with `unknowns` interior unknowns. Up to
 /// [`crate::modes::DENSE_FALLBACK_UNKNOWNS`] the dense fallback can prove
 /// the narrowest margin, so the ladder starts at its bottom. Above, only the
