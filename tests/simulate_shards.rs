@@ -217,7 +217,16 @@ fn the_merge_refuses_what_is_not_the_study() {
     mixed.push(moved.to_string_lossy().into_owned());
     let o = merge(&out, &mixed, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("histogram_range"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("$.shard.histogram_range"), "{}", stderr(&o));
+
+    // A shard written by another engine version.
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["engine"] = Value::from("0.0.1");
+    let old = parts.join("old-engine.json");
+    std::fs::write(&old, v.to_string()).unwrap();
+    let o = merge(&out, &[old.to_string_lossy().into_owned()], &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("$.engine"), "{}", stderr(&o));
 
     // A split into 10^18 shards: shard 0 has no paths; the merge counts the
     // missing ones instead of listing them all (it used to loop 10^18 times).

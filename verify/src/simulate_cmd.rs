@@ -195,10 +195,8 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     };
     // Everything that fixes the numbers of the study: shards of one study
     // carry the same identity, and `--merge` insists on it.
-    let raw: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let identity = json!({
-        "spec_digest": spec::spec_digest(&raw),
+        "spec_digest": spec::spec_digest(&spec.raw),
         "name": spec.name,
         "paths": settings.paths,
         "dt": settings.dt,
@@ -418,7 +416,7 @@ fn merge_shards(
     use std::collections::BTreeMap;
     let mut shards: BTreeMap<u64, (simulate::StudyShard, String)> = BTreeMap::new();
     let mut count: Option<(u64, String)> = None;
-    let mut reference: Option<((f64, f64), String, String)> = None;
+    let mut range: Option<((f64, f64), String)> = None;
     for path in files {
         let at = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{at}: cannot read: {e}")))?;
@@ -445,19 +443,26 @@ fn merge_shards(
         let shard_json = v.get("shard").ok_or_else(|| bad(format!("{at}: $.shard: missing")))?;
         let shard =
             simulate::StudyShard::from_json(shard_json, "$.shard", prepared).map_err(|m| bad(format!("{at}: {m}")))?;
-        // Shards of one study share the pilot run's histogram range and the
-        // engine that ran them (another engine may bin or integrate
-        // differently): their counts are only added when both agree.
-        let engine = v.get("engine").and_then(serde_json::Value::as_str).unwrap_or_default().to_string();
-        match &reference {
-            Some((range, eng, first)) if (*range != shard.histogram_range || *eng != engine) => {
+        // Another engine may integrate or bin differently: only this one's
+        // shards are merged, and they all ran the same pilot (one
+        // histogram range).
+        let engine = v.get("engine").and_then(serde_json::Value::as_str).unwrap_or_default();
+        if engine != env!("CARGO_PKG_VERSION") {
+            return Err(Failure::Failed(format!(
+                "{at}: $.engine: written by engine {}, not this one ({}); rerun the shard",
+                excerpt(engine),
+                env!("CARGO_PKG_VERSION")
+            )));
+        }
+        match &range {
+            Some((r, first)) if *r != shard.histogram_range => {
                 return Err(Failure::Failed(format!(
-                    "{at}: $.shard.histogram_range or $.engine differs from {first}'s ({:?} from engine {eng} here {:?} from engine {engine}): shards of different engines do not merge",
-                    range, shard.histogram_range
+                    "{at}: $.shard.histogram_range: {:?}, but {first} has {r:?}: the shards' pilot runs differ",
+                    shard.histogram_range
                 )))
             }
             Some(_) => {}
-            None => reference = Some((shard.histogram_range, engine, at.clone())),
+            None => range = Some((shard.histogram_range, at.clone())),
         }
         match &count {
             Some((n, first)) if *n != shard.count => {
