@@ -26,10 +26,6 @@ fn certify_text(name: &str, text: &str) -> Output {
     verify(&["certify", path.to_str().unwrap()])
 }
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
 /// Certify a fixture through the CLI and return the certificate.
 fn certify_fixture(name: &str) -> Value {
     let out = verify(&["certify", fixture_path(name).to_str().unwrap()]);
@@ -312,15 +308,6 @@ fn tampered_verified_numbers_fail_check() {
         let out = verify(&["check", path.to_str().unwrap()]);
         assert_eq!(out.status.code(), Some(1), "{what}: {}", stderr(&out));
     }
-}
-
-fn simulate(args: &[&str], threads: &str) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_verify"))
-        .arg("simulate")
-        .args(args)
-        .env("RAYON_NUM_THREADS", threads)
-        .output()
-        .unwrap()
 }
 
 /// `verify simulate` writes the charts and the numbers; the same seed gives

@@ -9,20 +9,7 @@ mod common;
 use common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn simulate(args: &[&str], threads: &str) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_verify"))
-        .arg("simulate")
-        .args(args)
-        .env("RAYON_NUM_THREADS", threads)
-        .output()
-        .expect("run verify")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use std::process::Output;
 
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("verify-shards-{}-{name}", std::process::id()));

@@ -99,3 +99,18 @@ pub fn proptest_config(cases: u32, heavy: u32) -> ProptestConfig {
         ..ProptestConfig::default()
     }
 }
+
+/// `verify simulate ARGS` with `RAYON_NUM_THREADS=threads`.
+pub fn simulate(args: &[&str], threads: &str) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_verify"))
+        .arg("simulate")
+        .args(args)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .expect("run verify")
+}
+
+/// A process's stderr as text.
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
