@@ -11,11 +11,12 @@
 //! `ValueError`) with `.path`, `.message` and `.kind` (`"failed"`: a claim
 //! does not hold; `"bad_input"`: the certificate or its spec is not valid).
 
+use outcome::Progress;
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 // The same allocator as the `verify` binary, so that the engine runs at the
@@ -74,80 +75,47 @@ fn check_error(py: Python<'_>, e: &spec::CheckError) -> PyErr {
 /// Certify a spec given as JSON text; files it names (a Zeitlin field's
 /// `.npy`) are relative to `base` (the current folder when `None`). Returns
 /// the certificate as pretty JSON text, as `verify certify` writes it.
+/// Fluid, Zeitlin and large specs run on a worker thread: Ctrl-C stops them
+/// (the engine stops at its next step and the `KeyboardInterrupt` is
+/// raised), and `progress(done, total)` is called from the calling thread
+/// as the steps go by.
 #[pyfunction]
-#[pyo3(signature = (text, base=None))]
-fn certify_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<String> {
+#[pyo3(signature = (text, base=None, progress=None))]
+fn certify_text(
+    py: Python<'_>,
+    text: String,
+    base: Option<PathBuf>,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<String> {
     let spec = py.detach(move || spec::parse_any_spec_in(&text, base.as_deref())).map_err(|e| spec_error(py, &e))?;
-    match spec {
+    let state = Progress::new();
+    if matches!(spec, spec::AnySpec::Lie(_)) && progress.is_none() {
         // Finite-dimensional systems certify in micro- to milliseconds:
         // on this thread, without the cost of another.
-        spec::AnySpec::Lie(_) => Ok(py.detach(move || spec::to_pretty_json(&spec.certify()))),
-        // Fluids, the Zeitlin model and large systems can take many seconds
-        // (a Zeitlin certificate at N = 2048: about 30 s).
-        _ => abandonable(py, move || spec::to_pretty_json(&spec.certify())),
+        return Ok(py.detach(|| spec::to_pretty_json(&spec.certify())));
     }
-}
-
-/// Run `work` on its own thread while this one, without the GIL, wakes
-/// every 100 ms to honour Ctrl-C. On an interrupt the `KeyboardInterrupt`
-/// is raised at once and the work is abandoned: its thread runs to the end
-/// in the background and its result is dropped (the certification
-/// pipelines have no points where they could stop early, unlike `simulate`
-/// and `sweep`, which stop between blocks of work).
-fn abandonable<R: Send + 'static>(py: Python<'_>, work: impl FnOnce() -> R + Send + 'static) -> PyResult<R> {
-    type Slot<R> = std::sync::Mutex<Option<std::thread::Result<R>>>;
-    let shared: std::sync::Arc<(Slot<R>, std::sync::Condvar)> =
-        std::sync::Arc::new((std::sync::Mutex::new(None), std::sync::Condvar::new()));
-    let theirs = std::sync::Arc::clone(&shared);
-    std::thread::Builder::new()
-        .name("energy-casimir-certify".into())
-        // The main thread's usual 8 MiB, not a spawned thread's 2 MiB: the
-        // work used to run on the calling thread.
-        .stack_size(8 << 20)
-        .spawn(move || {
-            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(work));
-            let (slot, wake) = &*theirs;
-            *slot.lock().unwrap_or_else(|p| p.into_inner()) = Some(result);
-            wake.notify_all();
-        })
-        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot start a thread: {e}")))?;
-    loop {
-        let done = py.detach(|| {
-            let (slot, wake) = &*shared;
-            let guard = slot.lock().unwrap_or_else(|p| p.into_inner());
-            let (mut guard, _) = wake
-                .wait_timeout_while(guard, Duration::from_millis(100), |r| r.is_none())
-                .unwrap_or_else(|p| p.into_inner());
-            guard.take()
-        });
-        match done {
-            Some(Ok(r)) => return Ok(r),
-            Some(Err(payload)) => {
-                let text = payload
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| payload.downcast_ref::<String>().cloned())
-                    .unwrap_or_else(|| "unknown".into());
-                return Err(pyo3::panic::PanicException::new_err(format!(
-                    "the engine panicked (a bug: please report it): {text}"
-                )));
-            }
-            None => py.check_signals()?,
-        }
-    }
+    let out =
+        interruptible(py, progress.as_ref(), &state, || spec.certify_with(&state).map(|v| spec::to_pretty_json(&v)))?;
+    // `Err(Cancelled)` only follows an interrupt, which `interruptible`
+    // has raised already.
+    out.map_err(|e| pyo3::exceptions::PyKeyboardInterrupt::new_err(e.to_string()))
 }
 
 /// Check a certificate given as JSON text (files its spec names are relative
 /// to `base`). Returns `(name, verdict, level, sigma2)`; `level` and
-/// `sigma2` may be `None`.
+/// `sigma2` may be `None`. The re-derivation runs on a worker thread, so
+/// Ctrl-C stops a long one and `progress(done, total)` follows it.
 #[pyfunction]
-#[pyo3(signature = (text, base=None))]
+#[pyo3(signature = (text, base=None, progress=None))]
 fn check_text(
     py: Python<'_>,
     text: String,
     base: Option<PathBuf>,
+    progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<(String, String, Option<String>, Option<f64>)> {
-    let out = py.detach(move || spec::check_certificate_in(&text, base.as_deref()));
+    let state = Progress::new();
+    let out =
+        interruptible(py, progress.as_ref(), &state, || spec::check_certificate_with(&text, base.as_deref(), &state))?;
     match out {
         Ok(r) => Ok((r.name, r.verdict.as_str().to_string(), r.level.map(|l| l.as_str().to_string()), r.sigma2)),
         Err(e) => Err(check_error(py, &e)),
@@ -243,12 +211,10 @@ fn simulate_text(
             estimate / 60.0
         )));
     }
-    let total = paths as u64 * prepared.ensembles();
-    let study = interruptible(py, total, progress.as_ref(), |cancel, done| {
-        let tick = |n: u64| {
-            done.fetch_add(n, Ordering::Relaxed);
-        };
-        simulate::run_cancellable(&prepared, &tick, cancel)
+    let state = Progress::new();
+    state.plan(paths as u64 * prepared.ensembles());
+    let study = interruptible(py, progress.as_ref(), &state, || {
+        simulate::run_cancellable(&prepared, &|n: u64| state.step(n), state.cancel_flag())
     })?
     .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let verdict = cert.json["verdict"].as_str().unwrap_or_default();
@@ -259,18 +225,18 @@ fn simulate_text(
 /// Run `work` on a worker thread while this (the calling, usually the main)
 /// thread, without the GIL, wakes every 100 ms to honour Ctrl-C
 /// (`check_signals`, which only the main thread can) and to call
-/// `progress(done, total)` when `done` moved. On an interrupt `cancel` is
-/// set; `work` must then stop soon, and the interrupt is raised.
+/// `progress(done, total)` with `state`'s counts when they moved. On an
+/// interrupt (or an exception from `progress`) `state` is cancelled; `work`
+/// then stops at its next step, and the exception is raised once it has
+/// (the worker is joined: no work is left running).
 fn interruptible<R: Send>(
     py: Python<'_>,
-    total: u64,
     progress: Option<&Bound<'_, PyAny>>,
-    work: impl FnOnce(&AtomicBool, &AtomicU64) -> R + Send,
+    state: &Progress,
+    work: impl FnOnce() -> R + Send,
 ) -> PyResult<R> {
-    let cancel = AtomicBool::new(false);
-    let done = AtomicU64::new(0);
     let mut interrupt: Option<PyErr> = None;
-    let mut reported = u64::MAX;
+    let mut reported = (u64::MAX, u64::MAX);
     // Set (and the watcher woken) when `work` returns or unwinds.
     let finished = (std::sync::Mutex::new(false), std::sync::Condvar::new());
     struct Finished<'a>(&'a (std::sync::Mutex<bool>, std::sync::Condvar));
@@ -281,10 +247,19 @@ fn interruptible<R: Send>(
         }
     }
     let joined = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| {
-            let _finished = Finished(&finished);
-            work(&cancel, &done)
-        });
+        let worker = std::thread::Builder::new()
+            .name("energy-casimir".into())
+            // The main thread's usual 8 MiB, not a spawned thread's 2 MiB:
+            // parsing a deeply nested expression recurses.
+            .stack_size(8 << 20)
+            .spawn_scoped(scope, || {
+                let _finished = Finished(&finished);
+                work()
+            });
+        let worker = match worker {
+            Ok(w) => w,
+            Err(e) => return Err(e),
+        };
         loop {
             let over = py.detach(|| {
                 let (lock, wake) = &finished;
@@ -299,23 +274,25 @@ fn interruptible<R: Send>(
             }
             if interrupt.is_none() {
                 if let Err(e) = py.check_signals() {
-                    cancel.store(true, Ordering::Release);
+                    state.cancel();
                     interrupt = Some(e);
                 }
             }
-            let now = done.load(Ordering::Relaxed);
+            let now = state.snapshot();
             if let (Some(cb), None) = (progress, &interrupt) {
                 if now != reported {
                     reported = now;
-                    if let Err(e) = cb.call1((now, total)) {
-                        cancel.store(true, Ordering::Release);
+                    if let Err(e) = cb.call1(now) {
+                        state.cancel();
                         interrupt = Some(e);
                     }
                 }
             }
         }
-        py.detach(|| worker.join())
+        Ok(py.detach(|| worker.join()))
     });
+    let joined =
+        joined.map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(format!("cannot start a thread: {e}")))?;
     let result = joined.map_err(|payload| {
         let text = payload
             .downcast_ref::<&str>()
@@ -327,9 +304,9 @@ fn interruptible<R: Send>(
     if let Some(e) = interrupt {
         return Err(e);
     }
-    let now = done.load(Ordering::Relaxed);
+    let now = state.snapshot();
     if let (Some(cb), true) = (progress, now != reported) {
-        cb.call1((now, total))?;
+        cb.call1(now)?;
     }
     Ok(result)
 }
@@ -458,13 +435,12 @@ fn sweep_text(
         Some(s) => sweep::Shard::parse(s).map_err(|e| PyValueError::new_err(format!("shard {s:?}: {e}")))?,
         None => sweep::Shard::ALL,
     };
-    let total = plan.len();
-    let out = interruptible(py, total, progress.as_ref(), |cancel, done| {
-        let mut sink = CancellableSink { lines: vec![], cancel };
-        let tick = |n: u64| {
-            done.fetch_add(n, Ordering::Relaxed);
-        };
-        sweep::run(&evaluator, &plan, &id, shard, &sweep::Done::none(), &mut sink, &tick).map(|_| sink.lines)
+    let state = Progress::new();
+    state.plan(plan.len());
+    let out = interruptible(py, progress.as_ref(), &state, || {
+        let mut sink = CancellableSink { lines: vec![], cancel: state.cancel_flag() };
+        sweep::run(&evaluator, &plan, &id, shard, &sweep::Done::none(), &mut sink, &|n: u64| state.step(n))
+            .map(|_| sink.lines)
     })?;
     let lines = out.map_err(|e| PyValueError::new_err(format!("the sweep stopped: {e}")))?;
     let text = String::from_utf8(lines).map_err(|_| PyValueError::new_err("the sweep wrote text that is not UTF-8"))?;

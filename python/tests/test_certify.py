@@ -7,6 +7,9 @@ fixture (the contract that both front ends write the same certificate)."""
 import json
 import math
 import random
+import subprocess
+import sys
+import types
 from concurrent.futures import ThreadPoolExecutor
 from fractions import Fraction
 from pathlib import Path
@@ -283,13 +286,95 @@ def test_errors_pickle_with_their_fields_and_read_errors_keep_their_kind(tmp_pat
         ec.certify("   ")
 
 
+ZEITLIN_1024 = {
+    "name": "zeitlin-n1024-energy",
+    "zeitlin": {"N": 1024, "equilibrium": "z + 0.3*z^3", "noise": ["0.1*z^2"]},
+    "settings": {"casimir_momentum": False},
+}
+
+
 def test_ctrl_c_ends_a_long_certify(interrupted):
     """The energy–Casimir–momentum search of a Zeitlin state at N = 1024
     takes about 10 s; SIGINT two seconds in raises KeyboardInterrupt at
-    once (the work is abandoned)."""
-    spec = {
-        "name": "zeitlin-n1024-energy",
-        "zeitlin": {"N": 1024, "equilibrium": "z + 0.3*z^3", "noise": ["0.1*z^2"]},
-        "settings": {"casimir_momentum": False},
-    }
-    interrupted(f"certify({spec!r})", 2.0)
+    once."""
+    interrupted(f"certify({ZEITLIN_1024!r})", 2.0)
+
+
+def test_ctrl_c_stops_the_work_itself_and_progress_moved_before():
+    """After the KeyboardInterrupt no engine thread is left working: the
+    process then uses (almost) no CPU time while it sleeps for a second
+    (an abandoned search kept a core busy for some 8 s more). The progress
+    callback was called, with counts that only grow and stay within the
+    total, before the interrupt."""
+    code = f"""
+import os, signal, threading, time
+import energy_casimir as ec
+calls = []
+threading.Timer(2.0, os.kill, (os.getpid(), signal.SIGINT)).start()
+try:
+    ec.certify({ZEITLIN_1024!r}, progress=lambda d, t: calls.append((d, t)))
+    print("finished")
+except KeyboardInterrupt:
+    print("interrupted")
+c0 = time.process_time()
+time.sleep(1.0)
+print("cpu", time.process_time() - c0)
+print("calls", len(calls), all(a[0] <= b[0] for a, b in zip(calls, calls[1:])), all(0 <= d <= t for d, t in calls), calls[-1] if calls else None)
+"""
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=120)
+    lines = out.stdout.splitlines()
+    assert lines[0] == "interrupted", out
+    cpu = float(lines[1].split()[1])
+    assert cpu < 0.2, f"{cpu} s of CPU after the interrupt: the work went on"
+    _, count, monotone, bounded, last = lines[2].split(" ", 4)
+    assert int(count) >= 5 and monotone == "True" and bounded == "True", lines[2]
+    done, total = eval(last)
+    assert 0 < done < total, "the search was under way, not over"
+
+
+def test_progress_of_certify_and_check_ends_at_the_total():
+    """A fluid spec (x-mode solves) and a Zeitlin certificate's check (block
+    operations): the last call is (total, total) with total > 1, and the
+    counts only grow."""
+    for run in (
+        lambda cb: ec.certify(FIXTURES / "fluids" / "compressible-compatible-noise.json", progress=cb),
+        lambda cb: ec.check(ec.certify(FIXTURES / "zeitlin" / "quflow-tilted-n16.json"), progress=cb),
+    ):
+        calls = []
+        run(lambda d, t: calls.append((d, t)))
+        assert calls and calls[-1][0] == calls[-1][1] > 1, calls
+        assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:]))
+    # A finite-dimensional spec is one step.
+    calls = []
+    ec.certify(FIXTURES / "rigid-body-major-axis.json", progress=lambda d, t: calls.append((d, t)))
+    assert calls[-1] == (1, 1)
+
+
+def test_progress_true_draws_tqdm_or_a_text_line(monkeypatch, capsys):
+    """``progress=True``: a tqdm bar when tqdm imports (a stand-in module
+    records what the bar was told), else a line on standard error."""
+    told = []
+
+    class Bar:
+        def __init__(self, total, desc, unit):
+            self.total, self.n = total, 0
+            told.append(("open", desc))
+
+        def update(self, k):
+            self.n += k
+            told.append(("at", self.n, self.total))
+
+        def close(self):
+            told.append(("close",))
+
+    fake = types.ModuleType("tqdm.auto")
+    fake.tqdm = Bar
+    monkeypatch.setitem(sys.modules, "tqdm", types.ModuleType("tqdm"))
+    monkeypatch.setitem(sys.modules, "tqdm.auto", fake)
+    ec.certify(FIXTURES / "rigid-body-major-axis.json", progress=True)
+    assert told[0] == ("open", "certify") and told[-1] == ("close",) and told[-2] == ("at", 1, 1), told
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)  # import fails
+    ec.certify(FIXTURES / "rigid-body-major-axis.json", progress=True)
+    assert "certify: 1/1 steps (100%)" in capsys.readouterr().err
+    with pytest.raises(TypeError, match="progress"):
+        ec.certify(FIXTURES / "rigid-body-major-axis.json", progress="yes")

@@ -114,6 +114,38 @@ pub(crate) fn progress_bar(total: u64, template: &str) -> Option<indicatif::Prog
     Some(bar)
 }
 
+/// Certify, with a progress bar on stderr (when it is a terminal) for the
+/// pipelines that can take seconds to minutes: fluids, the Zeitlin model
+/// and large systems. The work runs on a scoped thread (with the main
+/// thread's 8 MiB of stack) while this one draws the bar.
+pub(crate) fn certify_showing_progress(spec: &spec::AnySpec, label: &str) -> Value {
+    if matches!(spec, spec::AnySpec::Lie(_)) {
+        return spec.certify();
+    }
+    let Some(bar) = progress_bar(1, "{msg} [{bar:30}] {percent:>3}% ({elapsed})") else {
+        return spec.certify();
+    };
+    bar.set_message(messages::excerpt(label));
+    let state = outcome::Progress::new();
+    let out = std::thread::scope(|scope| {
+        let worker =
+            std::thread::Builder::new().stack_size(8 << 20).spawn_scoped(scope, || spec.certify_with(&state)).ok()?;
+        while !worker.is_finished() {
+            let (done, total) = state.snapshot();
+            bar.set_length(total);
+            bar.set_position(done);
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+        match worker.join() {
+            Ok(out) => out.ok(),
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
+    });
+    bar.finish_and_clear();
+    // `None`: no thread could be started (nothing cancels here): on this one.
+    out.unwrap_or_else(|| spec.certify())
+}
+
 fn read(path: &Path) -> Result<String, Failure> {
     std::fs::read_to_string(path).map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))
 }
@@ -125,7 +157,7 @@ fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failur
     let text = read(spec_path)?;
     let spec = parse_any_spec_in(&text, spec_path.parent())
         .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
-    let cert = spec.certify();
+    let cert = certify_showing_progress(&spec, &spec_path.display().to_string());
     let pretty = spec::to_pretty_json(&cert);
     match output {
         // Atomic: a failed write (a full disk) leaves no partial certificate

@@ -68,7 +68,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
                 continue;
             }
         };
-        let cert = spec.certify();
+        let cert = crate::certify_showing_progress(&spec, &path.display().to_string());
         let cpath = cert_path(path);
         if write {
             // Atomic: an interrupted or failed write keeps the committed certificate.

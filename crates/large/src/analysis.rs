@@ -31,7 +31,7 @@ use crate::LargeError;
 use exact::Rational;
 use fluid::dense::{largest_generalized, product, symmetric_eigen, symmetric_eigenvalues, FramePencil};
 use nalgebra::{DMatrix, DVector};
-use outcome::{Verdict, VerificationLevel};
+use outcome::{Progress, Verdict, VerificationLevel};
 use std::collections::BTreeMap;
 
 /// Settings, with documented defaults.
@@ -199,6 +199,32 @@ fn to_f64(v: &[Rational]) -> Vec<f64> {
 /// assert!((a.sigma2.unwrap() - 0.27).abs() < 1e-7 * 0.27);
 /// ```
 pub fn analyse_large(system: &LargeSystem, settings: &LargeSettings) -> Result<LargeAnalysis, LargeError> {
+    analyse_large_with(system, settings, &Progress::new())
+}
+
+/// [`analyse_large`] with progress in four steps (the derivatives and
+/// multipliers, the search for a definite form, the minimisation of
+/// `Sigma^2`, the final eigenproblems), stopping with
+/// [`LargeError::Cancelled`] soon after [`Progress::cancel`]: between the
+/// steps and between the iterations of the search and of the minimisation.
+pub fn analyse_large_with(
+    system: &LargeSystem,
+    settings: &LargeSettings,
+    progress: &Progress,
+) -> Result<LargeAnalysis, LargeError> {
+    progress.plan(4);
+    let a = analyse_scaled(system, settings, progress)?;
+    // A cancelled run ends early with meaningless values: never a result.
+    progress.check()?;
+    progress.settle();
+    Ok(a)
+}
+
+fn analyse_scaled(
+    system: &LargeSystem,
+    settings: &LargeSettings,
+    progress: &Progress,
+) -> Result<LargeAnalysis, LargeError> {
     // Sigma^2 scales as the noise squared: the noise is brought to unit size
     // by a power of two (exact), analysed, and the result scaled back, so
     // that noise near 1e-200 or 1e200 neither underflows to a false
@@ -207,11 +233,11 @@ pub fn analyse_large(system: &LargeSystem, settings: &LargeSettings) -> Result<L
     // (The largest magnitude exactly: an entry of 1e-400 is not zero.)
     let exponent = system.noise().iter().flatten().filter_map(exact::binary_exponent).max();
     let Some(exponent) = exponent.filter(|e| *e != 0) else {
-        return analyse_normalised(system, settings);
+        return analyse_normalised(system, settings, progress);
     };
     let scale = exact::power_of_two(-exponent);
     let scaled = system.with_noise(system.noise().iter().map(|f| f.iter().map(|x| x * &scale).collect()).collect());
-    let mut a = analyse_normalised(&scaled, settings)?;
+    let mut a = analyse_normalised(&scaled, settings, progress)?;
     // Residuals are exact and scale-free in their verdict; Sigma^2 scales by 2^(2 exponent).
     let back = |x: f64| x * 2f64.powi((2 * exponent).clamp(-2000, 2000) as i32);
     if let Some(s) = a.sigma2 {
@@ -232,7 +258,11 @@ pub fn analyse_large(system: &LargeSystem, settings: &LargeSettings) -> Result<L
     Ok(a)
 }
 
-fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<LargeAnalysis, LargeError> {
+fn analyse_normalised(
+    system: &LargeSystem,
+    settings: &LargeSettings,
+    progress: &Progress,
+) -> Result<LargeAnalysis, LargeError> {
     let n = system.dim();
     let numerical = |what: &str| LargeError::Numerical(what.to_string());
     let mut out = LargeAnalysis {
@@ -394,6 +424,8 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         no_form(&mut out, &why)?;
         return Ok(out);
     }
+    progress.check()?;
+    progress.step(1);
     // 3. Finsler on ker G^T, over the family lambda(t) = lambda_p + sum t_i d_i.
     let dense_hessian = |m: &BTreeMap<(usize, usize), f64>, scale: f64, into: &mut DMatrix<f64>| {
         for (&(i, j), &x) in m {
@@ -480,6 +512,9 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         for _ in 0..5 {
             let mut e = casimir::Ellipsoid::ball(&vec![0.0; f], radius);
             for _ in 0..(60 * f).max(60) {
+                if progress.is_cancelled() {
+                    break;
+                }
                 let c = e.centre().to_vec();
                 let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
                 let g: Vec<f64> = if norm > radius {
@@ -515,6 +550,8 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
     } else {
         0.0
     };
+    progress.check()?;
+    progress.step(1);
     let mut t = if sign > 0.0 { t_plus } else { t_minus };
     if sign == 0.0 {
         let why = format!(
@@ -566,6 +603,9 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
         for _ in 0..6 {
             let mut e = casimir::Ellipsoid::ball(&centre, radius);
             for _ in 0..(60 * f).max(60) {
+                if progress.is_cancelled() {
+                    break;
+                }
                 let c = e.centre().to_vec();
                 let dist = c.iter().zip(&centre).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
                 let g: Vec<f64> = if dist > radius {
@@ -605,6 +645,8 @@ fn analyse_normalised(system: &LargeSystem, settings: &LargeSettings) -> Result<
     let eig = symmetric_eigenvalues(&(&restricted * sign))
         .ok_or_else(|| numerical("the restricted Hessian's eigenvalues"))?;
     let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x.abs())));
+    progress.check()?;
+    progress.step(1);
     // 5. The frame [Z W] = U (orthonormal, from the SVD) and the Casimir
     // Hessian: each matrix is carried to the frame by one congruence
     // U^T M U, whose blocks are the Z and W parts.

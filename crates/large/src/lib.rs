@@ -42,4 +42,7 @@ pub enum LargeError {
     /// A floating-point step failed.
     #[error("numerical breakdown: {0}")]
     Numerical(String),
+    /// The analysis was stopped through its [`outcome::Progress`] before it ended.
+    #[error(transparent)]
+    Cancelled(#[from] outcome::Cancelled),
 }

@@ -3,6 +3,9 @@
 //! ([`VerificationLevel`]), and the sign of a definite conserved form
 //! ([`Sign`]).
 //!
+//! [`Progress`] carries the progress of a long analysis and a request to
+//! stop it (module [`progress`]).
+//!
 //! Each type has one name per value, the one certificates use (serde
 //! renames them, and [`Verdict::as_str`] / [`Verdict::from_name`] give the
 //! same names without serde), so no code compares outcome strings.
@@ -14,6 +17,9 @@
 //! assert!(VerificationLevel::Exact.is_proof() && !VerificationLevel::Numerical.is_proof());
 //! assert_eq!(Sign::Negative.as_f64() * 2.0, -2.0);
 //! ```
+
+pub mod progress;
+pub use progress::{Cancelled, Phase, Progress};
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -49,6 +49,16 @@ pub enum CheckError {
         /// What differs.
         message: String,
     },
+    /// The re-derivation was stopped through its [`outcome::Progress`]:
+    /// nothing was established either way.
+    #[error("the check was cancelled before it finished")]
+    Cancelled,
+}
+
+impl From<outcome::Cancelled> for CheckError {
+    fn from(_: outcome::Cancelled) -> CheckError {
+        CheckError::Cancelled
+    }
 }
 
 /// What a successful check established.
@@ -72,8 +82,19 @@ pub fn check_certificate(text: &str) -> Result<CheckReport, CheckError> {
 /// [`check_certificate`] for a certificate in the folder `base`: the files
 /// its spec names (a Zeitlin field's `.npy`) are relative to it.
 pub fn check_certificate_in(text: &str, base: Option<&std::path::Path>) -> Result<CheckReport, CheckError> {
+    check_certificate_with(text, base, &outcome::Progress::new())
+}
+
+/// [`check_certificate_in`], reporting the re-derivation's progress (see
+/// [`crate::AnySpec::certify_with`]) and stopping with
+/// [`CheckError::Cancelled`] soon after [`outcome::Progress::cancel`].
+pub fn check_certificate_with(
+    text: &str,
+    base: Option<&std::path::Path>,
+    progress: &outcome::Progress,
+) -> Result<CheckReport, CheckError> {
     let value: Value = crate::json::parse_json(text).map_err(CheckError::BadInput)?;
-    check_certificate_value_in(&value, base)
+    check_value_with(&value, base, progress)
 }
 
 /// Check a typed certificate (one built in Rust or read with
@@ -98,10 +119,18 @@ pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> 
 
 /// [`check_certificate_value`] with the spec's files relative to `base`.
 pub fn check_certificate_value_in(cert: &Value, base: Option<&std::path::Path>) -> Result<CheckReport, CheckError> {
+    check_value_with(cert, base, &outcome::Progress::new())
+}
+
+fn check_value_with(
+    cert: &Value,
+    base: Option<&std::path::Path>,
+    progress: &outcome::Progress,
+) -> Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
     if map.get("spec").is_some_and(crate::is_fluid_spec) {
         #[cfg(feature = "fluid")]
-        return crate::fluid::check_fluid_certificate(cert);
+        return crate::fluid::check_fluid_certificate_with(cert, progress);
         #[cfg(not(feature = "fluid"))]
         return Err(CheckError::BadInput(SpecError::new(
             "$.spec.fluid",
@@ -110,7 +139,7 @@ pub fn check_certificate_value_in(cert: &Value, base: Option<&std::path::Path>) 
     }
     if map.get("spec").is_some_and(crate::is_zeitlin_spec) {
         #[cfg(feature = "fluid")]
-        return crate::zeitlin::check_zeitlin_certificate_in(cert, base);
+        return crate::zeitlin::check_zeitlin_certificate_with(cert, base, progress);
         #[cfg(not(feature = "fluid"))]
         return Err(CheckError::BadInput(SpecError::new(
             "$.spec.zeitlin",
@@ -119,7 +148,7 @@ pub fn check_certificate_value_in(cert: &Value, base: Option<&std::path::Path>) 
     }
     #[cfg(feature = "fluid")]
     if map.get("spec").is_some_and(crate::is_large_spec) {
-        return crate::large::check_large_certificate(cert);
+        return crate::large::check_large_certificate_with(cert, progress);
     }
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     check_engine(map)?;

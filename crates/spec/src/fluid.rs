@@ -29,13 +29,13 @@ use crate::record::{
     GeneratorRecord, LevelOrNone, ModeRecord, PaperRecord, PseudomomentumRowRecord, ShiftPoint, UnstableModeRecord,
 };
 use fluid::analysis::{
-    analyse, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
+    analyse, analyse_with, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
 };
 use fluid::expr::{parse, Expr};
 use fluid::grid::{Boundary, ELEMENT_DEGREE};
 use fluid::profile::{Potential, Profile, ProfileError};
 use generator::StoppingTime;
-use outcome::{Sign, Verdict, VerificationLevel};
+use outcome::{Cancelled, Progress, Sign, Verdict, VerificationLevel};
 use serde_json::Value;
 use std::collections::BTreeMap;
 
@@ -457,7 +457,21 @@ impl FluidCertificate {
 /// assert_eq!(doc.modes.unwrap().len(), doc.discretisation.unwrap().x_modes as usize);
 /// ```
 pub fn certify_fluid_spec(spec: &FluidSpec) -> FluidCertificate {
-    let analysis = analyse(&spec.problem, &spec.settings);
+    fluid_certificate(spec, analyse(&spec.problem, &spec.settings))
+}
+
+/// [`certify_fluid_spec`] with progress; `Err` when it was cancelled (no
+/// certificate is built from a cancelled run).
+pub fn certify_fluid_with(spec: &FluidSpec, progress: &Progress) -> std::result::Result<FluidCertificate, Cancelled> {
+    let analysis = analyse_with(&spec.problem, &spec.settings, progress);
+    progress.check()?;
+    Ok(fluid_certificate(spec, analysis))
+}
+
+fn fluid_certificate(
+    spec: &FluidSpec,
+    analysis: std::result::Result<FluidAnalysis, fluid::analysis::FluidError>,
+) -> FluidCertificate {
     let json = match &analysis {
         Ok(a) => fluid_certificate_json(spec, a),
         // The profile was checked at parse time on a fine sample; the grid
@@ -704,6 +718,14 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
 /// Re-check a fluid certificate: independent claims, then re-derivation and
 /// comparison (floating-point fields to [`FLUID_TOLERANCE`]).
 pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+    check_fluid_certificate_with(cert, &Progress::new())
+}
+
+/// [`check_fluid_certificate`] with progress and cancellation.
+pub(crate) fn check_fluid_certificate_with(
+    cert: &Value,
+    progress: &Progress,
+) -> std::result::Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     crate::check::check_engine(map)?;
@@ -738,7 +760,9 @@ pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport,
             return Err(fail("$.convergence", format!("resolutions {found:?} are not the table's {expected:?}")));
         }
     }
-    let analysis = analyse(&spec.problem, &spec.settings).map_err(|e| fail("$.spec.fluid", e.to_string()))?;
+    let analysis = analyse_with(&spec.problem, &spec.settings, progress);
+    progress.check()?;
+    let analysis = analysis.map_err(|e| fail("$.spec.fluid", e.to_string()))?;
     prove_stated_bounds(&spec, &analysis, cert)?;
     // `compare_with` skips the top-level `engine`: a newer engine may re-check an older certificate.
     let expected = fluid_certificate_json(&spec, &analysis);

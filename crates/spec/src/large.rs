@@ -30,12 +30,12 @@ use crate::parse::Stopping;
 use crate::record::{Engine, ExactRational, Float, LargeAnalysisRecord, LargeCertificateDocument, LevelOrNone};
 use exact::Rational;
 use large::algebra::SparseAlgebra;
-use large::analysis::{analyse_large, LargeAnalysis, LargeSettings};
+use large::analysis::{analyse_large, analyse_large_with, LargeAnalysis, LargeSettings};
 use large::parse::{parse_sparse, SparseSymbols};
 use large::poly::SparsePoly;
 use large::system::LargeSystem;
 use large::LargeError;
-use outcome::{Verdict, VerificationLevel};
+use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use serde_json::Value;
 use std::collections::BTreeMap;
 
@@ -310,9 +310,25 @@ pub fn certify_large(spec: &LargeSpec) -> Value {
     serde_json::to_value(large_certificate_document(spec, &analysis)).unwrap_or_default()
 }
 
+/// [`certify_large`] with progress; `Err` when it was cancelled (no
+/// certificate is built from a cancelled run).
+pub fn certify_large_with(spec: &LargeSpec, progress: &Progress) -> std::result::Result<Value, Cancelled> {
+    let analysis = analyse_large_with(&spec.system, &spec.settings, progress);
+    progress.check()?;
+    Ok(serde_json::to_value(large_certificate_document(spec, &analysis)).unwrap_or_default())
+}
+
 /// Re-check a large certificate: the embedded spec and its digest, then
 /// re-derivation and comparison (numbers to [`LARGE_TOLERANCE`]).
 pub fn check_large_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+    check_large_certificate_with(cert, &Progress::new())
+}
+
+/// [`check_large_certificate`] with progress and cancellation.
+pub(crate) fn check_large_certificate_with(
+    cert: &Value,
+    progress: &Progress,
+) -> std::result::Result<CheckReport, CheckError> {
     let map = crate::json::as_object(cert, "$").map_err(CheckError::BadInput)?;
     let spec_value = crate::json::required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     crate::check::check_engine(map)?;
@@ -327,7 +343,8 @@ pub fn check_large_certificate(cert: &Value) -> std::result::Result<CheckReport,
     if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {
         return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
     }
-    let analysis = analyse_large(&spec.system, &spec.settings);
+    let analysis = analyse_large_with(&spec.system, &spec.settings, progress);
+    progress.check()?;
     let expected = serde_json::to_value(large_certificate_document(&spec, &analysis)).unwrap_or_default();
     compare_with(&expected, cert, "$", 0.0, LARGE_TOLERANCE)?;
     let level = expected.get("level").and_then(Value::as_str).and_then(|s| s.parse::<VerificationLevel>().ok());

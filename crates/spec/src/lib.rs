@@ -61,27 +61,27 @@ pub use certificate::{
     certificate_json, certify, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
 };
 pub use check::{
-    check_certificate, check_certificate_in, check_certificate_value, check_certificate_value_in, check_document,
-    CheckError, CheckReport, FLOAT_TOLERANCE,
+    check_certificate, check_certificate_in, check_certificate_value, check_certificate_value_in,
+    check_certificate_with, check_document, CheckError, CheckReport, FLOAT_TOLERANCE,
 };
 pub use claims::{verify_claims, ClaimFailure};
 #[cfg(feature = "fluid")]
 pub use fluid::{
-    certify_fluid, certify_fluid_spec, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value,
-    parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
+    certify_fluid, certify_fluid_spec, certify_fluid_with, check_fluid_certificate, fluid_certificate_json,
+    fluid_spec_from_value, parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
 
 #[cfg(feature = "fluid")]
 pub use zeitlin::{
-    analyse_zeitlin, certify_zeitlin, check_zeitlin_certificate, check_zeitlin_certificate_in, parse_zeitlin_spec,
-    zeitlin_certificate_document, zeitlin_spec_from_value, zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome,
-    ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
+    analyse_zeitlin, analyse_zeitlin_with, certify_zeitlin, certify_zeitlin_with, check_zeitlin_certificate,
+    check_zeitlin_certificate_in, parse_zeitlin_spec, zeitlin_certificate_document, zeitlin_spec_from_value,
+    zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
 };
 
 #[cfg(feature = "fluid")]
 pub use large::{
-    certify_large, check_large_certificate, is_large_spec, large_certificate_document, large_spec_from_value,
-    LargeSpec, LARGE_MAX_DIMENSION, LARGE_TOLERANCE,
+    certify_large, certify_large_with, check_large_certificate, is_large_spec, large_certificate_document,
+    large_spec_from_value, LargeSpec, LARGE_MAX_DIMENSION, LARGE_TOLERANCE,
 };
 
 /// Whether a spec value is a Zeitlin spec (has a `zeitlin` object at the top).
@@ -207,6 +207,46 @@ impl AnySpec {
             AnySpec::Zeitlin(s) => certify_zeitlin(s),
             #[cfg(feature = "fluid")]
             AnySpec::Large(s) => certify_large(s),
+        }
+    }
+
+    /// [`AnySpec::certify`], reporting progress and stopping soon after
+    /// [`outcome::Progress::cancel`] (then `Err`, and no certificate). The
+    /// fluid, Zeitlin and large pipelines count their steps (x-mode solves,
+    /// block operations, stages); a finite-dimensional system, certified
+    /// in micro- to milliseconds, is one step.
+    ///
+    /// ```
+    /// let text = r#"{"name": "rayleigh", "fluid": {"model": "incompressible", "x_period": "2*pi",
+    ///   "y_interval": [-1, 1], "boundary": "walls", "shear_flow": "-cos(y)",
+    ///   "noise": ["0.3*sin(y)"], "ny": 32, "x_modes": 2}}"#;
+    /// let spec = spec::parse_any_spec(text).unwrap();
+    /// let progress = outcome::Progress::new();
+    /// let cert = spec.certify_with(&progress).unwrap();
+    /// assert_eq!(cert["verdict"], "stable");
+    /// let (done, total) = progress.snapshot();
+    /// assert!(done > 1 && done == total);
+    /// progress.cancel();
+    /// assert!(spec.certify_with(&progress).is_err());
+    /// ```
+    pub fn certify_with(
+        &self,
+        progress: &outcome::Progress,
+    ) -> std::result::Result<serde_json::Value, outcome::Cancelled> {
+        match self {
+            AnySpec::Lie(s) => {
+                progress.plan(1);
+                progress.check()?;
+                let json = certify(s).json;
+                progress.settle();
+                Ok(json)
+            }
+            #[cfg(feature = "fluid")]
+            AnySpec::Fluid(s) => Ok(certify_fluid_with(s, progress)?.json),
+            #[cfg(feature = "fluid")]
+            AnySpec::Zeitlin(s) => certify_zeitlin_with(s, progress),
+            #[cfg(feature = "fluid")]
+            AnySpec::Large(s) => certify_large_with(s, progress),
         }
     }
 }

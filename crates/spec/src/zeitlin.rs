@@ -23,12 +23,12 @@ use crate::record::{
     Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinDenseRecord, ZeitlinFileRecord,
     ZeitlinFormRecord, ZeitlinFrameRecord, ZeitlinModelRecord, ZeitlinResidualsRecord,
 };
-use outcome::{Verdict, VerificationLevel};
+use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
-use zeitlin::analysis::{analyse, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
-use zeitlin::general::{analyse_general, Frame, GeneralAnalysis, GeneralProblem, GeneralSettings};
+use zeitlin::analysis::{analyse_with, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
+use zeitlin::general::{analyse_general_with, Frame, GeneralAnalysis, GeneralProblem, GeneralSettings};
 use zeitlin::zonal::quantise;
 
 /// Smallest and largest accepted `N`.
@@ -455,16 +455,35 @@ pub enum ZeitlinOutcome {
 
 /// Run the pipeline the spec's input calls for.
 pub fn analyse_zeitlin(spec: &ZeitlinSpec) -> ZeitlinOutcome {
+    analyse_zeitlin_with(spec, &Progress::new())
+}
+
+/// [`analyse_zeitlin`] with progress and cancellation (a cancelled run's
+/// outcome holds [`ZeitlinError::Cancelled`]).
+pub fn analyse_zeitlin_with(spec: &ZeitlinSpec, progress: &Progress) -> ZeitlinOutcome {
     match &spec.input {
-        ZeitlinInput::Zonal(p) => ZeitlinOutcome::Zonal(analyse(p, &spec.settings.zonal)),
-        ZeitlinInput::General(p) => ZeitlinOutcome::General(Box::new(analyse_general(p, &spec.settings))),
+        ZeitlinInput::Zonal(p) => ZeitlinOutcome::Zonal(analyse_with(p, &spec.settings.zonal, progress)),
+        ZeitlinInput::General(p) => {
+            ZeitlinOutcome::General(Box::new(analyse_general_with(p, &spec.settings, progress)))
+        }
     }
 }
 
 /// Run the Zeitlin pipeline and build the certificate JSON.
 pub fn certify_zeitlin(spec: &ZeitlinSpec) -> Value {
-    let analysis = analyse_zeitlin(spec);
-    serde_json::to_value(zeitlin_certificate_document(spec, &analysis)).unwrap_or_default()
+    zeitlin_certificate_value(spec, &analyse_zeitlin(spec))
+}
+
+/// [`certify_zeitlin`] with progress; `Err` when it was cancelled (no
+/// certificate is built from a cancelled run).
+pub fn certify_zeitlin_with(spec: &ZeitlinSpec, progress: &Progress) -> std::result::Result<Value, Cancelled> {
+    let analysis = analyse_zeitlin_with(spec, progress);
+    progress.check()?;
+    Ok(zeitlin_certificate_value(spec, &analysis))
+}
+
+fn zeitlin_certificate_value(spec: &ZeitlinSpec, analysis: &ZeitlinOutcome) -> Value {
+    serde_json::to_value(zeitlin_certificate_document(spec, analysis)).unwrap_or_default()
 }
 
 /// Largest degree `l` of the harmonics a certificate lists.
@@ -758,6 +777,15 @@ pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckRepor
 /// [`check_zeitlin_certificate`] with `.npy` paths relative to `base` (the
 /// certificate's folder).
 pub fn check_zeitlin_certificate_in(cert: &Value, base: Option<&Path>) -> std::result::Result<CheckReport, CheckError> {
+    check_zeitlin_certificate_with(cert, base, &Progress::new())
+}
+
+/// [`check_zeitlin_certificate_in`] with progress and cancellation.
+pub(crate) fn check_zeitlin_certificate_with(
+    cert: &Value,
+    base: Option<&Path>,
+    progress: &Progress,
+) -> std::result::Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
     let spec_value = required(map, "spec", "$").map_err(CheckError::BadInput)?.clone();
     crate::check::check_engine(map)?;
@@ -795,7 +823,8 @@ pub fn check_zeitlin_certificate_in(cert: &Value, base: Option<&Path>) -> std::r
             ));
         }
     }
-    let analysis = analyse_zeitlin(&spec);
+    let analysis = analyse_zeitlin_with(&spec, progress);
+    progress.check()?;
     let expected = serde_json::to_value(zeitlin_certificate_document(&spec, &analysis)).unwrap_or_default();
     compare_with(&expected, cert, "$", 0.0, ZEITLIN_TOLERANCE)?;
     let level = expected.get("level").and_then(Value::as_str).and_then(|s| s.parse::<VerificationLevel>().ok());

@@ -26,7 +26,7 @@
 use crate::laplacian::{block, solve_zonal, Tridiagonal, TridiagonalFactor};
 use fluid::banded::{pow2, Bounded, SymBanded};
 use fluid::minimise::{golden_section_until, golden_section_with_ends};
-use outcome::{Verdict, VerificationLevel};
+use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use rayon::prelude::*;
 
 /// `hbar = 2 / sqrt(N^2 - 1)`, the time scale of quflow's bracket.
@@ -90,6 +90,9 @@ pub enum ZeitlinError {
     /// A solve failed in floating point.
     #[error("numerical breakdown: {0}")]
     Numerical(String),
+    /// The analysis was stopped through its [`Progress`] before it ended.
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
 }
 
 /// The conserved functional `eps H + C_Phi + beta J` whose Hessian is `P`.
@@ -223,7 +226,9 @@ impl Block {
     /// `O(n)`: Lanczos on `P` converged slowly (the eigenvalues of `G`
     /// cluster at 0) and cost `O(k^2 n)` with reorthogonalisation. Used by
     /// the search only; definiteness is claimed by [`Block::definite`].
-    fn lambda_min(&self, choice: &Choice) -> f64 {
+    ///
+    /// `tick` is called once per definiteness test (the unit of progress).
+    fn lambda_min(&self, choice: &Choice, tick: &(dyn Fn() + Sync)) -> f64 {
         let n = self.len();
         let c = self.c(choice);
         if c.iter().any(|x| !x.is_finite()) {
@@ -232,7 +237,10 @@ impl Block {
         let pp = self.congruent_p(&c, choice.energy);
         let d2 = self.laplacian_squared();
         let mut work = vec![];
-        let mut above = |l: f64| pp.minus_is_positive_definite(l, &d2, &mut work);
+        let mut above = |l: f64| {
+            tick();
+            pp.minus_is_positive_definite(l, &d2, &mut work)
+        };
         // The Rayleigh quotient of each e_j in the pencil bounds lambda_min above.
         let mut hi = (0..n).map(|j| pp.get(j, j) / d2.get(j, j)).fold(f64::INFINITY, f64::min);
         let width0 = (choice.energy.abs() + c.iter().fold(0.0f64, |a, x| a.max(x.abs()))).max(f64::MIN_POSITIVE);
@@ -400,12 +408,17 @@ impl Block {
     /// reorthogonalisation and a dense Ritz problem (at N = 1024 Lanczos
     /// took 17 s a sweep). The upper end of the bracket is returned; it is
     /// the starting point of the verified bound.
-    fn lambda_max(&self, choice: &Choice, guess: f64, tol: f64) -> BlockResult {
+    ///
+    /// `tick` is called once per inertia (the unit of progress).
+    fn lambda_max(&self, choice: &Choice, guess: f64, tol: f64, tick: &(dyn Fn() + Sync)) -> BlockResult {
         let done = |lambda_max: f64, residual: f64| BlockResult { m: self.m, lambda_max, residual };
         if choice.energy == 0.0 || self.d_xi.iter().all(|d| d.iter().all(|x| *x == d[0])) {
             return done(0.0, 0.0); // Q = 0
         }
-        let below = |s: f64| self.below(choice, s, false);
+        let below = |s: f64| {
+            tick();
+            self.below(choice, s, false)
+        };
         let mut hi = if guess.is_finite() && guess > 0.0 { guess } else { 1.0 };
         let mut lo;
         // A bracket from the guess, 1e-6 wide at first (the search moves
@@ -517,6 +530,31 @@ impl Block {
 /// assert_eq!(a.sigma2, Some(0.0));
 /// ```
 pub fn analyse(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> Result<ZeitlinAnalysis, ZeitlinError> {
+    analyse_with(problem, settings, &Progress::new())
+}
+
+/// [`analyse`], counting block operations in `progress` and stopping with
+/// [`ZeitlinError::Cancelled`] soon after [`Progress::cancel`].
+///
+/// ```
+/// use outcome::Progress;
+/// use zeitlin::analysis::{analyse_with, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
+/// use zeitlin::zonal::quantise;
+/// let n = 16;
+/// let problem = ZeitlinProblem { n, omega: quantise(n, |z| z + 0.3 * z * z * z).diagonal, noise: vec![] };
+/// let progress = Progress::new();
+/// assert!(analyse_with(&problem, &ZeitlinSettings::default(), &progress).is_ok());
+/// let (done, total) = progress.snapshot();
+/// assert!(done > 0 && done == total);
+/// let stopped = Progress::new();
+/// stopped.cancel();
+/// assert!(matches!(analyse_with(&problem, &ZeitlinSettings::default(), &stopped), Err(ZeitlinError::Cancelled(_))));
+/// ```
+pub fn analyse_with(
+    problem: &ZeitlinProblem,
+    settings: &ZeitlinSettings,
+    progress: &Progress,
+) -> Result<ZeitlinAnalysis, ZeitlinError> {
     validate(problem)?;
     // The problem is homogeneous: omega -> k omega scales the drift's rates
     // by k (and the momentum coefficient by k) and leaves Sigma^2 alone;
@@ -538,7 +576,10 @@ pub fn analyse(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> Result<Z
     let exact = |v: &[f64], w: &[f64], f: f64| v.iter().zip(w).all(|(x, y)| y * f == *x);
     let exact_scaling = exact(&problem.omega, &scaled.omega, s_omega)
         && problem.noise.iter().zip(&scaled.noise).all(|(x, y)| exact(x, y, s_xi));
-    let mut a = analyse_normalised(&scaled, settings)?;
+    let mut a = analyse_normalised(&scaled, settings, progress)?;
+    // A cancelled search ends early with meaningless values: never a result.
+    progress.check()?;
+    progress.settle();
     let k2 = s_xi * s_xi;
     for b in &mut a.blocks {
         b.lambda_max *= k2;
@@ -602,14 +643,35 @@ fn validate(problem: &ZeitlinProblem) -> Result<(), ZeitlinError> {
     Ok(())
 }
 
-fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> Result<ZeitlinAnalysis, ZeitlinError> {
+/// Progress is counted in block operations (a definiteness test, a
+/// `lambda_min`, a bisection for `lambda_max`...), planned per phase at
+/// its worst case. Once cancelled, every block operation returns at once
+/// with a value that ends the search (not definite, `-inf` margin,
+/// infinite `lambda_max`), and [`analyse_with`] turns the result into
+/// [`ZeitlinError::Cancelled`].
+fn analyse_normalised(
+    problem: &ZeitlinProblem,
+    settings: &ZeitlinSettings,
+    progress: &Progress,
+) -> Result<ZeitlinAnalysis, ZeitlinError> {
     let n = problem.n;
+    // Progress counts definiteness tests and inertias of one block (each
+    // O(N)). The plan, in passes over the blocks: build them, G's
+    // diagonal, the Casimir–momentum tests, the energy search for each sign
+    // (measured: 126 to 138 passes for the sign that succeeds, 66 to 76 for
+    // the other, at N = 64 to 1024), then lambda_max everywhere, the drift
+    // residual and the proof (19 to 21).
+    let per_pass = (n - 1) as u64;
+    let search_passes = 140;
+    progress.plan((1 + 1 + 2 + 2 * search_passes + 20) * per_pass);
     let hbar = hbar(n);
     let omega = &problem.omega;
     let pi = solve_zonal(omega).ok_or_else(|| ZeitlinError::Numerical("the zonal Poisson solve failed".into()))?;
     let scale_omega = omega.iter().fold(0.0f64, |a, b| a.max(b.abs()));
     let blocks: Vec<Block> = (1..n)
         .map(|m| {
+            progress.check()?;
+            progress.step(1);
             let lap = block(n, m);
             let factor =
                 lap.factor().ok_or_else(|| ZeitlinError::Numerical(format!("the Laplacian of diagonal {m}")))?;
@@ -678,27 +740,43 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
         constraints.iter().all(|(dp, mu)| (eps * dp + b * mu).abs() <= 1e-9 * (eps.abs() * dp.abs() + b.abs() * mu))
     };
     // The choice is formed once (c_scale is a pass over every block), not per block.
+    // Once cancelled: nothing is definite, margins are -inf and lambda_max
+    // is infinite, which ends every loop of the search at once.
+    let stop = || -> bool {
+        progress.step(1);
+        progress.is_cancelled()
+    };
+    let tick = || progress.step(1);
     let definite = |eps: f64, b: f64| -> bool {
         allowed(eps, b) && {
             let choice = choice_at(eps, b);
-            blocks.par_iter().all(|blk| blk.definite(&choice))
+            blocks.par_iter().all(|blk| !stop() && blk.definite(&choice))
         }
     };
     // min_m lambda_min(P_m(b)) / scale: concave in b (P is affine in b).
     let margin = |eps: f64, b: f64| -> f64 {
         let choice = choice_at(eps, b);
-        blocks.par_iter().map(|blk| blk.lambda_min(&choice)).reduce(|| f64::INFINITY, f64::min)
+        blocks
+            .par_iter()
+            .map(|blk| if stop() { f64::NEG_INFINITY } else { blk.lambda_min(&choice, &tick) })
+            .reduce(|| f64::INFINITY, f64::min)
             / c_scale(eps, b).max(eps.abs()).max(f64::MIN_POSITIVE)
     };
     // The last lambda_max of each block, as bisection guesses: the search
     // moves b a little at a time.
     let last: std::cell::RefCell<Vec<f64>> = std::cell::RefCell::new(vec![f64::NAN; blocks.len()]);
     let tol = settings.tolerance;
+    let lambda_max = |blk: &Block, choice: &Choice, guess: f64| -> BlockResult {
+        if stop() {
+            return BlockResult { m: blk.m, lambda_max: f64::INFINITY, residual: f64::NAN };
+        }
+        blk.lambda_max(choice, guess, tol, &tick)
+    };
     let every_block = |eps: f64, b: f64| -> Vec<BlockResult> {
         let choice = choice_at(eps, b);
         let guesses = last.borrow().clone();
         let results: Vec<BlockResult> =
-            blocks.par_iter().zip(&guesses).map(|(blk, g)| blk.lambda_max(&choice, *g, tol)).collect();
+            blocks.par_iter().zip(&guesses).map(|(blk, g)| lambda_max(blk, &choice, *g)).collect();
         *last.borrow_mut() = results.iter().map(|r| r.lambda_max).collect();
         results
     };
@@ -713,22 +791,20 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
         }
         let choice = choice_at(eps, b);
         let top = last.borrow().iter().enumerate().max_by(|x, y| x.1.total_cmp(y.1)).map_or(0, |(i, _)| i);
-        let mut s = blocks[top].lambda_max(&choice, last.borrow()[top], tol).lambda_max;
+        let mut s = lambda_max(&blocks[top], &choice, last.borrow()[top]).lambda_max;
         last.borrow_mut()[top] = s;
         for _ in 0..blocks.len() {
             if !s.is_finite() {
                 return f64::INFINITY;
             }
             let above: Vec<usize> =
-                (0..blocks.len()).into_par_iter().filter(|&i| !blocks[i].below(&choice, s, false)).collect();
+                (0..blocks.len()).into_par_iter().filter(|&i| !stop() && !blocks[i].below(&choice, s, false)).collect();
             if above.is_empty() {
                 break;
             }
             let guesses = last.borrow().clone();
-            let found: Vec<(usize, f64)> = above
-                .par_iter()
-                .map(|&i| (i, blocks[i].lambda_max(&choice, guesses[i].max(s), tol).lambda_max))
-                .collect();
+            let found: Vec<(usize, f64)> =
+                above.par_iter().map(|&i| (i, lambda_max(&blocks[i], &choice, guesses[i].max(s)).lambda_max)).collect();
             for (i, v) in found {
                 last.borrow_mut()[i] = v;
                 s = s.max(v);
@@ -741,7 +817,13 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
     // eps G_jj + c_j(b) positive, each linear in b. The interval it leaves
     // (within [-RANGE, RANGE], widened by 1e-6 against rounding) contains
     // every definite b; None when it is empty.
-    let g_diagonals: Vec<Vec<f64>> = blocks.par_iter().map(|blk| blk.g_diagonal()).collect();
+    let g_diagonals: Vec<Vec<f64>> = blocks
+        .par_iter()
+        .map(|blk| {
+            progress.step(1);
+            blk.g_diagonal()
+        })
+        .collect();
     let diagonal_interval = |eps: f64| -> Option<(f64, f64)> {
         let (mut lo, mut hi) = (-RANGE, RANGE);
         for (blk, gd) in blocks.iter().zip(&g_diagonals) {
@@ -763,14 +845,18 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
     };
     let mut candidates: Vec<(f64, f64, f64, bool)> = vec![]; // (eps, b, sigma2, attained)
                                                              // eps = 0: the Casimir–momentum form, Q = 0.
-    for b in [1.0, -1.0] {
-        if settings.casimir_momentum && definite(0.0, b) {
-            candidates.push((0.0, b, 0.0, true));
+    {
+        let _phase = progress.phase(2 * per_pass);
+        for b in [1.0, -1.0] {
+            if settings.casimir_momentum && definite(0.0, b) {
+                candidates.push((0.0, b, 0.0, true));
+            }
         }
     }
     let searched = candidates.is_empty() && n <= settings.energy_search_max_n;
     if searched {
         for eps in [1.0, -1.0] {
+            let _phase = progress.phase(search_passes * per_pass);
             if let Some((dp, mu)) = constraints.first().copied() {
                 // b is forced.
                 let b = -eps * dp / mu;
@@ -829,7 +915,10 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
         if n <= settings.instability_max_n {
             let rate = blocks
                 .par_iter()
-                .map(|b| b.growth_rate(hbar))
+                .map(|b| {
+                    progress.step(1);
+                    b.growth_rate(hbar)
+                })
                 .reduce(|| 0.0, |a, b| if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) });
             if rate.is_nan() {
                 analysis.reason = "no energy–Casimir–momentum form is definite, and the drift's spectrum could not be computed (a non-finite value, or the eigenvalue iteration did not converge)".into();
@@ -860,7 +949,13 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
             "a definite form was found but a block's lambda_max could not be bracketed (not finite)".into();
         return Ok(analysis);
     }
-    analysis.drift_residual = blocks.par_iter().map(|b| b.drift_residual(&choice)).reduce(|| 0.0, f64::max);
+    analysis.drift_residual = blocks
+        .par_iter()
+        .map(|b| {
+            progress.step(1);
+            b.drift_residual(&choice)
+        })
+        .reduce(|| 0.0, f64::max);
     analysis.verdict = Verdict::Stable;
     analysis.reason = if choice.energy == 0.0 {
         "the Casimir–momentum form alone is definite (the profile is strictly monotone): it is conserved along every path, so Sigma^2 = 0".into()
@@ -879,7 +974,7 @@ fn analyse_normalised(problem: &ZeitlinProblem, settings: &ZeitlinSettings) -> R
         let base = sigma2.max(f64::MIN_POSITIVE);
         (0..9)
             .map(|i| base * (1.0 + 1e-10 * 10f64.powi(i)))
-            .find(|&s| blocks.par_iter().all(|blk| blk.definite(&choice) && blk.below(&choice, s, true)))
+            .find(|&s| blocks.par_iter().all(|blk| !stop() && blk.definite(&choice) && blk.below(&choice, s, true)))
     };
     if choice.energy == 0.0 {
         analysis.level = VerificationLevel::ExactStructure;

@@ -30,11 +30,11 @@
 //! `N^2 - 1`) in the eigenbasis `U` of `-i W_e = U diag(omega) U^*`
 //! ([`dense_analysis`]).
 
-use crate::analysis::{analyse, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
+use crate::analysis::{analyse_with, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
 use crate::isospectral::StreamSolver;
 use crate::sphere::rotation_to_axis;
 use nalgebra::{Complex, DMatrix};
-use outcome::{Verdict, VerificationLevel};
+use outcome::{Progress, Verdict, VerificationLevel};
 
 type C = Complex<f64>;
 
@@ -313,6 +313,18 @@ fn compatible_part(x: &DMatrix<C>, u: &DMatrix<C>, cl: &[usize]) -> DMatrix<C> {
 /// match a.frame { Some(Frame::Rotated { axis }) => assert!((axis[0] - 0.6).abs() < 1e-9 || (axis[0] + 0.6).abs() < 1e-9), _ => panic!() }
 /// ```
 pub fn analyse_general(problem: &GeneralProblem, settings: &GeneralSettings) -> Result<GeneralAnalysis, ZeitlinError> {
+    analyse_general_with(problem, settings, &Progress::new())
+}
+
+/// [`analyse_general`] with progress and cancellation: a zonal state
+/// reports the zonal analysis's block operations
+/// ([`crate::analysis::analyse_with`]); the dense analysis counts as one
+/// step per solve and is cancelled between its solves.
+pub fn analyse_general_with(
+    problem: &GeneralProblem,
+    settings: &GeneralSettings,
+    progress: &Progress,
+) -> Result<GeneralAnalysis, ZeitlinError> {
     let n = problem.n;
     if !(2..=4096).contains(&n) {
         return Err(ZeitlinError::Input(format!("N must be between 2 and 4096, got {n}")));
@@ -387,7 +399,11 @@ pub fn analyse_general(problem: &GeneralProblem, settings: &GeneralSettings) -> 
         let diagonal = |m: &DMatrix<C>, s: f64| -> Vec<f64> { (0..n).map(|j| m[(j, j)].im * s).collect() };
         let omega = diagonal(&wf, s_w);
         let noise_diag: Vec<Vec<f64>> = xs.iter().zip(&noise).map(|(x, (_, s))| diagonal(x, *s)).collect();
-        let a = analyse(&ZeitlinProblem { n, omega: omega.clone(), noise: noise_diag.clone() }, &settings.zonal)?;
+        let a = analyse_with(
+            &ZeitlinProblem { n, omega: omega.clone(), noise: noise_diag.clone() },
+            &settings.zonal,
+            progress,
+        )?;
         out.verdict = a.verdict;
         out.level = a.level;
         out.reason = match &frame {
@@ -411,7 +427,10 @@ pub fn analyse_general(problem: &GeneralProblem, settings: &GeneralSettings) -> 
         return Ok(out);
     }
     let xs: Vec<DMatrix<C>> = noise.iter().map(|(x, _)| x.clone()).collect();
+    progress.plan(2);
+    progress.check()?;
     let mut d = dense_analysis(&solver, &w, &p, &xs)?;
+    progress.step(1);
     // Back to the user's units: Sigma^2 scales as the noise squared (the
     // fields were each scaled to unit size: one common factor only when
     // they share a scale, else the fields were rescaled relative to each
@@ -419,8 +438,10 @@ pub fn analyse_general(problem: &GeneralProblem, settings: &GeneralSettings) -> 
     let common = noise.iter().map(|(_, s)| *s).fold(0.0f64, f64::max);
     if noise.iter().any(|(_, s)| *s != common) {
         let xs: Vec<DMatrix<C>> = noise.iter().map(|(x, s)| x * C::new(s / common, 0.0)).collect();
+        progress.check()?;
         d = dense_analysis(&solver, &w, &p, &xs)?;
     }
+    progress.settle();
     let k2 = common * common;
     let unscale = |x: f64| x * k2;
     d.sigma2 = d.sigma2.map(unscale);

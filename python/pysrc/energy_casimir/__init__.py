@@ -52,6 +52,66 @@ __all__ = [
 __version__: str = _core.engine_version()
 
 SpecLike = Union[Dict[str, Any], str, "os.PathLike[str]"]
+ProgressLike = Union[None, bool, Callable[[int, int], Any]]
+
+
+class _Progress:
+    """What a ``progress=`` argument becomes: the callback the engine calls
+    with ``(done, total)``, and ``close()`` for a bar it opened.
+
+    ``progress`` may be ``None`` (nothing), a callable (called as is), or
+    ``True``: a ``tqdm`` bar if tqdm is installed, else one line on
+    standard error that is rewritten in place.
+    """
+
+    def __init__(self, progress: ProgressLike, desc: str) -> None:
+        self._bar: Any = None
+        self._desc = desc
+        self._shown = False
+        self.callback: Optional[Callable[[int, int], Any]] = None
+        if progress is None or progress is False:
+            return
+        if progress is True:
+            try:
+                from tqdm.auto import tqdm
+            except ImportError:
+                self.callback = self._text
+            else:
+                self._bar = tqdm(total=0, desc=desc, unit="step")
+                self.callback = self._tqdm
+            return
+        if not callable(progress):
+            raise TypeError(f"progress: expected a callable, True or None, got {type(progress).__name__}")
+        self.callback = progress
+
+    def _tqdm(self, done: int, total: int) -> None:
+        bar = self._bar
+        if bar.total != total:
+            bar.total = total
+        bar.update(done - bar.n)
+
+    def _text(self, done: int, total: int) -> None:
+        import sys
+
+        share = 100.0 * done / total if total else 100.0
+        sys.stderr.write(f"\r{self._desc}: {done}/{total} steps ({share:.0f}%)")
+        sys.stderr.flush()
+        self._shown = True
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+        elif self._shown:
+            import sys
+
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+    def __enter__(self) -> "_Progress":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
 
 
 def _json_default(obj: Any) -> Any:
@@ -283,7 +343,12 @@ class CheckReport:
     sigma2: Optional[float]
 
 
-def certify(spec: SpecLike, *, base_dir: Optional[Union[str, "os.PathLike[str]"]] = None) -> Certificate:
+def certify(
+    spec: SpecLike,
+    *,
+    base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+    progress: ProgressLike = None,
+) -> Certificate:
     """Certify a spec: a dict, JSON text, or the path of a spec file.
 
     The spec format is the engine's (README, ``schema/``): finite-dimensional
@@ -293,7 +358,14 @@ def certify(spec: SpecLike, *, base_dir: Optional[Union[str, "os.PathLike[str]"]
     file's folder (the current folder for a dict or text).
 
     Raises :class:`SpecError` (``.path``, ``.message``) for invalid input.
-    The GIL is released while the engine works.
+    The GIL is released while the engine works. Fluid, Zeitlin and large
+    specs can take seconds to minutes: Ctrl-C stops them
+    (``KeyboardInterrupt``; the engine stops at its next step), and
+    ``progress`` reports them: a callable gets ``(done, total)`` about ten
+    times a second, ``True`` draws a tqdm bar if tqdm is installed (else a
+    line on standard error). Steps are x-mode solves for fluids, block
+    operations for the Zeitlin model and stages for large systems; a
+    search is counted at its worst case, so the count may jump at its end.
 
     >>> import energy_casimir as ec
     >>> ec.certify("fixtures/rigid-body-intermediate-axis.json").verdict
@@ -306,7 +378,8 @@ def certify(spec: SpecLike, *, base_dir: Optional[Union[str, "os.PathLike[str]"]
     $.equilibrium
     """
     text, base = _read_input(spec, "certify", base_dir)
-    out = _core.certify_text(text, _base(base))
+    with _Progress(progress, "certify") as p:
+        out = _core.certify_text(text, _base(base), progress=p.callback)
     return Certificate(json.loads(out), out, _base(base))
 
 
@@ -320,12 +393,14 @@ def check(
     certificate: Union[Certificate, Dict[str, Any], str, "os.PathLike[str]"],
     *,
     base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+    progress: ProgressLike = None,
 ) -> CheckReport:
     """Re-verify a certificate (a :class:`Certificate`, a dict, JSON text or a path).
 
     The engine re-derives everything from the embedded spec and trusts no
     stored number. Raises :class:`CheckError` with ``.path`` (the first field
     that fails), ``.message`` and ``.kind`` (``"failed"`` or ``"bad_input"``).
+    Ctrl-C stops a long re-derivation; ``progress`` as in :func:`certify`.
 
     >>> import energy_casimir as ec
     >>> d = ec.certify("fixtures/rigid-body-major-axis.json").to_dict()
@@ -340,7 +415,8 @@ def check(
         text, base = certificate.to_json(), base_dir if base_dir is not None else certificate._base_dir
     else:
         text, base = _read_input(certificate, "check", base_dir)
-    name, verdict, level, sigma2 = _core.check_text(text, _base(base))
+    with _Progress(progress, "check") as p:
+        name, verdict, level, sigma2 = _core.check_text(text, _base(base), progress=p.callback)
     return CheckReport(name=name, verdict=verdict, level=level, sigma2=sigma2)
 
 
@@ -374,7 +450,7 @@ def simulate(
     epsilon: Optional[float] = None,
     delta: Optional[float] = None,
     force: bool = False,
-    progress: Optional[Callable[[int, int], Any]] = None,
+    progress: ProgressLike = None,
     base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
 ) -> Dict[str, Any]:
     """Monte Carlo of the stochastic system next to what the certificate claims.
@@ -396,7 +472,8 @@ def simulate(
     invalid settings. The GIL is released while it runs; Ctrl-C stops it
     (``KeyboardInterrupt``, after the blocks of 256 paths in flight), and
     ``progress(done, total)`` counts paths (both ensembles), called about
-    ten times a second from the calling thread.
+    ten times a second from the calling thread (``True``: a tqdm bar, as
+    in :func:`certify`).
 
     >>> import energy_casimir as ec
     >>> r = ec.simulate("fixtures/rigid-body-major-axis.json", paths=200, t_end=2.0)
@@ -406,7 +483,28 @@ def simulate(
     True
     """
     text, base = _read_input(spec, "simulate", base_dir)
-    out = _core.simulate_text(
+    with _Progress(progress, "simulate") as p:
+        out = _simulate(text, base, p.callback, paths, dt, t_end, outputs, seed, bins, scheme, observable, epsilon, delta, force)
+    return _arrays(json.loads(out))
+
+
+def _simulate(
+    text: str,
+    base: Any,
+    progress: Optional[Callable[[int, int], Any]],
+    paths: int,
+    dt: float,
+    t_end: Optional[float],
+    outputs: int,
+    seed: int,
+    bins: int,
+    scheme: str,
+    observable: Optional[str],
+    epsilon: Optional[float],
+    delta: Optional[float],
+    force: bool,
+) -> str:
+    return _core.simulate_text(
         text,
         _base(base),
         paths=int(paths),
@@ -422,7 +520,6 @@ def simulate(
         force=bool(force),
         progress=progress,
     )
-    return _arrays(json.loads(out))
 
 
 def _range_text(name: str, r: Any) -> str:
@@ -454,7 +551,7 @@ def sweep(
     seed: int = 0,
     numeric: bool = False,
     shard: Optional[Union[str, Tuple[int, int]]] = None,
-    progress: Optional[Callable[[int, int], Any]] = None,
+    progress: ProgressLike = None,
     base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
 ) -> Dict[str, Any]:
     """Certify ``spec`` over a grid (or ``random`` points) of its parameters.
@@ -474,8 +571,8 @@ def sweep(
     and ``verify plot-sweep``).
 
     Ctrl-C stops the sweep (``KeyboardInterrupt``). ``progress(done,
-    total)`` is called about ten times a second from the calling thread;
-    pass ``tqdm``'s ``update`` through a small lambda to draw a bar.
+    total)`` is called about ten times a second from the calling thread
+    (``True``: a tqdm bar, as in :func:`certify`).
 
     >>> import energy_casimir as ec
     >>> cols = ec.sweep("fixtures/rigid-body-major-axis.json", {"I2": ("3/2", "5/2", 3)})
@@ -491,16 +588,17 @@ def sweep(
     shard_text = None
     if shard is not None:
         shard_text = shard if isinstance(shard, str) else f"{int(shard[0])}/{int(shard[1])}"
-    names, out = _core.sweep_text(
-        text,
-        _base(base),
-        params=ranges,
-        random=None if random is None else int(random),
-        seed=int(seed),
-        numeric=bool(numeric),
-        shard=shard_text,
-        progress=progress,
-    )
+    with _Progress(progress, "sweep") as p:
+        names, out = _core.sweep_text(
+            text,
+            _base(base),
+            params=ranges,
+            random=None if random is None else int(random),
+            seed=int(seed),
+            numeric=bool(numeric),
+            shard=shard_text,
+            progress=p.callback,
+        )
     index, values, verdict, level, sigma2, t, error, lines = out
     columns: Dict[str, Any] = {"index": np.array(index, dtype=np.int64)}
     for n, v in zip(names, values):

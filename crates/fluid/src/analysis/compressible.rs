@@ -33,6 +33,7 @@ pub(super) fn analyse_compressible(
     settings: &FluidSettings,
     sound_speed: f64,
     paper_bound: f64,
+    progress: &Progress,
 ) -> FluidAnalysis {
     let profile = &problem.profile;
     let (a, b) = profile.interval;
@@ -73,7 +74,8 @@ pub(super) fn analyse_compressible(
                 }
         })
         .collect();
-    let incompressible = analyse(&FluidProblem { model: FluidModel::Incompressible, ..problem.clone() }, settings).ok();
+    let incompressible =
+        analyse_steps(&FluidProblem { model: FluidModel::Incompressible, ..problem.clone() }, settings, progress).ok();
     let (incompressible_verdict, incompressible_sigma2) =
         incompressible.as_ref().map(|a| (a.verdict, a.sigma2)).unwrap_or((Verdict::Inconclusive, None));
     let choice = choose(profile);
@@ -181,6 +183,7 @@ pub(super) fn analyse_compressible(
             proved_weight,
             summary,
             base,
+            progress,
         );
     }
     let c = if lo == hi { lo } else { 0.5 * lo + 0.5 * hi };

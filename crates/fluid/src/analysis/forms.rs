@@ -83,10 +83,13 @@ pub(super) fn sigma2_all_modes(
     form: &Form,
     ks: &[(usize, f64)],
     tol: f64,
+    progress: &Progress,
 ) -> Option<f64> {
     let values: Vec<Option<f64>> = ks
         .par_iter()
-        .map(|(_, k)| Mode::new(grid, *k).sigma2(form, coef, tol).ok().map(|s| s.lambda_max.max(0.0)))
+        .map(|(_, k)| {
+            mode_step(progress, || Mode::new(grid, *k).sigma2(form, coef, tol).ok().map(|s| s.lambda_max.max(0.0)))
+        })
         .collect();
     values.into_iter().try_fold(0.0f64, |acc, v| v.map(|v| acc.max(v)))
 }

@@ -55,13 +55,18 @@ fn sigma2_over_modes(
     sound_speed: f64,
     c: f64,
     tol: f64,
+    progress: &Progress,
 ) -> Option<f64> {
     if !coef.usable() {
         return None;
     }
     let values: Vec<Option<f64>> = ks
         .par_iter()
-        .map(|&(_, k)| BarotropicMode::new(grid, coef, k, sound_speed, c).sigma2(tol).map(|s| s.lambda_max.max(0.0)))
+        .map(|&(_, k)| {
+            mode_step(progress, || {
+                BarotropicMode::new(grid, coef, k, sound_speed, c).sigma2(tol).map(|s| s.lambda_max.max(0.0))
+            })
+        })
         .collect();
     values.into_iter().try_fold(0.0f64, |acc, v| v.map(|v| acc.max(v)))
 }
@@ -106,6 +111,7 @@ pub(super) fn analyse_generator(
     proved_weight: bool,
     mut summary: FormSummary,
     base: FluidAnalysis,
+    progress: &Progress,
 ) -> FluidAnalysis {
     let profile = &problem.profile;
     let (a, b) = profile.interval;
@@ -140,8 +146,11 @@ pub(super) fn analyse_generator(
     } else {
         (lo + 1e-3 * width, hi)
     };
-    let f = |c: f64| sigma2_over_modes(&at(&coarse, c), &coarse, &ks, sound_speed, c, tol);
+    let f = |c: f64| sigma2_over_modes(&at(&coarse, c), &coarse, &ks, sound_speed, c, tol, progress);
     let mut curve: Vec<(f64, f64)> = vec![];
+    // The phases of the plan (see `planned_steps`).
+    let modes = ks.len() as u64;
+    let phase = progress.phase(21 * modes);
     let c = if width == 0.0 {
         lo
     } else {
@@ -168,6 +177,7 @@ pub(super) fn analyse_generator(
         curve.iter().copied().min_by(|x, y| x.1.total_cmp(&y.1)).map_or(best.0, |x| x.0)
     };
 
+    drop(phase);
     // The finest grid: per mode Lanczos and the verified check.
     let fine = WallGrid::new(a, b, problem.ny);
     let coef = at(&fine, c);
@@ -182,11 +192,13 @@ pub(super) fn analyse_generator(
     let per_mode: Vec<Option<ModeResult>> = ks
         .par_iter()
         .map(|&(m, k)| {
-            let mode = BarotropicMode::new(&fine, &coef, k, sound_speed, c);
-            let s = mode.sigma2(tol)?;
-            let sigma2 = s.lambda_max.max(0.0);
-            let (upper, form_verified) = verified_upper(sigma2, &s.ritz, 0, |bar| mode.verify(bar));
-            Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
+            mode_step(progress, || {
+                let mode = BarotropicMode::new(&fine, &coef, k, sound_speed, c);
+                let s = mode.sigma2(tol)?;
+                let sigma2 = s.lambda_max.max(0.0);
+                let (upper, form_verified) = verified_upper(sigma2, &s.ritz, 0, |bar| mode.verify(bar));
+                Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
+            })
         })
         .collect();
     if let Some(pos) = per_mode.iter().position(|r| !r.as_ref().is_some_and(|r| r.form_verified)) {
@@ -202,7 +214,11 @@ pub(super) fn analyse_generator(
     // k^3 h^2 here), so short waves on a given grid can outgrow Sigma^2.
     let discrete_sde = ks
         .par_iter()
-        .map(|&(m, k)| BarotropicMode::new(&fine, &coef, k, sound_speed, c).pointwise_noise_sigma2(tol).map(|d| (m, d)))
+        .map(|&(m, k)| {
+            mode_step(progress, || {
+                BarotropicMode::new(&fine, &coef, k, sound_speed, c).pointwise_noise_sigma2(tol).map(|d| (m, d))
+            })
+        })
         .collect::<Option<Vec<(usize, f64)>>>()
         .and_then(|d| d.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)));
     let sigma2 = modes.iter().map(|r| r.sigma2).fold(0.0, f64::max);
@@ -215,7 +231,11 @@ pub(super) fn analyse_generator(
     for &ny in &resolutions {
         let grid = WallGrid::new(a, b, ny);
         let cf = at(&grid, c);
-        let s = if ny == problem.ny { Some(sigma2) } else { sigma2_over_modes(&cf, &grid, &ks, sound_speed, c, tol) };
+        let s = if ny == problem.ny {
+            Some(sigma2)
+        } else {
+            sigma2_over_modes(&cf, &grid, &ks, sound_speed, c, tol, progress)
+        };
         convergence.push(ConvergenceRow { ny, sigma2: s, sigma2_paper_choice: None });
         if cf.usable() {
             if let Some(d) = BarotropicMode::new(&grid, &cf, k1, sound_speed, c).casimir_defect(1e-8) {

@@ -41,12 +41,17 @@ pub fn prove_mode_bounds(problem: &FluidProblem, shift: Option<f64>, bounds: &[(
         .collect()
 }
 
-pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSettings, fine: &YGrid) -> FluidAnalysis {
+pub(super) fn analyse_normalised(
+    problem: &FluidProblem,
+    settings: &FluidSettings,
+    fine: &YGrid,
+    progress: &Progress,
+) -> FluidAnalysis {
     let profile = &problem.profile;
     let fine = fine.clone();
     let paper_bound = profile.paper_bound();
     if let FluidModel::Compressible { sound_speed } = problem.model {
-        return analyse_compressible(problem, settings, sound_speed, paper_bound);
+        return analyse_compressible(problem, settings, sound_speed, paper_bound, progress);
     }
     let ks = wavenumbers(problem);
     let choice = choose(profile);
@@ -62,7 +67,15 @@ pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSetting
             Choice::Pseudomomentum { .. } => shifted_form(coef, 0.0),
         }
     };
-    let paper_choice_sigma2 = paper_form_at(&fine, &coef).and_then(|f| sigma2_all_modes(&fine, &coef, &f, &ks, tol));
+    // Each phase of the plan (see `planned_steps`) counts as done when it
+    // ends, whether or not it ran: the bar moves on at once past a part
+    // this profile does not need.
+    let modes = ks.len() as u64;
+    let phase = progress.phase(modes);
+    let paper_choice_sigma2 =
+        paper_form_at(&fine, &coef).and_then(|f| sigma2_all_modes(&fine, &coef, &f, &ks, tol, progress));
+    drop(phase);
+    let phase = progress.phase(8 * modes);
     let shift_curve = match &choice {
         Choice::Pseudomomentum { sign } => {
             let samples = profile.samples(crate::constants::PROFILE_SAMPLES);
@@ -75,12 +88,13 @@ pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSetting
                     let d = range * 4f64.powi(j - 2);
                     let c = if sign.is_positive() { -umin + d } else { -umax - d };
                     let f = shifted_form(&coef, c)?;
-                    Some((c, sigma2_all_modes(&fine, &coef, &f, &ks, tol)?))
+                    Some((c, sigma2_all_modes(&fine, &coef, &f, &ks, tol, progress)?))
                 })
                 .collect()
         }
         _ => vec![],
     };
+    drop(phase);
 
     let (form, stable_reason) = match form_and_reason(&choice, profile, &coef, &fine, &summary) {
         Ok(x) => x,
@@ -93,27 +107,33 @@ pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSetting
                 paper_bound,
                 paper_choice_sigma2,
                 shift_curve,
+                progress,
             )
         }
     };
 
     // Per mode at the finest grid: Lanczos, then the dense verified check.
+    let phase = progress.phase(modes);
     let per_mode: Vec<Option<ModeResult>> = ks
         .par_iter()
         .map(|&(m, k)| {
-            let mode = Mode::new(&fine, k);
-            let s = mode.sigma2(&form, &coef, tol).ok()?;
-            // Mode::sigma2 never returns a non-finite value; flooring NaN at 0
-            // would round towards "stable".
-            let sigma2 = s.lambda_max.max(0.0);
-            let rung = match fine.boundary() {
-                crate::grid::Boundary::Walls => first_rung(fine.n()),
-                crate::grid::Boundary::Periodic => 0,
-            };
-            let (upper, form_verified) = verified_upper(sigma2, &s.ritz, rung, |bar| mode.verify(&form, &coef, bar));
-            Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
+            mode_step(progress, || {
+                let mode = Mode::new(&fine, k);
+                let s = mode.sigma2(&form, &coef, tol).ok()?;
+                // Mode::sigma2 never returns a non-finite value; flooring NaN at 0
+                // would round towards "stable".
+                let sigma2 = s.lambda_max.max(0.0);
+                let rung = match fine.boundary() {
+                    crate::grid::Boundary::Walls => first_rung(fine.n()),
+                    crate::grid::Boundary::Periodic => 0,
+                };
+                let (upper, form_verified) =
+                    verified_upper(sigma2, &s.ritz, rung, |bar| mode.verify(&form, &coef, bar));
+                Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
+            })
         })
         .collect();
+    drop(phase);
     if let Some(pos) = per_mode.iter().position(|r| r.is_none() || !r.as_ref().is_some_and(|r| r.form_verified)) {
         let (m, k) = ks[pos];
         let reason = format!(
@@ -133,6 +153,7 @@ pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSetting
             paper_bound,
             paper_choice_sigma2,
             shift_curve,
+            progress,
         );
     }
     let modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
@@ -164,18 +185,21 @@ pub(super) fn analyse_normalised(problem: &FluidProblem, settings: &FluidSetting
             let r = ks
                 .par_iter()
                 .map(|(_, k)| {
-                    let mode = Mode::new(&grid, *k);
-                    let scale = mode.form_matrix(&f).norm() * k * mode.drift_matrix(&coef).norm();
-                    mode.drift_residual(&f, &coef).norm() / scale
+                    mode_step(progress, || {
+                        let mode = Mode::new(&grid, *k);
+                        let scale = mode.form_matrix(&f).norm() * k * mode.drift_matrix(&coef).norm();
+                        Some(mode.drift_residual(&f, &coef).norm() / scale)
+                    })
+                    .unwrap_or(f64::NAN)
                 })
                 .reduce(|| 0.0, |a, b| if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) });
             drift_residual = r.is_finite().then_some(r);
         }
-        let s = if ny == problem.ny { Some(sigma2) } else { sigma2_all_modes(&grid, &coef, &f, &ks, tol) };
+        let s = if ny == problem.ny { Some(sigma2) } else { sigma2_all_modes(&grid, &coef, &f, &ks, tol, progress) };
         let p = if ny == problem.ny {
             paper_choice_sigma2
         } else {
-            paper_form_at(&grid, &coef).and_then(|pf| sigma2_all_modes(&grid, &coef, &pf, &ks, tol))
+            paper_form_at(&grid, &coef).and_then(|pf| sigma2_all_modes(&grid, &coef, &pf, &ks, tol, progress))
         };
         convergence.push(ConvergenceRow { ny, sigma2: s, sigma2_paper_choice: p });
     }

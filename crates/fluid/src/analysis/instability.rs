@@ -29,6 +29,7 @@ pub(super) fn inconclusive_or_unstable(
     paper_bound: f64,
     paper_choice_sigma2: Option<f64>,
     shift_curve: Vec<(f64, f64)>,
+    progress: &Progress,
 ) -> FluidAnalysis {
     let profile = &problem.profile;
     let step = if profile.boundary == Boundary::Walls { crate::grid::ELEMENT_DEGREE } else { 2 };
@@ -44,28 +45,30 @@ pub(super) fn inconclusive_or_unstable(
     let rates: Vec<Option<UnstableMode>> = ks
         .par_iter()
         .map(|&(m, k)| {
-            // A growth rate is evidence when it is far above rounding
-            // (relative to k max|U|) and converged between two grids, the
-            // finer twice the coarser. Start at instability_ny and its half;
-            // double while a rate above the floor has not converged.
-            let floor = crate::constants::INSTABILITY_FLOOR * k * u_scale;
-            let half = (start / 2 - (start / 2) % step).max(16);
-            let mut coarse_rate = growth_rate(profile, half, k)?;
-            let mut ny = start;
-            loop {
-                let fine = growth_rate(profile, ny, k)?;
-                if fine > floor
-                    && coarse_rate > floor
-                    && (fine - coarse_rate).abs() <= crate::constants::INSTABILITY_AGREEMENT * fine
-                {
-                    return Some(UnstableMode { m, k, growth_rate: fine, growth_rate_coarse: coarse_rate, ny });
+            mode_step(progress, || {
+                // A growth rate is evidence when it is far above rounding
+                // (relative to k max|U|) and converged between two grids, the
+                // finer twice the coarser. Start at instability_ny and its half;
+                // double while a rate above the floor has not converged.
+                let floor = crate::constants::INSTABILITY_FLOOR * k * u_scale;
+                let half = (start / 2 - (start / 2) % step).max(16);
+                let mut coarse_rate = growth_rate(profile, half, k)?;
+                let mut ny = start;
+                loop {
+                    let fine = growth_rate(profile, ny, k)?;
+                    if fine > floor
+                        && coarse_rate > floor
+                        && (fine - coarse_rate).abs() <= crate::constants::INSTABILITY_AGREEMENT * fine
+                    {
+                        return Some(UnstableMode { m, k, growth_rate: fine, growth_rate_coarse: coarse_rate, ny });
+                    }
+                    if fine <= floor && coarse_rate <= floor || 2 * ny > max_ny {
+                        return None;
+                    }
+                    coarse_rate = fine;
+                    ny *= 2;
                 }
-                if fine <= floor && coarse_rate <= floor || 2 * ny > max_ny {
-                    return None;
-                }
-                coarse_rate = fine;
-                ny *= 2;
-            }
+            })
         })
         .collect();
     let instability = rates.into_iter().flatten().max_by(|a, b| a.growth_rate.total_cmp(&b.growth_rate));

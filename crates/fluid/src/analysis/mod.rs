@@ -87,7 +87,7 @@ impl Default for FluidSettings {
 
 /// The verdicts are the finite-dimensional pipeline's [`Verdict`] (a shear
 /// flow is always an equilibrium, so `NotAnEquilibrium` does not occur).
-pub use outcome::{Sign, Verdict, VerificationLevel};
+pub use outcome::{Cancelled, Progress, Sign, Verdict, VerificationLevel};
 
 /// Sigma^2 of one x-mode at the finest grid.
 #[derive(Clone, Debug, PartialEq)]
@@ -260,6 +260,9 @@ pub enum FluidError {
     /// The profile or noise is unusable.
     #[error(transparent)]
     Profile(#[from] ProfileError),
+    /// The analysis was stopped through its [`Progress`] before it ended.
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
 }
 
 /// The wavenumbers `k_m = 2 pi m / x_period`, `m = 1..=x_modes`.
@@ -352,10 +355,79 @@ pub fn table_resolutions(ny: usize, from: usize) -> Vec<usize> {
 /// reason, never a `Sigma^2` rounded to 0 or to infinity (the squares
 /// overflowed to NaN before, which was floored to 0).
 pub fn analyse(problem: &FluidProblem, settings: &FluidSettings) -> Result<FluidAnalysis, FluidError> {
+    analyse_with(problem, settings, &Progress::new())
+}
+
+/// [`analyse`], counting x-mode computations in `progress` and stopping
+/// with [`FluidError::Cancelled`] soon after [`Progress::cancel`] (each
+/// mode's solve checks it before it starts).
+///
+/// ```
+/// use fluid::analysis::{analyse_with, FluidError, FluidModel, FluidProblem, Progress, Verdict};
+/// use fluid::{expr::parse, grid::Boundary, profile::Profile};
+/// let p = |s: &str| parse(s, &Default::default()).unwrap();
+/// let profile = Profile::new(p("sin(y)"), vec![p("0.3*cos(y)")], (0.0, std::f64::consts::PI), Boundary::Walls);
+/// let problem = FluidProblem { model: FluidModel::Incompressible, profile, x_period: 6.283185307179586, ny: 32, x_modes: 2 };
+/// let progress = Progress::new();
+/// let a = analyse_with(&problem, &Default::default(), &progress).unwrap();
+/// assert_eq!(a.verdict, Verdict::Stable);
+/// let (done, total) = progress.snapshot();
+/// assert!(done > 0 && done == total);
+/// let stopped = Progress::new();
+/// stopped.cancel();
+/// assert!(matches!(analyse_with(&problem, &Default::default(), &stopped), Err(FluidError::Cancelled(_))));
+/// ```
+pub fn analyse_with(
+    problem: &FluidProblem,
+    settings: &FluidSettings,
+    progress: &Progress,
+) -> Result<FluidAnalysis, FluidError> {
+    progress.plan(planned_steps(problem, settings));
+    let a = analyse_steps(problem, settings, progress)?;
+    // A cancelled run ends early with meaningless values: never a result.
+    progress.check()?;
+    progress.settle();
+    Ok(a)
+}
+
+/// The steps [`analyse_with`] plans: one per x-mode solve (the paper's
+/// choice, the eight shifts, the finest grid, two per row of the
+/// convergence table and the drift residual), and for the compressible
+/// model the incompressible analysis plus the shift scan (nine points and
+/// twelve golden-section steps), the finest grid, the discrete SDE and
+/// one per row.
+fn planned_steps(problem: &FluidProblem, settings: &FluidSettings) -> u64 {
+    let modes = problem.x_modes as u64;
+    let rows = table_resolutions(problem.ny, settings.convergence_from).len() as u64;
+    let incompressible = modes * (1 + 8 + 1 + 2 * rows + 1);
+    match problem.model {
+        FluidModel::Incompressible => incompressible,
+        FluidModel::Compressible { .. } => incompressible + modes * (9 + 12 + 2 + rows),
+    }
+}
+
+/// The pipeline without planning or settling the progress (the
+/// compressible analysis runs the incompressible one inside its own plan).
+fn analyse_steps(
+    problem: &FluidProblem,
+    settings: &FluidSettings,
+    progress: &Progress,
+) -> Result<FluidAnalysis, FluidError> {
     let profile = &problem.profile;
     let fine = YGrid::new(profile.boundary, profile.interval.0, profile.interval.1, problem.ny);
     profile.check(fine.nodes())?;
     let (scaled, e) = normalise_noise(problem, &fine);
-    let a = analyse_normalised(&scaled, settings, &fine);
+    let a = analyse_normalised(&scaled, settings, &fine, progress);
     Ok(if e == 0 { a } else { rescale(a, e) })
+}
+
+/// Runs `work` unless the analysis was cancelled (then `None`), and counts
+/// one step: the per-mode solves' cancellation point.
+fn mode_step<T>(progress: &Progress, work: impl FnOnce() -> Option<T>) -> Option<T> {
+    if progress.is_cancelled() {
+        return None;
+    }
+    let out = work();
+    progress.step(1);
+    out
 }
