@@ -37,6 +37,7 @@ mod messages;
 mod npz_out;
 mod paths;
 mod plots;
+mod png;
 mod simulate_cmd;
 mod sweep_cmd;
 mod sweep_plots;

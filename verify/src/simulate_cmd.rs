@@ -339,14 +339,6 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         if let Some(w) = worst {
             curves.push(("worst start (exact)".into(), w.clone(), 4, true));
         }
-        if let Some(b) = bound {
-            curves.push((
-                format!("certified bound exp(Sigma^2 t), Sigma^2 = {:.4}", sigma2.unwrap_or(0.0)),
-                b.clone(),
-                1,
-                true,
-            ));
-        }
         curves.push(("nonlinear ensemble (mean)".into(), over(&nonlinear.norm_mean), 3, false));
         write_growth(
             &dir.join(format!("{file_stem}-growth")),
@@ -359,6 +351,15 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
                     lin_mean.iter().zip(&se).map(|(m, s)| m - 2.0 * s).collect(),
                     lin_mean.iter().zip(&se).map(|(m, s)| m + 2.0 * s).collect(),
                 )),
+                bound: bound.as_ref().map(|b| {
+                    (
+                        format!(
+                            "certified bound exp(Sigma^2 t), Sigma^2 = {}",
+                            crate::table::format_number(&serde_json::json!(sigma2.unwrap_or(0.0)))
+                        ),
+                        b.clone(),
+                    )
+                }),
                 stopping_time,
             },
         )

@@ -12,7 +12,7 @@
 
 use crate::messages::excerpt;
 use crate::paths::{ensure_output_dir, file_stem_noted, with_suffix};
-use crate::plots::{draw_file, draw_legend, palette, register_font, DrawResult};
+use crate::plots::{draw_file, linear_ticks, palette, register_font, DrawResult, Legend, Mark};
 use crate::{read, Failure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -204,6 +204,10 @@ fn verdict_colour(v: &str) -> RGBColor {
     }
 }
 
+/// The colour of stable cells with `Sigma^2 = 0` (teal: apart from the
+/// blue shades of positive `Sigma^2` and from every verdict's colour).
+const ZERO_GROWTH: RGBColor = RGBColor(40, 170, 150);
+
 /// Mix `c` towards white: `t = 0` white, `t = 1` the full colour.
 fn tint(c: RGBColor, t: f64) -> RGBColor {
     let t = t.clamp(0.0, 1.0);
@@ -244,7 +248,7 @@ impl Map<'_> {
     fn write(&self, stem: &Path) -> DrawResult {
         register_font();
         draw_file(&with_suffix(stem, "-map.svg"), |p| self.draw(SVGBackend::new(p, (1100, 800)).into_drawing_area()))?;
-        draw_file(&png(stem, "map"), |p| self.draw(BitMapBackend::new(p, (1100, 800)).into_drawing_area()))
+        draw_file(&png(stem, "map"), |p| self.draw(crate::png::PngBackend::new(p, (1100, 800)).into_drawing_area()))
     }
 
     /// The stable points' shade value and its range.
@@ -260,7 +264,6 @@ impl Map<'_> {
         DB::ErrorType: 'static,
     {
         area.fill(&WHITE)?;
-        let (main, side) = area.split_horizontally(900);
         let (x0, x1) = range_of(self.points.iter().map(|p| p.x[0]));
         let (y0, y1) = range_of(self.points.iter().map(|p| p.x[1]));
         let dx = step(self.points.iter().map(|p| p.x[0])).unwrap_or((x1 - x0).max(1e-12) / 50.0);
@@ -270,6 +273,50 @@ impl Map<'_> {
             && ((x1 - x0) / dx + 1.0) * ((y1 - y0) / dy + 1.0) < 4e6;
         let (px, py) = (dx.max(1e-12) / 2.0, dy.max(1e-12) / 2.0);
         let title = format!("{}: verdicts over ({}, {})", excerpt(self.spec.name()), self.names[0], self.names[1]);
+        // A stable point with Sigma^2 = 0 (T infinite) has its own colour:
+        // no growth at all, not a small one.
+        let zero = |p: &Point| p.verdict == "stable" && p.sigma2 == Some(0.0);
+        // The paper's (reference) constants: stable points where the sharp
+        // Sigma^2 exceeds them (the reference bound fails there).
+        let references: Vec<(String, Vec<(f64, f64)>)> = self
+            .spec
+            .sweep()
+            .reference_sigma2
+            .iter()
+            .map(|r| {
+                let above = self
+                    .points
+                    .iter()
+                    .filter(|p| p.verdict == "stable")
+                    .filter(|p| {
+                        let reference = eval(r, self.fixed, &[(self.names[0], p.x[0]), (self.names[1], p.x[1])]);
+                        p.sigma2.is_some_and(|s| s > reference * (1.0 + 1e-9) + 1e-300)
+                    })
+                    .map(|p| (p.x[0], p.x[1]))
+                    .collect();
+                (r.label.clone(), above)
+            })
+            .collect();
+        let mut legend = Legend::default();
+        for v in ["stable", "linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"] {
+            let n = self.points.iter().filter(|p| p.verdict == v && !zero(p)).count();
+            if n > 0 {
+                legend.add(format!("{v} ({n})"), Mark::Swatch(verdict_colour(v).to_rgba()));
+            }
+        }
+        let zeros = self.points.iter().filter(|p| zero(p)).count();
+        if zeros > 0 {
+            legend.add(format!("stable, Sigma^2 = 0: T infinite ({zeros})"), Mark::Swatch(ZERO_GROWTH.to_rgba()));
+        }
+        for (k, (label, above)) in references.iter().enumerate() {
+            legend.add(format!("Sigma^2 above {label} ({} points)", above.len()), Mark::Cross(palette(3 + k)));
+        }
+        for (k, b) in self.spec.sweep().boundaries.iter().enumerate() {
+            legend
+                .add(format!("boundary: {}", b.label), Mark::Line(if k == 0 { BLACK } else { palette(1 + k) }, false));
+        }
+        let area = legend.split(&area)?;
+        let (main, side) = area.split_horizontally(900);
         let mut chart = ChartBuilder::on(&main)
             .caption(title, ("sans-serif", 22))
             .margin(14)
@@ -281,6 +328,8 @@ impl Map<'_> {
             .disable_mesh()
             .x_desc(self.names[0])
             .y_desc(self.names[1])
+            .x_label_formatter(&linear_ticks(x1 - x0))
+            .y_label_formatter(&linear_ticks(y1 - y0))
             .label_style(("sans-serif", 15))
             .draw()?;
 
@@ -313,6 +362,9 @@ impl Map<'_> {
         let scaled = |v: f64, lo: f64, hi: f64| if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
         let colour = |p: &Point| -> RGBColor {
             let base = verdict_colour(&p.verdict);
+            if zero(p) {
+                return ZERO_GROWTH;
+            }
             match p.verdict.as_str() {
                 // Darker = larger Sigma^2 (shorter T); with log T, darker = shorter T.
                 "stable" => match self.shade_value(p) {
@@ -333,38 +385,10 @@ impl Map<'_> {
         } else {
             chart.draw_series(self.points.iter().map(|p| Circle::new((p.x[0], p.x[1]), 3, colour(p).filled())))?;
         }
-        // Legend entries for the verdicts present.
-        for v in ["stable", "linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"] {
-            let n = self.points.iter().filter(|p| p.verdict == v).count();
-            if n == 0 {
-                continue;
-            }
-            let c = verdict_colour(v);
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label(format!("{v} ({n})"))
-                .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
-        }
-
-        // The paper's (reference) constants: mark stable points where the
-        // sharp Sigma^2 exceeds them (the reference bound fails there).
-        for (k, r) in self.spec.sweep().reference_sigma2.iter().enumerate() {
+        for (k, (_, above)) in references.iter().enumerate() {
             let colour = palette(3 + k);
-            let above: Vec<(f64, f64)> = self
-                .points
-                .iter()
-                .filter(|p| p.verdict == "stable")
-                .filter(|p| {
-                    let reference = eval(r, self.fixed, &[(self.names[0], p.x[0]), (self.names[1], p.x[1])]);
-                    p.sigma2.is_some_and(|s| s > reference * (1.0 + 1e-9) + 1e-300)
-                })
-                .map(|p| (p.x[0], p.x[1]))
-                .collect();
             let size = if regular { 2 } else { 1 };
-            chart
-                .draw_series(above.iter().map(|q| Cross::new(*q, size + 1, colour.stroke_width(1))))?
-                .label(format!("Sigma^2 above {} ({} points)", r.label, above.len()))
-                .legend(move |(x, y)| Cross::new((x + 8, y), 4, colour.stroke_width(2)));
+            chart.draw_series(above.iter().map(|q| Cross::new(*q, size + 1, colour.stroke_width(1))))?;
         }
 
         // Analytic boundaries: zero sets on a fine grid.
@@ -376,12 +400,8 @@ impl Map<'_> {
                 400,
             );
             let style = if k == 0 { BLACK.stroke_width(3) } else { palette(1 + k).stroke_width(3) };
-            chart
-                .draw_series(segments.into_iter().map(|(a, c)| PathElement::new(vec![a, c], style)))?
-                .label(format!("boundary: {}", b.label))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], style));
+            chart.draw_series(segments.into_iter().map(|(a, c)| PathElement::new(vec![a, c], style)))?;
         }
-        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
 
         // Colour bar of the stable shading.
         let (label, lo, hi) = match self.shade {
@@ -462,7 +482,9 @@ impl LineCharts<'_> {
             draw_file(&with_suffix(stem, &format!("-{what}.svg")), |p| {
                 self.draw(SVGBackend::new(p, (1000, 600)).into_drawing_area(), what)
             })?;
-            draw_file(&png(stem, what), |p| self.draw(BitMapBackend::new(p, (1000, 600)).into_drawing_area(), what))?;
+            draw_file(&png(stem, what), |p| {
+                self.draw(crate::png::PngBackend::new(p, (1000, 600)).into_drawing_area(), what)
+            })?;
         }
         Ok(())
     }
@@ -535,48 +557,54 @@ impl LineCharts<'_> {
             )
         };
         let y_desc = if log { format!("log10 {y_desc}") } else { y_desc };
+        let strips = ["linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"];
+        let mut legend = Legend::default();
+        for v in strips {
+            let n = pts.iter().filter(|p| p.verdict == v).count();
+            if n > 0 {
+                legend.add(format!("{v} ({n})"), Mark::Swatch(verdict_colour(v).mix(0.35)));
+            }
+        }
+        for (k, (label, _)) in references.iter().enumerate() {
+            legend.add(format!("{label} (reference)"), Mark::Line(palette(1 + k), true));
+        }
+        legend.add(
+            if what == "sigma2" { "engine: sharp Sigma^2 (stable points)" } else { "engine: T from the sharp Sigma^2" },
+            Mark::Dot(verdict_colour("stable")),
+        );
+        let area = legend.split(&area)?;
         let mut chart = ChartBuilder::on(&area)
             .caption(title, ("sans-serif", 21))
             .margin(14)
+            .margin_right(30)
             .x_label_area_size(45)
             .y_label_area_size(80)
             .build_cartesian_2d((x0 - pad)..(x1 + pad), y_lo..y_hi)?;
-        chart.configure_mesh().x_desc(self.name).y_desc(y_desc).label_style(("sans-serif", 14)).draw()?;
+        chart
+            .configure_mesh()
+            .x_desc(self.name)
+            .y_desc(y_desc)
+            .x_label_formatter(&linear_ticks(x1 - x0))
+            .y_label_formatter(&linear_ticks(y_hi - y_lo))
+            .label_style(("sans-serif", 14))
+            .draw()?;
         // Verdict strips along the bottom: where the points are not stable.
         let half = step(pts.iter().map(|p| p.x[0])).unwrap_or(pad) / 2.0;
-        for v in ["linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"] {
+        for v in strips {
             let c = verdict_colour(v);
             let strip: Vec<&&Point> = pts.iter().filter(|p| p.verdict == v).collect();
-            if strip.is_empty() {
-                continue;
-            }
-            chart
-                .draw_series(
-                    strip
-                        .iter()
-                        .map(|p| Rectangle::new([(p.x[0] - half, y_lo), (p.x[0] + half, y_hi)], c.mix(0.18).filled())),
-                )?
-                .label(format!("{v} ({})", strip.len()))
-                .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.mix(0.35).filled()));
+            chart.draw_series(
+                strip
+                    .iter()
+                    .map(|p| Rectangle::new([(p.x[0] - half, y_lo), (p.x[0] + half, y_hi)], c.mix(0.18).filled())),
+            )?;
         }
-        for (k, (label, curve)) in references.iter().enumerate() {
-            let colour = palette(1 + k);
-            chart
-                .draw_series(DashedLineSeries::new(curve.clone(), 8, 5, colour.stroke_width(2)))?
-                .label(format!("{label} (reference)"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        for (k, (_, curve)) in references.iter().enumerate() {
+            chart.draw_series(DashedLineSeries::new(curve.clone(), 8, 5, palette(1 + k).stroke_width(2)))?;
         }
         let blue = verdict_colour("stable");
         chart.draw_series(LineSeries::new(ours.clone(), blue.stroke_width(2)))?;
-        chart
-            .draw_series(ours.iter().map(|q| Circle::new(*q, 3, blue.filled())))?
-            .label(if what == "sigma2" {
-                "engine: sharp Sigma^2 (stable points)"
-            } else {
-                "engine: T from the sharp Sigma^2"
-            })
-            .legend(move |(x, y)| Circle::new((x + 8, y), 4, blue.filled()));
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        chart.draw_series(ours.iter().map(|q| Circle::new(*q, 3, blue.filled())))?;
         area.present()?;
         Ok(())
     }
