@@ -63,6 +63,8 @@ fn check_error(py: Python<'_>, e: &spec::CheckError) -> PyErr {
         spec::CheckError::Failed { path, message } => {
             error_with::<CheckError>(py, e.to_string(), &[("path", path), ("message", message), ("kind", "failed")])
         }
+        // Only after an interrupt, which is raised instead.
+        spec::CheckError::Cancelled => pyo3::exceptions::PyKeyboardInterrupt::new_err(e.to_string()),
         // `CheckError` is non-exhaustive: a future kind keeps its message.
         other => error_with::<CheckError>(
             py,

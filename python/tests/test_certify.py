@@ -295,7 +295,7 @@ ZEITLIN_1024 = {
 
 def test_ctrl_c_ends_a_long_certify(interrupted):
     """The energy–Casimir–momentum search of a Zeitlin state at N = 1024
-    takes about 10 s; SIGINT two seconds in raises KeyboardInterrupt at
+    takes 7 to 10 s; SIGINT two seconds in raises KeyboardInterrupt at
     once."""
     interrupted(f"certify({ZEITLIN_1024!r})", 2.0)
 

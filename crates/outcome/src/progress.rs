@@ -10,9 +10,11 @@
 //!
 //! An analysis plans its whole total first ([`Progress::plan`]), so the
 //! fraction done only grows. A phase whose length is not known in advance
-//! (a search) is given its worst case ([`Progress::phase`]) and, when it
-//! ends early, its unused steps count as done. `done` never passes `total`,
-//! and [`Progress::settle`] brings it there when the work is over.
+//! (a search) is given a budget ([`Progress::phase`]): its steps count up
+//! to the budget and no further (a search that runs long holds the count at
+//! the phase's end instead of running it to the total), and when it ends
+//! early its unused steps count as done. `done` never passes `total`, and
+//! [`Progress::settle`] brings it there when the work is over.
 //!
 //! ```
 //! use outcome::Progress;
@@ -34,11 +36,24 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// Steps done, steps planned, and whether the work should stop (shared
 /// between the working threads and an observer; every method takes `&self`).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Progress {
     done: AtomicU64,
     total: AtomicU64,
+    /// The end of the innermost open phase (`u64::MAX` outside phases).
+    ceiling: AtomicU64,
     cancelled: AtomicBool,
+}
+
+impl Default for Progress {
+    fn default() -> Progress {
+        Progress {
+            done: AtomicU64::new(0),
+            total: AtomicU64::new(0),
+            ceiling: AtomicU64::new(u64::MAX),
+            cancelled: AtomicBool::new(false),
+        }
+    }
 }
 
 /// The work stopped early because [`Progress::cancel`] was called.
@@ -57,18 +72,24 @@ impl Progress {
         self.total.fetch_add(steps, Ordering::Relaxed);
     }
 
-    /// `steps` more steps are done (never counted past the plan).
+    /// `steps` more steps are done (never counted past the plan, nor past
+    /// the end of the open phase; never moving `done` back).
     pub fn step(&self, steps: u64) {
-        let total = self.total.load(Ordering::Relaxed);
-        let _ =
-            self.done.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |d| Some(d.saturating_add(steps).min(total)));
+        let limit = self.total.load(Ordering::Relaxed).min(self.ceiling.load(Ordering::Relaxed));
+        let _ = self
+            .done
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |d| Some(d.max(d.saturating_add(steps).min(limit))));
     }
 
-    /// A phase of at most `steps` steps, starting now: when the returned
-    /// guard is dropped, `done` is at least where it would be had the
-    /// phase taken all of them.
+    /// A phase of `steps` steps, starting now: until the returned guard is
+    /// dropped, steps count only up to its end; when it is dropped, `done`
+    /// is at least that end. Phases nest (the guards are dropped in
+    /// reverse order of creation).
     pub fn phase(&self, steps: u64) -> Phase<'_> {
-        Phase { progress: self, end: self.done.load(Ordering::Relaxed).saturating_add(steps) }
+        let outer = self.ceiling.load(Ordering::Relaxed);
+        let end = self.done.load(Ordering::Relaxed).saturating_add(steps).min(outer);
+        self.ceiling.store(end, Ordering::Relaxed);
+        Phase { progress: self, end, outer }
     }
 
     /// Every planned step counts as done: the work is over.
@@ -114,12 +135,14 @@ impl Progress {
 pub struct Phase<'a> {
     progress: &'a Progress,
     end: u64,
+    outer: u64,
 }
 
 impl Drop for Phase<'_> {
     fn drop(&mut self) {
         let total = self.progress.total.load(Ordering::Relaxed);
         self.progress.done.fetch_max(self.end.min(total), Ordering::Relaxed);
+        self.progress.ceiling.store(self.outer, Ordering::Relaxed);
     }
 }
 
@@ -149,5 +172,31 @@ mod tests {
         p.cancel();
         assert_eq!(p.check(), Err(Cancelled));
         assert!(p.cancel_flag().load(Ordering::Relaxed));
+    }
+
+    /// A phase caps its steps at its end (a long search holds the count
+    /// there), phases nest, and a phase ended early counts as done.
+    #[test]
+    fn phases_cap_their_steps_and_nest() {
+        let p = Progress::new();
+        p.plan(100);
+        {
+            let _outer = p.phase(50);
+            p.step(10);
+            {
+                let _inner = p.phase(20);
+                p.step(1000);
+                assert_eq!(p.snapshot(), (30, 100), "held at the inner phase's end");
+            }
+            p.step(1000);
+            assert_eq!(p.snapshot(), (50, 100), "held at the outer phase's end");
+        }
+        p.step(5);
+        assert_eq!(p.snapshot(), (55, 100));
+        {
+            let _short = p.phase(30);
+            p.step(2);
+        }
+        assert_eq!(p.snapshot(), (85, 100), "the unused 28 count as done");
     }
 }

@@ -365,7 +365,8 @@ def certify(
     times a second, ``True`` draws a tqdm bar if tqdm is installed (else a
     line on standard error). Steps are x-mode solves for fluids, block
     operations for the Zeitlin model and stages for large systems; a
-    search is counted at its worst case, so the count may jump at its end.
+    search has a budget, so the count may jump at its end or wait at the
+    budget's end while it runs long (``docs/python.md``).
 
     >>> import energy_casimir as ec
     >>> ec.certify("fixtures/rigid-body-intermediate-axis.json").verdict
