@@ -6,11 +6,19 @@
 # pytest, numpy and matplotlib (for examples/rigid_body.py) there from PyPI
 # when they are missing, and runs the pytest suite (python/tests) and the
 # package's doc examples from the repository root (they read fixtures/).
+# Between the two, tests/browser/report.sh opens `verify report`'s page in
+# headless Chromium (BROWSER_TESTS=0 skips it).
 # Arguments go to `cargo test --workspace`.
 # PYTHON_TESTS=0 skips the Python part.
 set -euo pipefail
 cd "$(dirname "$0")"
 cargo test --workspace "$@"
+# `verify report` in headless Chromium (installed from Debian's packages
+# when missing): no console error, no fetch, every section rendered.
+# BROWSER_TESTS=0 skips it.
+if [ "${BROWSER_TESTS:-1}" != "0" ]; then
+  tests/browser/report.sh
+fi
 if [ "${PYTHON_TESTS:-1}" = "0" ]; then
   exit 0
 fi

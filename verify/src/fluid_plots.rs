@@ -26,13 +26,13 @@ fn points(rows: &Value, x: &str, y: &str) -> Vec<(f64, f64)> {
         .unwrap_or_default()
 }
 
-fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
-    // The name is data: titles quote an excerpt, files use a safe stem.
-    let full_name = cert["name"].as_str().unwrap_or("fluid");
-    let name = excerpt(full_name);
-    let file_stem = file_stem_noted(full_name);
-    let fail = |e: Box<dyn std::error::Error>| Failure::Failed(format!("{name}: drawing failed: {e}"));
-    let mut written = vec![];
+/// The charts of a fluid certificate: `(file suffix, chart)` for Sigma^2
+/// per x-mode, the convergence table and the Galilean-shift curve, those
+/// the certificate has data for (also drawn by `verify report`).
+pub(crate) fn fluid_charts(cert: &Value) -> Vec<(&'static str, XyChart)> {
+    // The name is data: titles quote an excerpt.
+    let name = excerpt(cert["name"].as_str().unwrap_or("fluid"));
+    let mut charts = vec![];
     let mut hlines = vec![];
     if let Some(b) = cert.pointer("/paper/bound").and_then(Value::as_f64) {
         hlines.push(("paper's bound sup sum eta'^2".to_string(), b, 1));
@@ -42,11 +42,10 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
     }
     let modes = points(&cert["modes"], "k", "sigma2");
     if !modes.is_empty() && (modes.iter().any(|(_, s)| *s > 0.0) || hlines.iter().any(|h| h.1 > 0.0)) {
-        let stem = out.join(format!("{file_stem}-modes"));
         let zero = modes.iter().all(|(_, s)| *s == 0.0);
-        write_xy(
-            &stem,
-            &XyChart {
+        charts.push((
+            "modes",
+            XyChart {
                 title: format!("{name}: Sigma^2 per x-mode{}", if zero { " (ours: 0 for every mode)" } else { "" }),
                 x_desc: "x-wavenumber k".into(),
                 y_desc: "Sigma^2".into(),
@@ -59,9 +58,7 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
                 )],
                 hlines,
             },
-        )
-        .map_err(fail)?;
-        written.push(crate::paths::with_suffix(&stem, ".png"));
+        ));
     }
     let table = &cert["convergence"];
     let ours = points(table, "ny", "sigma2");
@@ -81,10 +78,9 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
             }
         }
         if !series.is_empty() {
-            let stem = out.join(format!("{file_stem}-convergence"));
-            write_xy(
-                &stem,
-                &XyChart {
+            charts.push((
+                "convergence",
+                XyChart {
                     title: format!("{name}: convergence of Sigma^2 under refinement in y"),
                     x_desc: "ny".into(),
                     y_desc: "relative change".into(),
@@ -92,9 +88,7 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
                     series,
                     hlines: vec![],
                 },
-            )
-            .map_err(fail)?;
-            written.push(crate::paths::with_suffix(&stem, ".png"));
+            ));
         }
     }
     let curve = points(&cert["optimisation"]["shift_curve"], "c", "sigma2");
@@ -102,10 +96,9 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
         // distance from the admissible edge: the curve starts a quarter of the range beyond it
         let edge = curve[0].0 - (curve[1].0 - curve[0].0) / 3.0;
         let shifted: Vec<(f64, f64)> = curve.iter().map(|(c, s)| ((c - edge).abs(), *s)).collect();
-        let stem = out.join(format!("{file_stem}-shift"));
-        write_xy(
-            &stem,
-            &XyChart {
+        charts.push((
+            "shift",
+            XyChart {
                 title: format!("{name}: Sigma^2 of H + C + cM (limit: pseudomomentum, 0)"),
                 x_desc: "|c - c_edge| (distance of the Galilean shift beyond the admissible edge)".into(),
                 y_desc: "Sigma^2 (max over modes)".into(),
@@ -117,8 +110,19 @@ fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
                     .map(|p| vec![("paper's functional (c = 0)".to_string(), p, 2)])
                     .unwrap_or_default(),
             },
-        )
-        .map_err(fail)?;
+        ));
+    }
+    charts
+}
+
+fn charts(cert: &Value, out: &Path) -> Result<Vec<PathBuf>, Failure> {
+    // Files use a safe stem of the name (which is data).
+    let full_name = cert["name"].as_str().unwrap_or("fluid");
+    let file_stem = file_stem_noted(full_name);
+    let mut written = vec![];
+    for (suffix, chart) in fluid_charts(cert) {
+        let stem = out.join(format!("{file_stem}-{suffix}"));
+        write_xy(&stem, &chart).map_err(|e| Failure::Failed(format!("{}: drawing failed: {e}", excerpt(full_name))))?;
         written.push(crate::paths::with_suffix(&stem, ".png"));
     }
     Ok(written)

@@ -38,6 +38,7 @@ mod npz_out;
 mod paths;
 mod plots;
 mod png;
+mod report;
 mod simulate_cmd;
 mod sweep_cmd;
 mod sweep_plots;
@@ -82,6 +83,8 @@ enum Command {
     PlotSweep(sweep_plots::PlotSweepArgs),
     /// Charts from fluid certificates (Sigma^2 per x-mode, convergence, Galilean shift).
     PlotFluid(fluid_plots::PlotFluidArgs),
+    /// One self-contained HTML page for certificates (verdicts in words, what was proved, key numbers, charts), each re-checked.
+    Report(report::ReportArgs),
     /// Print the JSON Schema of specs (for editors: validation and completion).
     Schema {
         /// Which schema: `spec` (finite-dimensional systems), `fluid-spec`, `zeitlin-spec`, `certificate` (of a finite-dimensional spec), `fluid-certificate`, `zeitlin-certificate` or `large-certificate` (of a spec above 64 coordinates).
@@ -301,6 +304,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         }
         Some(Command::Simulate(args)) => simulate_cmd::run(&args),
         Some(Command::PlotFluid(args)) => fluid_plots::run(&args),
+        Some(Command::Report(args)) => report::run(&args),
         Some(Command::Sweep(args)) => sweep_cmd::run(&args),
         Some(Command::Merge(args)) => merge_cmd::run(&args),
         Some(Command::PlotSweep(args)) => sweep_plots::run(&args),

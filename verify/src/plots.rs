@@ -515,6 +515,14 @@ where
     Ok(())
 }
 
+/// The chart as SVG text of `size` pixels (for inline use in HTML).
+pub(crate) fn xy_svg(chart: &XyChart, size: (u32, u32)) -> Result<String, Box<dyn std::error::Error>> {
+    register_font();
+    let mut svg = String::new();
+    draw_xy(SVGBackend::with_string(&mut svg, size).into_drawing_area(), chart)?;
+    Ok(svg)
+}
+
 /// Write `stem.svg` and `stem.png`.
 pub fn write_xy(stem: &Path, chart: &XyChart) -> DrawResult {
     register_font();

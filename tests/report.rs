@@ -1,0 +1,103 @@
+//! `verify report`: one self-contained HTML page for certificates. Every
+//! fixture certificate is in it with its verdict; nothing is fetched; every
+//! string from a certificate is escaped; a certificate that fails its
+//! re-check is marked and makes the exit status 1; a spec is refused
+//! (exit 2). The page in a real browser: `tests/browser/report.sh` (run by
+//! `./test.sh`).
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+
+fn verify(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
+}
+
+fn temp_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("verify-report-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn certificates(dir: &Path, out: &mut Vec<PathBuf>) {
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            certificates(&p, out);
+        } else if p.to_string_lossy().ends_with(".cert.json") {
+            out.push(p);
+        }
+    }
+}
+
+/// Nothing in the page makes a browser fetch anything.
+fn assert_self_contained(html: &str) {
+    // (Data is escaped, so `src="` cannot come from a certificate's text.)
+    for pattern in ["<script", "<link", "<img", "<iframe", "@import", "url(", "src=\"", "href=\""] {
+        assert!(!html.contains(pattern), "the page contains {pattern:?}");
+    }
+}
+
+#[test]
+fn every_fixture_certificate_in_one_self_contained_page() {
+    let mut certs = vec![];
+    certificates(&Path::new(ROOT).join("fixtures"), &mut certs);
+    assert!(certs.len() >= 30, "{}", certs.len());
+    let out = temp_dir().join("all.html");
+    let mut args: Vec<String> = vec!["report".into()];
+    args.extend(certs.iter().map(|p| p.display().to_string()));
+    args.extend(["-o".into(), out.display().to_string()]);
+    let o = verify(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(&out).unwrap();
+    assert_self_contained(&html);
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+    assert_eq!(html.matches("<section>").count(), certs.len());
+    assert!(!html.contains("Re-check FAILED"));
+    for p in &certs {
+        let cert: Value = serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+        let name = cert["name"].as_str().unwrap();
+        assert!(html.contains(&format!("<h2>{name}</h2>")), "{name}");
+    }
+    // A fluid certificate's three charts and every stable one's guarantee are inline SVG.
+    assert!(html.matches("<svg").count() >= 20, "{}", html.matches("<svg").count());
+    assert!(html.contains("Sigma^2 per x-mode") && html.contains("the guarantee over time"));
+}
+
+#[test]
+fn strings_from_a_certificate_are_escaped_and_a_failed_check_is_marked() {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("fixtures/rigid-body-major-axis.cert.json")).unwrap();
+    let mut cert: Value = serde_json::from_str(&text).unwrap();
+    cert["name"] = Value::from("<script>alert('x')</script> & co");
+    cert["reason"] = Value::from("</p><img src=x onerror=alert(1)>");
+    let dir = temp_dir();
+    let path = dir.join("tampered.cert.json");
+    std::fs::write(&path, cert.to_string()).unwrap();
+    let out = dir.join("tampered.html");
+    let o = verify(&["report", path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(&out).unwrap();
+    assert_self_contained(&html);
+    assert!(html.contains("&lt;script&gt;alert(&#39;x&#39;)&lt;/script&gt; &amp; co"));
+    assert!(html.contains("&lt;/p&gt;&lt;img src=x onerror=alert(1)&gt;"));
+    assert!(html.contains("Re-check FAILED"), "the tampered name and reason fail the check");
+}
+
+#[test]
+fn a_spec_or_bad_json_is_bad_input() {
+    let dir = temp_dir();
+    let out = dir.join("bad.html");
+    let spec = Path::new(ROOT).join("fixtures/rigid-body-major-axis.json");
+    let o = verify(&["report", spec.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("not a certificate") && err.contains("verify certify"), "{err}");
+    let junk = dir.join("junk.json");
+    std::fs::write(&junk, "{\"verdict\": ").unwrap();
+    let o = verify(&["report", junk.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists(), "no page for bad input");
+}
