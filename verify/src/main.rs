@@ -122,12 +122,21 @@ pub(crate) fn progress_bar(total: u64, template: &str) -> Option<indicatif::Prog
 /// pipelines that can take seconds to minutes: fluids, the Zeitlin model
 /// and large systems. The work runs on a scoped thread (with the main
 /// thread's 8 MiB of stack) while this one draws the bar.
-pub(crate) fn certify_showing_progress(spec: &spec::AnySpec, label: &str) -> Value {
+/// With `multi`, the bar joins it (below the bare run's line of progress).
+pub(crate) fn certify_showing_progress(
+    spec: &spec::AnySpec,
+    label: &str,
+    multi: Option<&indicatif::MultiProgress>,
+) -> Value {
     if matches!(spec, spec::AnySpec::Lie(_)) {
         return spec.certify();
     }
     let Some(bar) = progress_bar(1, "{msg} [{bar:30}] {percent:>3}% ({elapsed})") else {
         return spec.certify();
+    };
+    let bar = match multi {
+        Some(m) => m.add(bar),
+        None => bar,
     };
     bar.set_message(messages::excerpt(label));
     let state = outcome::Progress::new();
@@ -161,7 +170,7 @@ fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failur
     let text = read(spec_path)?;
     let spec = parse_any_spec_in(&text, spec_path.parent())
         .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
-    let cert = certify_showing_progress(&spec, &spec_path.display().to_string());
+    let cert = certify_showing_progress(&spec, &spec_path.display().to_string(), None);
     let pretty = spec::to_pretty_json(&cert);
     match output {
         // Atomic: a failed write (a full disk) leaves no partial certificate

@@ -56,19 +56,29 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
     let header = ["name", "verdict", "Sigma^2", "first choice", "T(eps, delta)", "level", "certificate"];
     let mut rows: Vec<[String; 7]> = Vec::new();
     let (mut bad, mut failed) = (0, 0);
+    // On a terminal: one line of progress over the specs, and below it a
+    // bar for each spec that takes seconds (fluids, Zeitlin, large).
+    let multi = indicatif::MultiProgress::new();
+    let overall = crate::progress_bar(specs.len() as u64, "{pos}/{len} specs [{bar:30}] {msg}").map(|b| multi.add(b));
+    // Messages print above the bars, not through them.
+    let say = |m: String| multi.suspend(|| eprintln!("{m}"));
     for path in &specs {
+        if let Some(b) = &overall {
+            b.set_message(crate::messages::excerpt(&path.display().to_string()));
+        }
         let text = std::fs::read_to_string(path)?;
         let spec = match parse_any_spec_in(&text, path.parent()) {
             Ok(s) => s,
             Err(e) => {
                 bad += 1;
-                eprintln!("error: {}", cut_message(&format!("{}: {e}", path.display())));
+                say(format!("error: {}", cut_message(&format!("{}: {e}", path.display()))));
                 let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("?").to_string();
                 rows.push([name, "bad input".into(), "-".into(), "-".into(), "-".into(), "-".into(), "-".into()]);
                 continue;
             }
         };
-        let cert = crate::certify_showing_progress(&spec, &path.display().to_string());
+        let cert =
+            crate::certify_showing_progress(&spec, &path.display().to_string(), overall.as_ref().map(|_| &multi));
         let cpath = cert_path(path);
         if write {
             // Atomic: an interrupted or failed write keeps the committed certificate.
@@ -81,12 +91,12 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
                 Ok(_) => "checked".to_string(),
                 Err(CheckError::Failed { path, message }) => {
                     failed += 1;
-                    eprintln!("FAIL {}", cut_message(&format!("{}: {path}: {message}", cpath.display())));
+                    say(format!("FAIL {}", cut_message(&format!("{}: {path}: {message}", cpath.display()))));
                     "FAILED".to_string()
                 }
                 Err(e) => {
                     failed += 1;
-                    eprintln!("FAIL {}", cut_message(&format!("{}: {e}", cpath.display())));
+                    say(format!("FAIL {}", cut_message(&format!("{}: {e}", cpath.display()))));
                     "FAILED".to_string()
                 }
             },
@@ -105,6 +115,12 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
             j["level"].as_str().unwrap_or("?").to_string(),
             status,
         ]);
+        if let Some(b) = &overall {
+            b.inc(1);
+        }
+    }
+    if let Some(b) = overall {
+        b.finish_and_clear();
     }
     let widths: Vec<usize> = (0..header.len())
         .map(|c| rows.iter().map(|r| r[c].len()).chain([header[c].len()]).max().unwrap_or(0))
