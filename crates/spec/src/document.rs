@@ -530,7 +530,7 @@ pub struct Annotation {
 }
 
 /// A fluid spec: 2D Euler about a shear flow `U(y)` in a periodic channel
-/// (README, "Fluids"). Required: `name`, `fluid`.
+/// (docs/fluid-guide.md, "Fluids"). Required: `name`, `fluid`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[schemars(title = "verify: spec of a stochastic shear flow")]

@@ -441,7 +441,7 @@ impl JsonSchema for LevelOrNone {
     }
 }
 
-/// The certificate of a fluid spec (README, "Fluids"): the claims are about
+/// The certificate of a fluid spec (docs/fluid-guide.md, "Fluids"): the claims are about
 /// the discretised linear SDE, per x-mode, with the convergence table beside
 /// them. When the profile cannot be discretised (a singularity at a grid
 /// node) the verdict is `inconclusive` and the analysis parts are absent.
