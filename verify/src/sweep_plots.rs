@@ -417,7 +417,12 @@ impl Map<'_> {
             .y_label_area_size(70)
             .caption(label, ("sans-serif", 15))
             .build_cartesian_2d(0.0..1.0, lo..hi)?;
-        bar.configure_mesh().disable_mesh().disable_x_axis().label_style(("sans-serif", 13)).draw()?;
+        bar.configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_label_formatter(&linear_ticks(hi - lo))
+            .label_style(("sans-serif", 13))
+            .draw()?;
         let n = 100;
         let base = verdict_colour("stable");
         bar.draw_series((0..n).map(|i| {
