@@ -1,5 +1,5 @@
-//! Every chart type through the `verify` binary (simulate: density and
-//! growth; plot-sweep: map and line charts; plot-fluid: per-mode,
+//! Every chart type through the `verify` binary (simulate: density, with
+//! the isotropic noise's mean, and growth; plot-sweep: map and line charts; plot-fluid: per-mode,
 //! convergence and shift charts): each is written as SVG and PNG, and every
 //! tick label in the SVG is a short number in the axis formats (the growth
 //! chart's labels once overflowed as `0000000000.0` and switched to 16
@@ -38,7 +38,20 @@ fn every_chart_type_has_short_numeric_ticks_and_a_png() {
     let out = std::env::temp_dir().join(format!("verify-charts-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     let o = out.to_str().unwrap();
-    verify(&["simulate", "fixtures/rigid-body-major-axis.json", "--paths", "300", "--t-end", "40", "--out", o]);
+    verify(&[
+        "simulate",
+        "fixtures/rigid-body-major-axis.json",
+        "--paths",
+        "300",
+        "--t-end",
+        "40",
+        "--compare-isotropic",
+        "--out",
+        o,
+    ]);
+    // The paper's figure: the isotropic noise's mean beside the compatible one.
+    let density = std::fs::read_to_string(out.join("rigid-body-major-axis-density.svg")).unwrap();
+    assert!(texts(&density).iter().any(|t| t == "mean, isotropic noise (same amplitude)"));
     for s in ["lagrange-top-map", "heavy-top-gravity"] {
         let lines = format!("fixtures/sweeps/{s}.jsonl");
         let spec = format!("fixtures/sweeps/{s}.json");
@@ -70,4 +83,18 @@ fn every_chart_type_has_short_numeric_ticks_and_a_png() {
             assert!(!t.ends_with(".0"), "{}: tick {t:?} (a whole number written with .0)", svg.display());
         }
     }
+}
+
+/// The isotropic comparison is a plain run's: with a shard it is refused
+/// (exit 2, naming both options).
+#[test]
+fn the_isotropic_comparison_is_not_sharded() {
+    let o = Command::new(env!("CARGO_BIN_EXE_verify"))
+        .current_dir(ROOT)
+        .args(["simulate", "fixtures/rigid-body-major-axis.json", "--compare-isotropic", "--shard", "0/2"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--compare-isotropic") && err.contains("--shard"), "{err}");
 }

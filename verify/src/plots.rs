@@ -36,6 +36,9 @@ pub struct DensityChart<'a> {
     pub range: (f64, f64),
     /// Mean of the observable per time.
     pub mean: Vec<f64>,
+    /// Other means to compare with (label, mean per time), dashed: the
+    /// isotropic noise's in the paper's figure.
+    pub other_means: Vec<(String, Vec<f64>)>,
     /// The certified stopping time, if finite.
     pub stopping_time: Option<f64>,
 }
@@ -209,6 +212,9 @@ where
     let shown_t = c.stopping_time.filter(|t| *t <= t_max);
     let mut legend = Legend::default();
     legend.add("mean", Mark::Line(BLACK, false));
+    for (k, (label, _)) in c.other_means.iter().enumerate() {
+        legend.add(label.as_str(), Mark::Line(palette(2 + k), true));
+    }
     legend.add("density (log shade per time, darker = more paths)", Mark::Swatch(RGBColor(90, 90, 90).to_rgba()));
     if shown_t.is_some() {
         legend.add("stopping time T(eps, delta)", Mark::Line(RED, true));
@@ -252,6 +258,10 @@ where
         }
     }
     chart.draw_series(LineSeries::new(c.times.iter().copied().zip(c.mean.iter().copied()), BLACK.stroke_width(2)))?;
+    for (k, (_, mean)) in c.other_means.iter().enumerate() {
+        let points: Vec<(f64, f64)> = c.times.iter().copied().zip(mean.iter().copied()).collect();
+        chart.draw_series(DashedLineSeries::new(points, 8, 5, palette(2 + k).stroke_width(2)))?;
+    }
     if let Some(t) = shown_t {
         chart.draw_series(DashedLineSeries::new(vec![(t, c.range.0), (t, c.range.1)], 6, 4, RED.stroke_width(2)))?;
     }

@@ -69,6 +69,37 @@ pub struct SimulateArgs {
     /// identical to an unsharded run's. Give SPEC before `--merge`.
     #[arg(long, value_name = "FILE", num_args = 1..)]
     pub merge: Vec<PathBuf>,
+    /// Also run the nonlinear system with isotropic noise (a field along
+    /// every coordinate axis, each of the largest amplitude among the spec's
+    /// noise entries), from the same start and with the same seed, and draw
+    /// its mean beside the compatible noise's on the density chart (the
+    /// paper's figure). Not with --shard or --merge.
+    #[arg(long, conflicts_with_all = ["shard", "merge"])]
+    pub compare_isotropic: bool,
+}
+
+/// The spec's system with isotropic noise: one field along each coordinate
+/// axis, of the largest absolute entry among the spec's noise fields (the
+/// paper's isotropic comparison: `sigma e_1, sigma e_2, sigma e_3` beside
+/// the compatible `sigma e_1`). `None` when the spec has no noise.
+fn isotropic_system(system: &casimir::System) -> Option<casimir::System> {
+    let amplitude = system.noise().iter().flatten().map(|x| x.abs()).max()?;
+    if amplitude == exact::Rational::from(0) {
+        return None;
+    }
+    let n = system.dim();
+    let noise = (0..n)
+        .map(|i| (0..n).map(|j| if i == j { amplitude.clone() } else { exact::Rational::from(0) }).collect())
+        .collect();
+    casimir::System::new(
+        system.algebra().clone(),
+        system.hamiltonian().clone(),
+        system.casimirs().to_vec(),
+        system.first_integrals().to_vec(),
+        system.equilibrium().to_vec(),
+        noise,
+    )
+    .ok()
 }
 
 /// What kind of file a shard file is, and its format version.
@@ -315,6 +346,27 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         delta,
     )?;
     let mean_obs: Vec<f64> = nonlinear.mean.iter().map(|m| m[observable]).collect();
+    let mut other_means = vec![];
+    if args.compare_isotropic {
+        let iso = isotropic_system(system)
+            .ok_or_else(|| bad("--compare-isotropic: the spec has no noise to compare with".into()))?;
+        let model = simulate::Model::new(&iso);
+        let target = simulate::Target::Nonlinear { model: &model, scheme, mu0: prepared.mu0.clone() };
+        let bar = crate::progress_bar(args.paths as u64, "{bar:40} {pos}/{len} paths, isotropic noise ({eta} left)");
+        let tick = |k: u64| {
+            if let Some(b) = &bar {
+                b.inc(k)
+            }
+        };
+        let stats = simulate::run_ensemble(&target, &prepared.ensemble, &tick).map_err(ensemble_failure)?;
+        if let Some(b) = &bar {
+            b.finish_and_clear();
+        }
+        other_means.push((
+            "mean, isotropic noise (same amplitude)".to_string(),
+            stats.mean.iter().map(|m| m[observable]).collect(),
+        ));
+    }
     write_density(
         &dir.join(format!("{file_stem}-density")),
         &DensityChart {
@@ -324,6 +376,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             histogram: &nonlinear.histogram,
             range: study.histogram_range,
             mean: mean_obs,
+            other_means,
             stopping_time,
         },
     )
