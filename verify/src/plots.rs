@@ -161,7 +161,12 @@ pub(crate) fn linear_ticks(range: f64) -> impl Fn(&f64) -> String {
         if *v == 0.0 {
             "0".into()
         } else if !(1e-4..1e6).contains(&a) {
-            format!("{v:.1e}")
+            // As few mantissa digits as give the value back (2.25e-5 keeps
+            // its 5).
+            (0..=12)
+                .map(|d| format!("{v:.d$e}"))
+                .find(|t| t.parse::<f64>().is_ok_and(|x| (x - v).abs() <= 1e-9 * a))
+                .unwrap_or_else(|| format!("{v:e}"))
         } else {
             // More decimals when the tick needs them (0.25 on a 0.1 grid).
             let mut d = decimals;
@@ -188,13 +193,17 @@ pub(crate) fn log_ticks(v: &f64) -> String {
         let text = format!("{v:.2}");
         text.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {
-        let e = a.log10().floor();
-        let m = v / 10f64.powf(e);
-        if (m - m.round()).abs() < 1e-6 && m.round() == 1.0 {
-            format!("1e{e}")
-        } else {
-            format!("{:.0}e{e}", m)
+        // A decade computed as 10^k lands a rounding off it (1e-5 is
+        // 9.999999999999999e-6): the mantissa is brought back into [1, 10).
+        let mut e = a.log10().floor();
+        let mut m = v / 10f64.powf(e);
+        if m.abs() >= 10.0 - 1e-9 {
+            e += 1.0;
+            m /= 10.0;
         }
+        let text = format!("{m:.2}");
+        let text = text.trim_end_matches('0').trim_end_matches('.');
+        format!("{text}e{e}")
     }
 }
 
@@ -608,6 +617,8 @@ mod tests {
     fn tick_formats() {
         let f = linear_ticks(140.0);
         assert_eq!([f(&0.0), f(&20.0), f(&120.0)], ["0", "20", "120"]);
+        let f = linear_ticks(1e-4);
+        assert_eq!([f(&2.25e-5), f(&5e-5)], ["2.25e-5", "5e-5"]);
         let f = linear_ticks(1.0);
         assert_eq!([f(&0.5), f(&-0.25), f(&1.0)], ["0.5", "-0.25", "1"]);
         assert_eq!(
@@ -615,5 +626,10 @@ mod tests {
             ["1", "1000", "1e4", "1e-3", "0.1"]
         );
         assert_eq!(log_ticks(&2e5), "2e5");
+        assert_eq!(log_ticks(&2.5e5), "2.5e5", "a mantissa keeps its digits");
+        // Decades as 10^k computes them, a rounding away from the power.
+        assert_eq!(log_ticks(&9.999999999999999e-6), "1e-5");
+        assert_eq!(log_ticks(&1.0000000000000002e12), "1e12");
+        assert_eq!(log_ticks(&10f64.powi(-7)), "1e-7");
     }
 }
