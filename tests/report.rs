@@ -101,3 +101,28 @@ fn a_spec_or_bad_json_is_bad_input() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!out.exists(), "no page for bad input");
 }
+
+/// Certificates edited to the ends of the double range (Sigma^2 = 1e308
+/// with T = 4.6e-308; Sigma^2 = 1e-308 with T = 1e308, whose chart would
+/// span 2e308): the page is still written, each marked as failing its
+/// re-check, and the run ends (it once hung drawing the second chart).
+#[test]
+fn certificates_at_the_ends_of_the_double_range_still_give_a_page() {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("fixtures/rigid-body-major-axis.cert.json")).unwrap();
+    let dir = temp_dir();
+    let mut args = vec!["report".to_string()];
+    for (name, sigma2, t) in [("big", 1e308, 4.6e-308), ("tiny", 1e-308, 1e308)] {
+        let mut cert: Value = serde_json::from_str(&text).unwrap();
+        cert["sigma2"] = Value::from(sigma2);
+        cert["stopping"]["T"] = Value::from(t);
+        let path = dir.join(format!("{name}.cert.json"));
+        std::fs::write(&path, cert.to_string()).unwrap();
+        args.push(path.display().to_string());
+    }
+    let out = dir.join("edges.html");
+    args.extend(["-o".into(), out.display().to_string()]);
+    let o = verify(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(html.matches("Re-check FAILED").count(), 2);
+}

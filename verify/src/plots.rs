@@ -465,21 +465,30 @@ where
 {
     area.fill(&WHITE)?;
     let ok = |v: f64| v.is_finite() && v > 0.0;
-    let xs: Vec<f64> =
-        c.series.iter().flat_map(|(_, p, _, _)| p.iter().map(|q| q.0)).filter(|x| !c.x_log || ok(*x)).collect();
-    let ys: Vec<f64> = c
+    // The points drawn: a finite x (positive on a log axis) and a positive y.
+    let kept = |&(x, y): &(f64, f64)| ok(y) && x.is_finite() && (!c.x_log || ok(x));
+    let points = || c.series.iter().flat_map(|(_, p, _, _)| p.iter().copied().filter(kept));
+    // (The x axis spans every point with a usable x, drawn or not: a series
+    // of zeros still places the reference lines over its range.)
+    let xs: Vec<f64> = c
         .series
         .iter()
-        .flat_map(|(_, p, _, _)| p.iter().map(|q| q.1))
-        .chain(c.hlines.iter().map(|h| h.1))
-        .filter(|y| ok(*y))
+        .flat_map(|(_, p, _, _)| p.iter().map(|q| q.0))
+        .filter(|x| x.is_finite() && (!c.x_log || ok(*x)))
         .collect();
+    let ys: Vec<f64> = points().map(|q| q.1).chain(c.hlines.iter().map(|h| h.1).filter(|y| ok(*y))).collect();
     if xs.is_empty() || ys.is_empty() {
         return Err("nothing to plot".into());
     }
     let (x0, x1) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let (y0, y1) = ys.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), y| (l.min(*y), h.max(*y)));
     let (y0, y1) = (y0 / 2.0, (y1 * 2.0).max(y0 * 10.0));
+    // Axes whose span or logarithm leaves the doubles (values near 1e308
+    // or 1e-308) are refused: plotters' tick search does not end on them.
+    let x_span = if c.x_log { x1.log10() - x0.log10() } else { x1 - x0 };
+    if !(x_span.is_finite() && y0 > 0.0 && y1.is_finite() && (y1.log10() - y0.log10()).is_finite()) {
+        return Err("the values span more than double precision can draw".into());
+    }
     let mut legend = Legend::default();
     for (label, _, colour) in &c.hlines {
         legend.add(label.as_str(), Mark::Line(palette(*colour), true));
@@ -512,8 +521,7 @@ where
             }
             for (_, points, colour, dashed) in &c.series {
                 let colour = palette(*colour);
-                let pts: Vec<(f64, f64)> =
-                    points.iter().copied().filter(|(x, y)| ok(*y) && (!c.x_log || ok(*x))).collect();
+                let pts: Vec<(f64, f64)> = points.iter().copied().filter(kept).collect();
                 let style = colour.stroke_width(2);
                 if *dashed {
                     chart.draw_series(DashedLineSeries::new(pts.clone(), 6, 4, style))?;
@@ -611,6 +619,28 @@ mod tests {
         }
         let lowest_tick = ticks.iter().map(|t| t.1).fold(0.0, f64::max);
         assert!(legend.iter().all(|t| t.1 > lowest_tick), "a legend label above a tick: {legend:?}");
+    }
+
+    /// Values at the ends of the double range: an x span that overflows
+    /// (-1.7e308 to 1.7e308), x at infinity, a y that halves to 0
+    /// (5e-324): drawn from the finite points, or refused, never a hang
+    /// (plotters' tick search did not end on an infinite axis).
+    #[test]
+    fn charts_at_the_ends_of_the_double_range_end() {
+        register_font();
+        let chart = |series: Vec<(f64, f64)>| XyChart {
+            title: "edge".into(),
+            x_desc: "x".into(),
+            y_desc: "y".into(),
+            x_log: false,
+            series: vec![("s".into(), series, 0, false)],
+            hlines: vec![],
+        };
+        assert!(xy_svg(&chart(vec![(-1.7e308, 1.0), (1.7e308, 2.0)]), (400, 300)).is_err());
+        assert!(xy_svg(&chart(vec![(0.0, 1.0), (1.0, 5e-324)]), (400, 300)).is_err());
+        // A point at infinity is dropped; the finite ones are drawn.
+        assert!(xy_svg(&chart(vec![(0.0, 1.0), (1.0, 2.0), (f64::INFINITY, 3.0)]), (400, 300)).is_ok());
+        assert!(xy_svg(&chart(vec![(0.0, 1.0), (1e-300, 1e300)]), (400, 300)).is_ok());
     }
 
     #[test]

@@ -114,7 +114,7 @@ fn guarantee_chart(cert: &Value) -> Option<XyChart> {
     let stopping = cert.get("stopping")?;
     let (e, d) = (stopping.get("epsilon")?.as_f64()?, stopping.get("delta")?.as_f64()?);
     let t = stopping.get("T")?.as_f64()?;
-    if !(s > 0.0 && t.is_finite() && t > 0.0 && e > d && d > 0.0) {
+    if !(s > 0.0 && (2.0 * t).is_finite() && t > 0.0 && e > d && d > 0.0) {
         return None;
     }
     let points: Vec<(f64, f64)> =
