@@ -278,12 +278,23 @@ where
     Ok(())
 }
 
+/// Whether plotters can draw a log axis over `[lo, hi]`: its tick search
+/// counts the decades from `hi / lo`, and an infinite ratio (more than
+/// about 308 decades) never ends.
+fn log_axis_ok(lo: f64, hi: f64) -> bool {
+    lo > 0.0 && hi.is_finite() && (hi / lo).is_finite()
+}
+
 /// The `(lo, hi)` of the positive finite values, widened for a log axis
-/// (at least a decade).
+/// (at least a decade), and at most 300 decades deep: the axis stays inside
+/// the doubles and [`log_axis_ok`]; values below `lo` are not drawn.
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) =
         values.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, 0.0f64), |(l, h), v| (l.min(v), h.max(v)));
-    lo.is_finite().then(|| (lo * 0.8, (hi * 1.25).max(lo * 10.0)))
+    lo.is_finite().then(|| {
+        let high = (hi * 1.25).max(lo * 10.0).min(f64::MAX);
+        ((lo * 0.8).max(high * 1e-300), high)
+    })
 }
 
 fn draw_growth<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, c: &GrowthChart) -> DrawResult
@@ -319,6 +330,9 @@ where
     else {
         return Err("nothing positive to plot".into());
     };
+    if !log_axis_ok(lo, hi) {
+        return Err(format!("the curves span {lo:e} to {hi:e}, more decades than a log axis can draw").into());
+    }
     let mut chart = ChartBuilder::on(&top)
         .caption(&c.title, ("sans-serif", 22))
         .margin(12)
@@ -335,7 +349,7 @@ where
         .label_style(("sans-serif", 14))
         .draw()?;
     let series = |values: &[f64]| -> Vec<(f64, f64)> {
-        c.times.iter().copied().zip(values.iter().copied()).filter(|(_, v)| positive(v)).collect()
+        c.times.iter().copied().zip(values.iter().copied()).filter(|(_, v)| positive(v) && *v >= lo).collect()
     };
     if let Some((_, lo_b, hi_b)) = &c.band {
         let mut poly = series(hi_b);
@@ -373,8 +387,13 @@ where
                 .filter(|(_, r)| positive(r))
                 .collect()
         };
+        let ratio_lo = |ratios: Vec<(f64, f64)>, lo: f64| -> Vec<(f64, f64)> {
+            ratios.into_iter().filter(|q| q.1 >= lo).collect()
+        };
         let ratios: Vec<f64> = c.curves.iter().flat_map(|(_, v, _, _)| ratio(v)).map(|(_, r)| r).chain([1.0]).collect();
-        let Some((r_lo, r_hi)) = log_range(ratios.into_iter()) else { return Ok(()) };
+        let Some((r_lo, r_hi)) = log_range(ratios.into_iter()).filter(|(a, b)| log_axis_ok(*a, *b)) else {
+            return Err("the ratios to the bound span more decades than a log axis can draw".into());
+        };
         let mut panel = ChartBuilder::on(&bottom)
             .caption(
                 "divided by the certified bound exp(Sigma^2 t): the claim is that the exact moments stay at or below 1",
@@ -394,12 +413,12 @@ where
             .label_style(("sans-serif", 14))
             .draw()?;
         if let Some((_, lo_b, hi_b)) = &c.band {
-            let mut poly = ratio(hi_b);
-            poly.extend(ratio(lo_b).into_iter().rev());
+            let mut poly = ratio_lo(ratio(hi_b), r_lo);
+            poly.extend(ratio_lo(ratio(lo_b), r_lo).into_iter().rev());
             panel.draw_series(std::iter::once(Polygon::new(poly, band_colour.filled())))?;
         }
         for (_, values, colour, dashed) in &c.curves {
-            draw_line(&mut panel, ratio(values), palette(*colour), *dashed)?;
+            draw_line(&mut panel, ratio_lo(ratio(values), r_lo), palette(*colour), *dashed)?;
         }
         draw_line(&mut panel, vec![(0.0, 1.0), (t_max, 1.0)], palette(1), true)?;
         if let Some(t) = shown_t {
@@ -482,11 +501,14 @@ where
     }
     let (x0, x1) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
     let (y0, y1) = ys.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), y| (l.min(*y), h.max(*y)));
-    let (y0, y1) = (y0 / 2.0, (y1 * 2.0).max(y0 * 10.0));
+    // At most 300 decades deep, inside the doubles (as `log_range`); points
+    // below are not drawn.
+    let y1 = (y1 * 2.0).max(y0 * 10.0).min(f64::MAX);
+    let y0 = (y0 / 2.0).max(y1 * 1e-300);
     // Axes whose span or logarithm leaves the doubles (values near 1e308
     // or 1e-308) are refused: plotters' tick search does not end on them.
-    let x_span = if c.x_log { x1.log10() - x0.log10() } else { x1 - x0 };
-    if !(x_span.is_finite() && y0 > 0.0 && y1.is_finite() && (y1.log10() - y0.log10()).is_finite()) {
+    let x_ok = if c.x_log { log_axis_ok(x0, x1) } else { (x1 - x0).is_finite() };
+    if !(x_ok && log_axis_ok(y0, y1)) {
         return Err("the values span more than double precision can draw".into());
     }
     let mut legend = Legend::default();
@@ -521,7 +543,7 @@ where
             }
             for (_, points, colour, dashed) in &c.series {
                 let colour = palette(*colour);
-                let pts: Vec<(f64, f64)> = points.iter().copied().filter(kept).collect();
+                let pts: Vec<(f64, f64)> = points.iter().copied().filter(|q| kept(q) && q.1 >= y0).collect();
                 let style = colour.stroke_width(2);
                 if *dashed {
                     chart.draw_series(DashedLineSeries::new(pts.clone(), 6, 4, style))?;
@@ -622,8 +644,8 @@ mod tests {
     }
 
     /// Values at the ends of the double range: an x span that overflows
-    /// (-1.7e308 to 1.7e308), x at infinity, a y that halves to 0
-    /// (5e-324): drawn from the finite points, or refused, never a hang
+    /// (-1.7e308 to 1.7e308) is refused; x at infinity is dropped; a y of
+    /// 5e-324 beside 1 leaves the axis at most 300 decades deep: never a hang
     /// (plotters' tick search did not end on an infinite axis).
     #[test]
     fn charts_at_the_ends_of_the_double_range_end() {
@@ -637,10 +659,35 @@ mod tests {
             hlines: vec![],
         };
         assert!(xy_svg(&chart(vec![(-1.7e308, 1.0), (1.7e308, 2.0)]), (400, 300)).is_err());
-        assert!(xy_svg(&chart(vec![(0.0, 1.0), (1.0, 5e-324)]), (400, 300)).is_err());
+        assert!(xy_svg(&chart(vec![(0.0, 1.0), (1.0, 5e-324)]), (400, 300)).is_ok());
         // A point at infinity is dropped; the finite ones are drawn.
         assert!(xy_svg(&chart(vec![(0.0, 1.0), (1.0, 2.0), (f64::INFINITY, 3.0)]), (400, 300)).is_ok());
         assert!(xy_svg(&chart(vec![(0.0, 1.0), (1e-300, 1e300)]), (400, 300)).is_ok());
+    }
+
+    /// Growth charts whose curves span 600 decades (down to 5e-324, up to
+    /// 1.7e308) or 200, with the bound at f64::MAX and infinity (its ratio
+    /// at 1e-308), are drawn and end: each log axis is at most 300 decades
+    /// deep (plotters' tick search never ended on a deeper one).
+    #[test]
+    fn a_growth_chart_at_the_ends_of_the_double_range_ends() {
+        register_font();
+        let times = [0.0, 1.0, 2.0];
+        let chart = |curve: Vec<f64>| GrowthChart {
+            title: "edge".into(),
+            times: &times,
+            curves: vec![("c".into(), curve, 0, false)],
+            band: None,
+            bound: Some(("b".into(), vec![1.0, f64::MAX, f64::INFINITY])),
+            stopping_time: None,
+        };
+        let draw = |c: &GrowthChart| {
+            let mut svg = String::new();
+            draw_growth(SVGBackend::with_string(&mut svg, (1000, 860)).into_drawing_area(), c).map(|_| svg)
+        };
+        for curve in [vec![1e-300, 1.0, 1e300], vec![5e-324, 1.0, 1.7e308], vec![1e-100, 1.0, 1e100]] {
+            assert!(draw(&chart(curve.clone())).unwrap().contains("<svg"), "{curve:?}");
+        }
     }
 
     #[test]
