@@ -3,9 +3,10 @@
 # independent numpy/scipy implementation (bench/numpy_pipeline.py), same specs,
 # same machine, same run. The numpy timing covers the pipeline after parsing
 # (sympy parsing excluded) in floating point, so the like-for-like Rust figure
-# is the numeric-level analysis (`us_analyse_numeric`); the exact-level
-# analysis and the end-to-end certify (parsing, exact proofs, certificate
-# JSON) are shown beside it.
+# is the numeric level in floating point (`us_analyse_numeric`:
+# `generator::analyse_numeric`, what `verify sweep --numeric` runs); the
+# exact-level analysis and the end-to-end certify (parsing, exact proofs,
+# certificate JSON) are shown beside it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 python3 -c 'import numpy, scipy, sympy' 2>/dev/null || python3 -m pip install --quiet numpy scipy sympy

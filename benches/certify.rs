@@ -3,8 +3,11 @@
 //! * `certify/<spec>`: the whole path, spec text in, certificate JSON out
 //!   (exact level: optimal Casimir choice, rational Sigma^2, exact spectral test);
 //! * `analysis-exact/<spec>`: the analysis alone at the exact level;
-//! * `analysis-numeric/<spec>`: the analysis alone with the exact proofs
-//!   switched off (`settings.exact = false`): floating-point Sigma^2.
+//! * `analysis-exact-false/<spec>`: the analysis alone with the exact
+//!   proofs switched off (`settings.exact = false`): floating-point
+//!   Sigma^2, `P` still proved definite and formed exactly;
+//! * `analysis-numeric/<spec>`: the numeric level in floating point
+//!   throughout (`generator::analyse_numeric`, as `verify sweep --numeric`).
 //!
 //! The side-by-side numpy/scipy figure comes from `bench/side_by_side.sh`.
 #![allow(missing_docs)] // criterion_group! generates an undocumented function
@@ -35,7 +38,7 @@ fn certify_pipeline(c: &mut Criterion) {
         });
     }
     group.finish();
-    for (label, exact) in [("analysis-exact", true), ("analysis-numeric", false)] {
+    for (label, exact) in [("analysis-exact", true), ("analysis-exact-false", false)] {
         let mut group = c.benchmark_group(label);
         for (dim, name) in SPECS {
             let mut spec = spec::parse_spec(&fixture(&format!("{name}.json"))).unwrap();
@@ -46,6 +49,14 @@ fn certify_pipeline(c: &mut Criterion) {
         }
         group.finish();
     }
+    let mut group = c.benchmark_group("analysis-numeric");
+    for (dim, name) in SPECS {
+        let spec = spec::parse_spec(&fixture(&format!("{name}.json"))).unwrap();
+        group.bench_with_input(BenchmarkId::new(name, dim), &spec, |b, spec| {
+            b.iter(|| black_box(generator::analyse_numeric(&spec.system, &spec.settings.pipeline)))
+        });
+    }
+    group.finish();
 }
 
 criterion_group! {

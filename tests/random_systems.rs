@@ -202,7 +202,43 @@ proptest! {
             confirm_with_moments(&cert)?;
         }
         agrees_with_the_large_pipeline(&spec, &cert.json, &text)?;
+        agrees_with_the_numeric_level(&spec, &cert, &text)?;
     }
+}
+
+/// The numeric level in floating point (`generator::analyse_numeric`) on
+/// the same system: the same early verdicts, never `stable` against a
+/// proved instability or the reverse, `stable` wherever the exact engine
+/// found a definite form with a relative margin above 1e-6 (the numeric
+/// level's tolerance is 1e-9), and where both are stable and the exact
+/// value is sharp, the same `Sigma^2` to 1e-6.
+fn agrees_with_the_numeric_level(spec: &spec::Spec, cert: &spec::Certificate, text: &str) -> Result<(), TestCaseError> {
+    let a = generator::analyse_numeric(&spec.system, &spec.settings.pipeline);
+    let exact = &cert.analysis;
+    let (n, e) = (a.verdict.as_str(), exact.verdict.as_str());
+    let contradiction = matches!((n, e), ("stable", "linearly_unstable") | ("linearly_unstable", "stable"));
+    prop_assert!(!contradiction, "numeric {} ({}), exact {}\n{}", n, a.reason, e, text);
+    for early in ["not_an_equilibrium", "noise_incompatible"] {
+        prop_assert_eq!(n == early, e == early, "numeric {}, exact {}\n{}", n, e, text);
+    }
+    if let Some(s) = &exact.stable {
+        if s.first_choice.relative_margin > 1e-6 {
+            prop_assert_eq!(n, "stable", "{} ({:?})\n{}", a.reason, a.route, text);
+        }
+        let sharp = s.optimum.as_ref().is_none_or(|o| o.attained && o.within_tolerance);
+        if let (true, Some(x)) = (sharp, a.sigma2) {
+            let y = s.sigma2();
+            prop_assert!(
+                (x - y).abs() <= 1e-6 * y.abs() + 1e-9,
+                "Sigma^2 numeric {} ({:?}), exact {}\n{}",
+                x,
+                a.route,
+                y,
+                text
+            );
+        }
+    }
+    Ok(())
 }
 
 /// The large (floating-point) pipeline on the same system never contradicts

@@ -377,8 +377,8 @@ fn merge_checks_identity_duplicates_and_completeness() {
     assert!(stderr(&o).contains("--resume"), "{}", stderr(&o));
 }
 
-/// The numeric level gives the same verdicts and Sigma^2 (to 1e-9) as the
-/// exact level, and says `numerical`.
+/// The numeric level gives the same verdicts and Sigma^2 (to 1e-9, or
+/// rounding near 0) as the exact level, and says `numerical`.
 #[test]
 fn numeric_and_exact_levels_agree() {
     let spec = "rigid-body-major-axis.json";
@@ -402,7 +402,10 @@ fn numeric_and_exact_levels_agree() {
             assert_eq!(re["level"], "exact");
             assert_eq!(rn["level"], "numerical");
             let (a, b) = (re["sigma2"].as_f64().unwrap(), rn["sigma2"].as_f64().unwrap());
-            assert!((a - b).abs() <= 1e-9 * a.abs().max(1e-12), "{re} vs {rn}");
+            // The numeric level (floating point throughout) does not floor a
+            // rounding-size lambda_max to 0: where I2 = I3 the exact value is
+            // 0 and floating point gives about 1e-17 (noise sigma^2 = 0.09).
+            assert!((a - b).abs() <= 1e-9 * a.abs() + 1e-15, "{re} vs {rn}");
         }
     }
     // I1 = 3 is the largest, the intermediate or the smallest axis somewhere on this grid.

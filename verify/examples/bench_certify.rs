@@ -2,10 +2,13 @@
 //! with the numpy/scipy baseline (`bench/side_by_side.sh`) and for profilers.
 //!
 //! Usage: `bench_certify SPEC [REPS]` (`ONLY=analyse` times the analysis alone,
-//! `ONLY=numeric` the analysis at the numeric level). Prints one JSON line with microseconds
+//! `ONLY=numeric` the numeric level). Prints one JSON line with microseconds
 //! per certificate for: parsing the spec (JSON + exact polynomials + checks),
-//! the analysis at the exact level (default) and at the numeric level
-//! (`exact = false`: the scope of the numpy timing), building the
+//! the analysis at the exact level (default), the numeric level in floating
+//! point (`generator::analyse_numeric`, what `verify sweep --numeric`
+//! runs: the scope of the numpy timing), the analysis with `exact = false`
+//! (no rational Sigma^2, but `P` still proved definite and `P`, `Q` exact:
+//! what a spec with `"settings": {"exact": false}` certifies), building the
 //! certificate JSON, and the whole `certify` path end to end (spec text in,
 //! certificate text out, as `verify certify` writes it).
 use std::time::Instant;
@@ -32,12 +35,17 @@ fn main() {
     let analysis = generator::analyse(&spec.system, &spec.settings.pipeline);
     let only = std::env::var("ONLY").unwrap_or_default();
     if only == "analyse" || only == "numeric" {
-        // For profilers: the analysis alone (`numeric`: at the numeric level).
-        let mut settings = spec.settings.pipeline.clone();
-        settings.exact = only == "analyse";
-        let us = per_call(reps, || {
-            std::hint::black_box(generator::analyse(&spec.system, &settings));
-        });
+        // For profilers: the analysis alone (`numeric`: the numeric level).
+        let settings = &spec.settings.pipeline;
+        let us = if only == "analyse" {
+            per_call(reps, || {
+                std::hint::black_box(generator::analyse(&spec.system, settings));
+            })
+        } else {
+            per_call(reps, || {
+                std::hint::black_box(generator::analyse_numeric(&spec.system, settings));
+            })
+        };
         println!("{{\"name\": \"{}\", \"us_analyse\": {us:.2}}}", spec.name);
         return;
     }
@@ -47,10 +55,13 @@ fn main() {
     let analyse = per_call(reps, || {
         std::hint::black_box(generator::analyse(&spec.system, &spec.settings.pipeline));
     });
-    let mut numeric_spec = spec.clone();
-    numeric_spec.settings.pipeline.exact = false;
     let analyse_numeric = per_call(reps, || {
-        std::hint::black_box(generator::analyse(&numeric_spec.system, &numeric_spec.settings.pipeline));
+        std::hint::black_box(generator::analyse_numeric(&spec.system, &spec.settings.pipeline));
+    });
+    let mut inexact_spec = spec.clone();
+    inexact_spec.settings.pipeline.exact = false;
+    let analyse_inexact = per_call(reps, || {
+        std::hint::black_box(generator::analyse(&inexact_spec.system, &inexact_spec.settings.pipeline));
     });
     let certificate = per_call(reps, || {
         std::hint::black_box(spec::certificate_json(&spec, &analysis));
@@ -61,7 +72,7 @@ fn main() {
         std::hint::black_box(spec::to_pretty_json(&spec::certify(&s).json));
     });
     println!(
-        "{{\"name\": \"{}\", \"reps\": {reps}, \"us_parse\": {parse:.2}, \"us_analyse\": {analyse:.2}, \"us_analyse_numeric\": {analyse_numeric:.2}, \"us_certificate_json\": {certificate:.2}, \"us_end_to_end\": {end_to_end:.2}}}",
+        "{{\"name\": \"{}\", \"reps\": {reps}, \"us_parse\": {parse:.2}, \"us_analyse\": {analyse:.2}, \"us_analyse_numeric\": {analyse_numeric:.2}, \"us_analyse_exact_false\": {analyse_inexact:.2}, \"us_certificate_json\": {certificate:.2}, \"us_end_to_end\": {end_to_end:.2}}}",
         spec.name
     );
 }

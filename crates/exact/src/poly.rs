@@ -311,6 +311,58 @@ impl Poly {
         h
     }
 
+    /// The gradient and the Hessian (row-major, `n x n`) at a point, in
+    /// floating point, without forming the derivative polynomials: the
+    /// floating-point counterpart of [`Self::gradient_at`] and
+    /// [`Self::hessian_at`] for the engine's numeric level.
+    ///
+    /// ```
+    /// use exact::{parse_expression, Symbols};
+    /// let s = Symbols::new(&["x".to_string(), "y".to_string()]);
+    /// let p = parse_expression("x^2*y + y^3/3", &s).unwrap();
+    /// let (g, h) = p.derivatives_at_f64(&[2.0, 3.0]);
+    /// // d/dx = 2xy = 12, d/dy = x^2 + y^2 = 13; Hessian [[2y, 2x], [2x, 2y]]
+    /// assert_eq!(g, vec![12.0, 13.0]);
+    /// assert_eq!(h, vec![6.0, 4.0, 4.0, 6.0]);
+    /// ```
+    pub fn derivatives_at_f64(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        assert_eq!(x.len(), self.nvars);
+        let n = self.nvars;
+        let mut g = vec![0.0; n];
+        let mut h = vec![0.0; n * n];
+        // x_k^e, with x^0 = 1 also for x = 0.
+        let power = |k: usize, e: u16| if e == 0 { 1.0 } else { x[k].powi(e as i32) };
+        for (m, c) in &self.terms {
+            let c = rational_to_f64(c);
+            for i in 0..n {
+                if m[i] == 0 {
+                    continue;
+                }
+                let mut t = c * m[i] as f64;
+                for (k, &e) in m.iter().enumerate() {
+                    t *= power(k, if k == i { e - 1 } else { e });
+                }
+                g[i] += t;
+                for j in i..n {
+                    let factor = if i == j { m[i] as f64 * (m[i] as f64 - 1.0) } else { m[i] as f64 * m[j] as f64 };
+                    if factor == 0.0 {
+                        continue;
+                    }
+                    let mut t = c * factor;
+                    for (k, &e) in m.iter().enumerate() {
+                        let e = e - u16::from(k == i) - u16::from(k == j);
+                        t *= power(k, e);
+                    }
+                    h[i * n + j] += t;
+                    if i != j {
+                        h[j * n + i] += t;
+                    }
+                }
+            }
+        }
+        (g, h)
+    }
+
     /// Exact value at a rational point.
     pub fn eval(&self, x: &[Rational]) -> Rational {
         assert_eq!(x.len(), self.nvars);

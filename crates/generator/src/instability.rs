@@ -7,7 +7,7 @@
 //! linearisation).
 
 use exact::Matrix;
-use nalgebra::Complex;
+use nalgebra::{Complex, DMatrix};
 
 /// An eigenvalue of `A` with positive real part, with an eigenvector.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,8 +59,12 @@ fn eigen(a: &Matrix) -> Result<Eigen, SpectrumError> {
 
 /// Eigenvalues of `A`, largest real part first.
 pub fn spectrum(a: &Matrix) -> Result<Vec<Complex<f64>>, SpectrumError> {
-    let n = a.nrows();
-    let af = a.to_dmatrix();
+    spectrum_f64(&a.to_dmatrix())
+}
+
+/// [`spectrum`] of a floating-point matrix (the numeric level's drift).
+pub(crate) fn spectrum_f64(af: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, SpectrumError> {
+    let n = af.nrows();
     if af.iter().any(|x| !x.is_finite()) {
         return Err(SpectrumError::NonFinite);
     }

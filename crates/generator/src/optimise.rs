@@ -89,7 +89,7 @@ pub struct Optimum {
 /// `lambda_max(Q, P)` with its `P`-normalised eigenvector, or `None` when
 /// `P` is not numerically positive definite (then the eigenvector of
 /// `lambda_min(P)` is returned as the second member for a feasibility cut).
-fn top_generalized(p: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<(f64, DVector<f64>), DVector<f64>> {
+pub(crate) fn top_generalized(p: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<(f64, DVector<f64>), DVector<f64>> {
     let n = p.nrows();
     if let Some(g) = generalized_eigen(p, q).filter(|g| !g.values.is_empty()) {
         return Ok((g.values[n - 1], g.vectors.column(n - 1).into_owned()));
@@ -316,17 +316,17 @@ fn positive_part(m: &DMatrix<f64>) -> Option<DMatrix<f64>> {
 /// The pair `(sP, sQ)` in the frame `T = [Z W]` at fixed multipliers, when
 /// `Q` does not depend on `K`: `sP = [[Pz, Pzw], [Pzw^T, Pw + K']]` with
 /// `K' = sK`, `sQ = [[Qz, Qzw], [Qzw^T, Qw]]`.
-struct FramePencil {
-    pz: DMatrix<f64>,
-    pzw: DMatrix<f64>,
-    pw: DMatrix<f64>,
-    qz: DMatrix<f64>,
-    qzw: DMatrix<f64>,
-    qw: DMatrix<f64>,
+pub(crate) struct FramePencil {
+    pub(crate) pz: DMatrix<f64>,
+    pub(crate) pzw: DMatrix<f64>,
+    pub(crate) pw: DMatrix<f64>,
+    pub(crate) qz: DMatrix<f64>,
+    pub(crate) qzw: DMatrix<f64>,
+    pub(crate) qw: DMatrix<f64>,
     /// `K0'`: `sP ≻ 0` iff `K' ≻ K0'` (the Schur bound, signed).
-    k0: DMatrix<f64>,
+    pub(crate) k0: DMatrix<f64>,
     /// The margin `D` added along the conserved directions.
-    margin: DMatrix<f64>,
+    pub(crate) margin: DMatrix<f64>,
 }
 
 impl FramePencil {
@@ -337,7 +337,7 @@ impl FramePencil {
     /// `K' = K1 + (K0' - K1)_+ + D` also makes `P` definite, and adding the
     /// positive `D` to `P` never raises a positive `lambda_max` (`Q` does
     /// not depend on `K`). So `Sigma^2 <= S` up to rounding.
-    fn k_for(&self, s: f64, singular: bool) -> Option<DMatrix<f64>> {
+    pub(crate) fn k_for(&self, s: f64, singular: bool) -> Option<DMatrix<f64>> {
         if s.is_nan() || s <= 0.0 {
             return None;
         }
@@ -893,15 +893,52 @@ fn at_multipliers(
     };
     // delta = 0 first: when the infimum is attained, S = lambda_max itself
     // (exactly singular S P - Q: a sharp certificate).
-    let mut best = if restricted_max > 0.0 { build(0.0, 1e-12 * scale) } else { None };
-    let half = 0.5 * settings.tolerance * scale;
-    let mut delta = 1e-12 * scale;
+    let best = if restricted_max > 0.0 { build(0.0, 1e-12 * scale) } else { None };
+    let best = best.or_else(|| {
+        let condition_at = |delta: f64| frame.k_for(infimum + delta, false).and_then(|kp| screen(&kp)).map(|v| v.1);
+        approach_infimum(
+            Approach { infimum, ceiling: first_growth.sigma2, scale, tolerance: settings.tolerance, cond_limit },
+            |delta| build(delta, 2.0 * delta + 1e-12 * scale),
+            condition_at,
+        )
+    });
+    Some(AtMultipliers { restricted_max, witness, best })
+}
+
+/// Where [`approach_infimum`] may look.
+pub(crate) struct Approach {
+    /// The infimum of `Sigma^2` over `K` (at fixed multipliers).
+    pub infimum: f64,
+    /// The first choice's `Sigma^2`: no target above it is worth building.
+    pub ceiling: f64,
+    /// The scale of `Sigma^2` (the infimum, or the first choice's value).
+    pub scale: f64,
+    /// The optimisation tolerance, relative to the scale.
+    pub tolerance: f64,
+    /// The largest `cond(P)` accepted.
+    pub cond_limit: f64,
+}
+
+/// `K` for targets `S = infimum + delta` when the infimum is approached
+/// but not attained: delta from 1e-12 of the scale growing by 4 (half the
+/// tolerance is always tried), jumping once to a gap predicted from the
+/// condition number seen (`cond(P)` grows like `1/delta` while `K` must
+/// grow), then refined by three geometric bisections between the last gap
+/// that failed and the first that succeeded. `attempt(delta)` builds and
+/// screens the choice; `condition_at(delta)` is `cond(P)` of the `K` built
+/// for that target, unscreened. Shared by the exact optimiser and the
+/// numeric level, so both stop at the same point.
+pub(crate) fn approach_infimum<T>(
+    a: Approach,
+    mut attempt: impl FnMut(f64) -> Option<T>,
+    mut condition_at: impl FnMut(f64) -> Option<f64>,
+) -> Option<T> {
+    let half = 0.5 * a.tolerance * a.scale;
+    let mut delta = 1e-12 * a.scale;
     let mut failed = 0.0;
     let mut predicted = false;
-    // Accepted when conditioned and at its target (a K1 spoiled by
-    // round-off in X^{-1} misses the target: a larger gap then).
-    let attempt = |delta: f64| build(delta, 2.0 * delta + 1e-12 * scale);
-    while best.is_none() && infimum + delta < first_growth.sigma2.max(infimum + 1e3 * scale) {
+    let mut best = None;
+    while best.is_none() && a.infimum + delta < a.ceiling.max(a.infimum + 1e3 * a.scale) {
         let mut next = delta * 4.0;
         best = attempt(delta);
         if best.is_some() && failed > 0.0 {
@@ -921,10 +958,10 @@ fn at_multipliers(
         }
         failed = delta;
         if best.is_none() && !predicted {
-            if let Some((_, c)) = frame.k_for(infimum + delta, false).and_then(|kp| screen(&kp)) {
-                if c.is_finite() && c > cond_limit {
+            if let Some(c) = condition_at(delta) {
+                if c.is_finite() && c > a.cond_limit {
                     // cond(P) ~ 1/delta while K must grow: aim just inside the limit.
-                    next = next.max(2.0 * delta * c / cond_limit);
+                    next = next.max(2.0 * delta * c / a.cond_limit);
                     predicted = true;
                 }
             }
@@ -934,7 +971,7 @@ fn at_multipliers(
         }
         delta = next;
     }
-    Some(AtMultipliers { restricted_max, witness, best })
+    best
 }
 
 /// `max(0, x^T sQ x / x^T sP x)` exactly for `x = Z n`, with `n` the

@@ -199,21 +199,13 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     };
     if analysis.equilibrium_residual.iter().any(|r| !r.is_zero()) {
         analysis.verdict = Verdict::NotAnEquilibrium;
-        analysis.reason = "ad*_{Dh(mu_e)} mu_e is not zero: mu_e is not an equilibrium".into();
+        analysis.reason = NOT_AN_EQUILIBRIUM.into();
         return analysis;
     }
-    let incompatible: Vec<usize> = analysis
-        .noise_residuals
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.iter().any(|x| !x.is_zero()))
-        .map(|(i, _)| i)
-        .collect();
+    let incompatible = incompatible_noise(&analysis.noise_residuals);
     if !incompatible.is_empty() {
         analysis.verdict = Verdict::NoiseIncompatible;
-        analysis.reason = format!(
-            "ad*_sigma mu_e is not zero for noise field(s) {incompatible:?}: the noise moves the equilibrium; compatible noise lies in the isotropy algebra of mu_e"
-        );
+        analysis.reason = incompatible_reason(&incompatible);
         return analysis;
     }
     let linearisation = linearise(system);
@@ -242,13 +234,17 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
             analysis.instability = None;
         }
         analysis.spectral_proof = Some(proof);
+    } else if analysis.instability.is_some() && exact_spectrum_test(&linearisation.a) == SpectralProof::ImaginaryAxis {
+        // Without exact proofs a floating-point instability is still
+        // confirmed: round-off off a defective eigenvalue on the imaginary
+        // axis (a Jordan block of size k >= 3 moves by eps^(1/k) |A|) is not
+        // reported as linear instability. (Only a claimed instability pays
+        // for the Sturm sequence; nothing is recorded as proved.)
+        analysis.instability = None;
     }
 
     let Some(variation) = system.second_variation() else {
-        return conclude_without_form(
-            analysis,
-            "no multipliers make mu_e a critical point of h + sum lambda_j K_j (Dh(mu_e) is not in the span of the conserved gradients)",
-        );
+        return conclude_without_form(analysis, NO_MULTIPLIERS);
     };
     let outcome = find_definite_choice(&variation, &settings.search);
     analysis.variation = Some(variation);
@@ -356,6 +352,24 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         optimum: summary,
     });
     analysis
+}
+
+/// Why `mu_e` is not an equilibrium.
+pub(crate) const NOT_AN_EQUILIBRIUM: &str = "ad*_{Dh(mu_e)} mu_e is not zero: mu_e is not an equilibrium";
+
+/// Why no energy–Casimir form exists when the multipliers do not.
+pub(crate) const NO_MULTIPLIERS: &str = "no multipliers make mu_e a critical point of h + sum lambda_j K_j (Dh(mu_e) is not in the span of the conserved gradients)";
+
+/// The noise fields whose residual `ad*_sigma mu_e` is not zero.
+pub(crate) fn incompatible_noise(residuals: &[Vec<Rational>]) -> Vec<usize> {
+    (0..residuals.len()).filter(|&i| residuals[i].iter().any(|x| !x.is_zero())).collect()
+}
+
+/// Why the noise is incompatible.
+pub(crate) fn incompatible_reason(fields: &[usize]) -> String {
+    format!(
+        "ad*_sigma mu_e is not zero for noise field(s) {fields:?}: the noise moves the equilibrium; compatible noise lies in the isotropy algebra of mu_e"
+    )
 }
 
 fn conclude_without_form(mut analysis: Analysis, why: &str) -> Analysis {

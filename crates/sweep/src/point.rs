@@ -145,11 +145,20 @@ impl Evaluator {
                     Ok(system) => system,
                     Err(e) => return Outcome::invalid(e),
                 };
-                let mut settings = s.settings.pipeline.clone();
                 if self.level == Level::Numeric {
-                    settings.exact = false;
+                    // The numeric level in floating point throughout
+                    // (`generator::analyse_numeric`: no exact P, no proof).
+                    let a = generator::analyse_numeric(&system, &s.settings.pipeline);
+                    return Outcome {
+                        verdict: Some(a.verdict),
+                        level: Some(a.level()),
+                        sigma2: a.sigma2,
+                        stopping_time: stopping_time(s.stopping, a.sigma2),
+                        growth_rate: a.instability.map(|z| z.re),
+                        error: None,
+                    };
                 }
-                let a = generator::analyse(&system, &settings);
+                let a = generator::analyse(&system, &s.settings.pipeline);
                 let sigma2 = a.sigma2();
                 Outcome {
                     verdict: Some(a.verdict),
