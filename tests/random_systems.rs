@@ -208,7 +208,8 @@ proptest! {
 
 /// The numeric level in floating point (`generator::analyse_numeric`) on
 /// the same system: the same early verdicts, never `stable` against a
-/// proved instability or the reverse, `stable` wherever the exact engine
+/// proved instability or the reverse, `stable` only where the exact engine
+/// proves it, and `stable` wherever the exact engine
 /// found a definite form with a relative margin above 1e-6 (the numeric
 /// level's tolerance is 1e-9), and where both are stable and the exact
 /// value is sharp, the same `Sigma^2` to 1e-6.
@@ -221,6 +222,15 @@ fn agrees_with_the_numeric_level(spec: &spec::Spec, cert: &spec::Certificate, te
     for early in ["not_an_equilibrium", "noise_incompatible"] {
         prop_assert_eq!(n == early, e == early, "numeric {}, exact {}\n{}", n, e, text);
     }
+    // `stable` at the numeric level only where the exact engine proves it.
+    prop_assert!(
+        n != "stable" || e == "stable",
+        "numeric stable ({:?}), exact {} ({})\n{}",
+        a.route,
+        e,
+        exact.reason,
+        text
+    );
     if let Some(s) = &exact.stable {
         if s.first_choice.relative_margin > 1e-6 {
             prop_assert_eq!(n, "stable", "{} ({:?})\n{}", a.reason, a.route, text);

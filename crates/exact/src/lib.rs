@@ -45,7 +45,7 @@ pub use number::{
     MAX_CERTIFICATE_DIGITS, MAX_LITERAL_DIGITS,
 };
 pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};
-pub use poly::{monomial_count, monomials_of_degree, Monomial, Poly};
+pub use poly::{monomial_count, monomials_of_degree, Derivatives, Monomial, Poly};
 pub use rational::integer_scale;
 pub use text::{cut, quote};
 pub use upoly::{char_poly, UPoly};

@@ -21,6 +21,21 @@ pub struct Poly {
     terms: Vec<(Monomial, Rational)>,
 }
 
+/// First and second derivatives at a point in floating point
+/// ([`Poly::derivatives_at_f64`]), with the sums of the magnitudes of the
+/// terms behind each entry.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Derivatives {
+    /// The gradient.
+    pub gradient: Vec<f64>,
+    /// The Hessian, row-major `n x n`.
+    pub hessian: Vec<f64>,
+    /// `sum |term|` of each gradient entry.
+    pub gradient_size: Vec<f64>,
+    /// `sum |term|` of each Hessian entry.
+    pub hessian_size: Vec<f64>,
+}
+
 impl Poly {
     /// The zero polynomial in `nvars` variables.
     pub fn zero(nvars: usize) -> Self {
@@ -314,22 +329,33 @@ impl Poly {
     /// The gradient and the Hessian (row-major, `n x n`) at a point, in
     /// floating point, without forming the derivative polynomials: the
     /// floating-point counterpart of [`Self::gradient_at`] and
-    /// [`Self::hessian_at`] for the engine's numeric level.
+    /// [`Self::hessian_at`] for the engine's numeric level. With each, the
+    /// sum of the magnitudes of its terms (`Derivatives::gradient_size`,
+    /// `hessian_size`): the rounding of an entry is a small multiple of
+    /// `eps` times that size, so an entry that is zero exactly but not in
+    /// floating point (terms that cancel) can be told from a small one.
     ///
     /// ```
     /// use exact::{parse_expression, Symbols};
     /// let s = Symbols::new(&["x".to_string(), "y".to_string()]);
     /// let p = parse_expression("x^2*y + y^3/3", &s).unwrap();
-    /// let (g, h) = p.derivatives_at_f64(&[2.0, 3.0]);
+    /// let d = p.derivatives_at_f64(&[2.0, 3.0]);
     /// // d/dx = 2xy = 12, d/dy = x^2 + y^2 = 13; Hessian [[2y, 2x], [2x, 2y]]
-    /// assert_eq!(g, vec![12.0, 13.0]);
-    /// assert_eq!(h, vec![6.0, 4.0, 4.0, 6.0]);
+    /// assert_eq!(d.gradient, vec![12.0, 13.0]);
+    /// assert_eq!(d.hessian, vec![6.0, 4.0, 4.0, 6.0]);
+    /// // x^2 - 2x at x = 1: the gradient's terms 2 and -2 cancel
+    /// let q = parse_expression("x^2 - 2*x", &s).unwrap().derivatives_at_f64(&[1.0, 0.0]);
+    /// assert_eq!((q.gradient[0], q.gradient_size[0]), (0.0, 4.0));
     /// ```
-    pub fn derivatives_at_f64(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    pub fn derivatives_at_f64(&self, x: &[f64]) -> Derivatives {
         assert_eq!(x.len(), self.nvars);
         let n = self.nvars;
-        let mut g = vec![0.0; n];
-        let mut h = vec![0.0; n * n];
+        let mut d = Derivatives {
+            gradient: vec![0.0; n],
+            hessian: vec![0.0; n * n],
+            gradient_size: vec![0.0; n],
+            hessian_size: vec![0.0; n * n],
+        };
         // x_k^e, with x^0 = 1 also for x = 0.
         let power = |k: usize, e: u16| if e == 0 { 1.0 } else { x[k].powi(e as i32) };
         for (m, c) in &self.terms {
@@ -342,7 +368,8 @@ impl Poly {
                 for (k, &e) in m.iter().enumerate() {
                     t *= power(k, if k == i { e - 1 } else { e });
                 }
-                g[i] += t;
+                d.gradient[i] += t;
+                d.gradient_size[i] += t.abs();
                 for j in i..n {
                     let factor = if i == j { m[i] as f64 * (m[i] as f64 - 1.0) } else { m[i] as f64 * m[j] as f64 };
                     if factor == 0.0 {
@@ -353,14 +380,16 @@ impl Poly {
                         let e = e - u16::from(k == i) - u16::from(k == j);
                         t *= power(k, e);
                     }
-                    h[i * n + j] += t;
+                    d.hessian[i * n + j] += t;
+                    d.hessian_size[i * n + j] += t.abs();
                     if i != j {
-                        h[j * n + i] += t;
+                        d.hessian[j * n + i] += t;
+                        d.hessian_size[j * n + i] += t.abs();
                     }
                 }
             }
         }
-        (g, h)
+        d
     }
 
     /// Exact value at a rational point.

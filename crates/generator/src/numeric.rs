@@ -42,7 +42,11 @@
 //! first integral (`Q` then depends on the Casimir Hessian), data whose
 //! magnitudes leave `2^±100` (products could leave the double range),
 //! a rank of `G` or an existence of multipliers that floating point cannot
-//! decide, and any eigen-solver failure.
+//! decide, a conserved gradient whose terms cancel to near their rounding
+//! (a zero gradient computed as 1e-17 must not become a direction), a
+//! restricted Hessian whose sign is within its rounding (bounded from the
+//! magnitudes of the derivatives' terms and the multipliers' accuracy) of
+//! the definiteness tolerance, and any eigen-solver failure.
 
 use crate::instability::spectrum_f64;
 use crate::optimise::{approach_infimum, Approach, FramePencil};
@@ -272,15 +276,13 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
     // an exactly zero gradient stays zero.
     let dh: Vec<f64> = system.hamiltonian_gradient().iter().map(exact::rational_to_f64).collect();
     let hh = system.hamiltonian_hessian().to_dmatrix();
-    let conserved: Vec<(Vec<f64>, DMatrix<f64>)> = system
-        .casimirs()
-        .iter()
-        .chain(system.first_integrals())
-        .map(|p| {
-            let (g, h) = p.derivatives_at_f64(&mu);
-            (g, DMatrix::from_row_slice(n, n, &h))
-        })
-        .collect();
+    let conserved: Vec<exact::Derivatives> =
+        system.casimirs().iter().chain(system.first_integrals()).map(|p| p.derivatives_at_f64(&mu)).collect();
+    // A bound on the rounding of one derivative entry relative to the sum of
+    // the magnitudes of its terms (a few roundings per term, n terms and
+    // more per entry; generous).
+    let rounding = 64.0 * (n as f64 + 4.0) * f64::EPSILON;
+    let frobenius = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     let m = conserved.len();
     let (a, noise, a_tilde) = linearise_f64(system, &mu, &dh, &hh);
     if a_tilde.iter().chain(hh.iter()).chain(&dh).any(|x| !x.is_finite()) {
@@ -292,13 +294,23 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
     // (None: no multipliers exist.) The scope checks come first, so that a
     // system outside the scope costs nothing more here.
     let frame_data = if m == 0 {
-        dh.iter().all(|x| *x == 0.0).then(|| (DVector::zeros(0), DMatrix::identity(n, n), DMatrix::zeros(n, 0)))
+        dh.iter().all(|x| *x == 0.0).then(|| (DVector::zeros(0), DMatrix::identity(n, n), DMatrix::zeros(n, 0), 1.0))
     } else {
         // Columns of unit length: the rank, the range and the multipliers'
         // combination do not depend on how the conserved quantities are
-        // scaled (a zero gradient stays zero and has multiplier 0).
-        let lengths: Vec<f64> = conserved.iter().map(|(g, _)| g.iter().map(|x| x * x).sum::<f64>().sqrt()).collect();
-        let g = DMatrix::from_fn(n, m, |i, j| if lengths[j] > 0.0 { conserved[j].0[i] / lengths[j] } else { 0.0 });
+        // scaled. A gradient with no terms at mu_e is zero exactly (and has
+        // multiplier 0); one whose terms cancel to near its rounding is not
+        // decided by floating point (a zero gradient computed as 1e-17
+        // would become a unit column in a random direction).
+        let lengths: Vec<f64> = conserved.iter().map(|d| frobenius(&d.gradient)).collect();
+        for (d, len) in conserved.iter().zip(&lengths) {
+            let size = frobenius(&d.gradient_size);
+            if size > 0.0 && *len <= 1e9 * rounding * size {
+                return Err("a conserved gradient at mu_e is not resolved above its rounding (its terms cancel)");
+            }
+        }
+        let g =
+            DMatrix::from_fn(n, m, |i, j| if lengths[j] > 0.0 { conserved[j].gradient[i] / lengths[j] } else { 0.0 });
         let gf = faer::Mat::<f64>::from_fn(n, m, |i, j| g[(i, j)]);
         let svd = gf.svd().map_err(|_| "the SVD of the gradient matrix")?;
         let s: Vec<f64> = (0..m.min(n)).map(|i| svd.S()[i]).collect();
@@ -328,7 +340,9 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
                 *l /= len;
             }
         }
-        (relative <= 1e-10).then(|| (lambda, u.columns(rank, n - rank).into_owned(), u.columns(0, rank).into_owned()))
+        (relative <= 1e-10).then(|| {
+            (lambda, u.columns(rank, n - rank).into_owned(), u.columns(0, rank).into_owned(), top / s[rank - 1])
+        })
     };
     // The spectrum of A (instability, and a consistency check of a definite form).
     let spectrum = spectrum_f64(&a).map_err(|_| "the eigenvalues of A")?;
@@ -358,12 +372,21 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
         out
     };
 
-    let Some((lambda, z, w)) = frame_data else {
+    let Some((lambda, z, w, g_condition)) = frame_data else {
         return Ok(conclude(out, NO_MULTIPLIERS));
     };
     out.multipliers = lambda.iter().copied().collect();
     let mut b = hh.clone();
-    for (j, (_, hk)) in conserved.iter().enumerate() {
+    // A bound on the rounding of B = D^2h + sum lambda_j D^2K_j (2-norm, by
+    // the Frobenius norm): D^2h rounded from exact, each Hessian to its
+    // terms' rounding, and each multiplier to about eps cond(G) of itself
+    // (the least-squares solve) plus the gradients' own rounding, which the
+    // check above keeps below 1e-9 of their length.
+    let mut b_error = 4.0 * f64::EPSILON * hh.norm();
+    for (j, d) in conserved.iter().enumerate() {
+        let hk = DMatrix::from_row_slice(n, n, &d.hessian);
+        let lj = lambda[j].abs();
+        b_error += lj * (rounding * frobenius(&d.hessian_size) + (1e-9 + rounding * g_condition) * hk.norm());
         b += hk * lambda[j];
     }
     let b = symmetric(b);
@@ -390,6 +413,13 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
         }
     };
     let tol = settings.search.definiteness_tolerance;
+    // The restricted Hessian's eigenvalues move by at most the rounding of
+    // B (Weyl; Z has orthonormal columns, and its own rounding adds a few
+    // eps |B|): a sign that this rounding could decide is not decided here.
+    let eig_error = b_error + 16.0 * (n as f64) * f64::EPSILON * b.norm();
+    if k > 0 && [Sign::Positive, Sign::Negative].iter().any(|&s| (margin(s) - tol).abs() * max_abs <= eig_error) {
+        return Err("the restricted Hessian's sign is within its rounding of the definiteness tolerance");
+    }
     let Some(sign) = [Sign::Positive, Sign::Negative].into_iter().find(|&s| margin(s) > tol) else {
         out.restricted_margin = Some(margin(Sign::Positive).max(margin(Sign::Negative)));
         return Ok(conclude(out, "no choice of multipliers and Casimir function makes the second variation definite"));

@@ -935,6 +935,11 @@ pub(crate) fn approach_infimum<T>(
 ) -> Option<T> {
     let half = 0.5 * a.tolerance * a.scale;
     let mut delta = 1e-12 * a.scale;
+    if !(delta > 0.0 && delta.is_finite()) {
+        // A scale near the bottom of the double range (or not finite):
+        // the gaps would not grow, and the loop would not end.
+        return None;
+    }
     let mut failed = 0.0;
     let mut predicted = false;
     let mut best = None;

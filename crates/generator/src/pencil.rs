@@ -64,11 +64,17 @@ pub(crate) fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
     if m.iter().any(|x| !x.is_finite()) {
         return None;
     }
-    let mut a = (m + m.transpose()) * 0.5;
-    let norm = a.norm();
-    if norm == 0.0 {
+    // Scaled by a power of two near its largest entry (exact unless an
+    // entry becomes subnormal), so that the sums of squares below neither
+    // overflow nor underflow; the eigenvalues are scaled back at the end.
+    let top = m.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if top == 0.0 {
         return Some(vec![0.0; n]);
     }
+    let e = top.log2().round() as i32;
+    let (down, up) = (2f64.powi(-e), 2f64.powi(e));
+    let mut a = (m + m.transpose()) * (0.5 * down);
+    let norm = a.norm();
     let mut converged = n < 2;
     for _ in 0..60 {
         let off: f64 = (0..n).flat_map(|i| (0..i).map(move |j| (i, j))).map(|(i, j)| a[(i, j)] * a[(i, j)]).sum();
@@ -110,7 +116,7 @@ pub(crate) fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
     if !converged {
         return None;
     }
-    let mut values: Vec<f64> = (0..n).map(|i| a[(i, i)]).collect();
+    let mut values: Vec<f64> = (0..n).map(|i| a[(i, i)] * up).collect();
     values.sort_by(f64::total_cmp);
     values.iter().all(|x| x.is_finite()).then_some(values)
 }
@@ -160,6 +166,12 @@ mod tests {
         let e = symmetric_eigenvalues(&(&m * d * m.transpose())).unwrap();
         assert!(e[0].abs() < 1e-15 && (e[1] - 2.0).abs() < 1e-15 && (e[2] - 2.0).abs() < 1e-15, "{e:?}");
         assert_eq!(symmetric_eigenvalues(&DMatrix::zeros(4, 4)), Some(vec![0.0; 4]));
+        // [[s, 2s], [2s, s]] has eigenvalues -s and 3s at every scale (the
+        // sums of squares would overflow at 1e160 and underflow at 1e-165).
+        for s in [1e160, 1e-165, 1e300, 1e-300] {
+            let e = symmetric_eigenvalues(&DMatrix::from_row_slice(2, 2, &[s, 2.0 * s, 2.0 * s, s])).unwrap();
+            assert!((e[0] + s).abs() <= 1e-14 * s && (e[1] - 3.0 * s).abs() <= 1e-14 * s, "{s}: {e:?}");
+        }
         assert_eq!(symmetric_eigenvalues(&DMatrix::from_element(2, 2, f64::NAN)), None);
     }
 
