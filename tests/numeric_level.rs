@@ -210,7 +210,27 @@ fn cancellations_never_give_a_false_stable() {
         "j3":"100000001/100000000","c":"7/9","sigma":"3/10"},
         "hamiltonian":"j1*Pi1^2/2 + j2*Pi2^2/2 + j3*Pi3^2/2","casimirs":["c*(Pi1^2+Pi2^2+Pi3^2)/2"],
         "equilibrium":[1,0,0],"noise":[["sigma",0,0]]}"#;
-    for (name, text) in [("zero gradient", zero_gradient), ("near sphere", near_sphere)] {
+    // A second review: the computed ker G^T is rotated by the gradients'
+    // rounding times cond(G), which moves the restricted eigenvalues by up
+    // to about 2 theta |B| (now part of the bound). A Casimir whose terms
+    // cancel by about 1e4 at a non-dyadic mu_e with a large coupling B_zw,
+    // and two nearly dependent Casimirs (cond(G) about 1e6) on so3 + so3.
+    let rotated = r#"{"name": "zrot", "algebra": "so3",
+        "parameters": {"p": "11/29", "q": "21/31", "m": 5000, "eps1": "1/10000", "beta": "100", "gamma": 1, "e0": "-1/1000000000000", "sigma": "3/10"},
+        "hamiltonian": "(eps1*Pi3^2 + 2*beta*(-q*(Pi1-p) + p*(Pi2-q))*(p*(Pi1-p) + q*(Pi2-q))/(p^2+q^2)^2 + gamma*((p*(Pi1-p) + q*(Pi2-q))/(p^2+q^2))^2 + e0*((-q*(Pi1-p) + p*(Pi2-q))/(p^2+q^2))^2)/2",
+        "casimirs": ["(Pi1^2 + Pi2^2 + Pi3^2 - (p^2+q^2)*(1 - 1/m))^2/4"],
+        "equilibrium": ["p", "q", 0], "noise": [["sigma*p", "sigma*q", 0]]}"#;
+    let dependent = r#"{"name": "cond", "algebra": {"coordinates": ["x1","x2","x3","x4","x5","x6"], "structure_constants": [[0,1,2,1],[1,2,0,1],[2,0,1,1],[3,4,5,1],[4,5,3,1],[5,3,4,1]]},
+        "parameters": {"p": "25/35", "q": "11/53", "p2": "5/13", "q2": "39/17", "d": "1/1000000", "eps1": "1/100", "beta": "1", "e0": "-1/10000000000000"},
+        "hamiltonian": "(eps1*(x3^2 + x6^2 + ((-q2*(x4-p2) + p2*(x5-q2))/(p2^2+q2^2))^2) + 2*beta*((-q*(x1-p) + p*(x2-q))/(p^2+q^2))*((p*(x1-p) + q*(x2-q))/(p^2+q^2)) + ((p*(x1-p) + q*(x2-q))/(p^2+q^2))^2 + ((p2*(x4-p2) + q2*(x5-q2))/(p2^2+q2^2))^2 + e0*((-q*(x1-p) + p*(x2-q))/(p^2+q^2))^2)/2",
+        "casimirs": ["(x1^2+x2^2+x3^2 + x4^2+x5^2+x6^2)/2", "(x1^2+x2^2+x3^2 + (1+d)*(x4^2+x5^2+x6^2))/2"],
+        "equilibrium": ["p", "q", 0, "p2", "q2", 0], "noise": [["p/3", "q/3", 0, 0, 0, 0]]}"#;
+    for (name, text) in [
+        ("zero gradient", zero_gradient),
+        ("near sphere", near_sphere),
+        ("rotated kernel", rotated),
+        ("dependent", dependent),
+    ] {
         let spec = parse(text);
         let exact = analyse(&spec.system, &spec.settings.pipeline);
         assert_eq!(exact.verdict, Verdict::LinearlyUnstable, "{name}: {}", exact.reason);

@@ -294,7 +294,9 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
     // (None: no multipliers exist.) The scope checks come first, so that a
     // system outside the scope costs nothing more here.
     let frame_data = if m == 0 {
-        dh.iter().all(|x| *x == 0.0).then(|| (DVector::zeros(0), DMatrix::identity(n, n), DMatrix::zeros(n, 0), 1.0))
+        dh.iter()
+            .all(|x| *x == 0.0)
+            .then(|| (DVector::zeros(0), DMatrix::identity(n, n), DMatrix::zeros(n, 0), 0.0, 1.0, vec![]))
     } else {
         // Columns of unit length: the rank, the range and the multipliers'
         // combination do not depend on how the conserved quantities are
@@ -303,10 +305,16 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
         // decided by floating point (a zero gradient computed as 1e-17
         // would become a unit column in a random direction).
         let lengths: Vec<f64> = conserved.iter().map(|d| frobenius(&d.gradient)).collect();
+        // The relative accuracy of the unit columns: their terms' rounding
+        // over their length, and the SVD's own.
+        let mut accuracy = 64.0 * (n as f64 + 4.0) * f64::EPSILON;
         for (d, len) in conserved.iter().zip(&lengths) {
             let size = frobenius(&d.gradient_size);
             if size > 0.0 && *len <= 1e9 * rounding * size {
                 return Err("a conserved gradient at mu_e is not resolved above its rounding (its terms cancel)");
+            }
+            if *len > 0.0 {
+                accuracy += rounding * size / len;
             }
         }
         let g =
@@ -340,8 +348,13 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
                 *l /= len;
             }
         }
+        // The computed range of G (and its complement ker G^T) is within
+        // the angle theta of the exact one (Wedin: the columns' error over
+        // the smallest singular value, the columns being of unit length).
+        let theta = 2.0 * (m as f64).sqrt() * accuracy / s[rank - 1];
         (relative <= 1e-10).then(|| {
-            (lambda, u.columns(rank, n - rank).into_owned(), u.columns(0, rank).into_owned(), top / s[rank - 1])
+            let frame = (u.columns(rank, n - rank).into_owned(), u.columns(0, rank).into_owned());
+            (lambda, frame.0, frame.1, theta, top / s[rank - 1], lengths)
         })
     };
     // The spectrum of A (instability, and a consistency check of a definite form).
@@ -372,21 +385,25 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
         out
     };
 
-    let Some((lambda, z, w, g_condition)) = frame_data else {
+    let Some((lambda, z, w, theta, g_condition, lengths)) = frame_data else {
         return Ok(conclude(out, NO_MULTIPLIERS));
     };
     out.multipliers = lambda.iter().copied().collect();
     let mut b = hh.clone();
     // A bound on the rounding of B = D^2h + sum lambda_j D^2K_j (2-norm, by
     // the Frobenius norm): D^2h rounded from exact, each Hessian to its
-    // terms' rounding, and each multiplier to about eps cond(G) of itself
-    // (the least-squares solve) plus the gradients' own rounding, which the
-    // check above keeps below 1e-9 of their length.
+    // terms' rounding, and the multipliers of the unit columns (`lambda_j
+    // |g_j|`, which do not depend on how a quantity is scaled) to about
+    // (theta + eps cond(G)) of their norm (the least-squares solve with the
+    // gradients' own error); `lambda_j` itself then errs by that over
+    // `|g_j|`.
     let mut b_error = 4.0 * f64::EPSILON * hh.norm();
+    let unit_multipliers = lambda.iter().zip(&lengths).map(|(l, len)| (l * len).powi(2)).sum::<f64>().sqrt();
+    let lambda_error = unit_multipliers * (theta + rounding * g_condition);
     for (j, d) in conserved.iter().enumerate() {
         let hk = DMatrix::from_row_slice(n, n, &d.hessian);
-        let lj = lambda[j].abs();
-        b_error += lj * (rounding * frobenius(&d.hessian_size) + (1e-9 + rounding * g_condition) * hk.norm());
+        let spread = if lengths[j] > 0.0 { lambda_error / lengths[j] } else { 0.0 };
+        b_error += lambda[j].abs() * rounding * frobenius(&d.hessian_size) + spread * hk.norm();
         b += hk * lambda[j];
     }
     let b = symmetric(b);
@@ -416,7 +433,10 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
     // The restricted Hessian's eigenvalues move by at most the rounding of
     // B (Weyl; Z has orthonormal columns, and its own rounding adds a few
     // eps |B|): a sign that this rounding could decide is not decided here.
-    let eig_error = b_error + 16.0 * (n as f64) * f64::EPSILON * b.norm();
+    // (The computed ker G^T is within the angle theta of the exact one,
+    // which moves the restricted eigenvalues by up to 2 theta |B| + theta^2
+    // |B|: a review found false `stable` verdicts without this term.)
+    let eig_error = b_error + (16.0 * (n as f64) * f64::EPSILON + 3.0 * theta) * b.norm();
     if k > 0 && [Sign::Positive, Sign::Negative].iter().any(|&s| (margin(s) - tol).abs() * max_abs <= eig_error) {
         return Err("the restricted Hessian's sign is within its rounding of the definiteness tolerance");
     }
@@ -532,6 +552,12 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
     let (sp, sigma2) = best;
     if !sigma2.is_finite() {
         return Err("Sigma^2 is not finite in double precision");
+    }
+    if sigma2 < infimum * (1.0 - 1e-6) - 1e-12 * scale {
+        // lambda_max at a finite K is never below the infimum over K: the
+        // floating-point pencil is inconsistent (not a proof of anything,
+        // but a sign that rounding decided it).
+        return Err("Sigma^2 came out below the infimum over the Casimir Hessian");
     }
     out.verdict = Verdict::Stable;
     out.reason = format!(
