@@ -12,9 +12,12 @@
 //! The steps, with the exact pipeline's conventions and tolerances:
 //!
 //! 1. `Dh` and `D^2h` at `mu_e` (exact in the [`System`], rounded), the
-//!    conserved gradients `G` and Hessians at `mu_e` in floating point;
-//! 2. the multipliers `G lambda = -Dh` by the SVD of `G`, and from it an
-//!    orthonormal frame `[Z W]`: `Z` spans `ker G^T`, `W` the range of `G`;
+//!    conserved gradients `G` at `mu_e` exactly (whether multipliers exist
+//!    and the rank of `G` are decided in rational arithmetic, as the exact
+//!    pipeline decides them), the conserved Hessians in floating point;
+//! 2. the multipliers `G lambda = -Dh` by the SVD of `G` (rounded, unit
+//!    columns), and from it an orthonormal frame `[Z W]`: `Z` spans
+//!    `ker G^T`, `W` the range of `G`;
 //! 3. the restricted Hessian `Z^T B Z` (`B = D^2h + sum lambda_j D^2K_j`)
 //!    definite of sign `s` with a relative margin above
 //!    [`casimir::SearchSettings::definiteness_tolerance`] (the positive sign
@@ -23,7 +26,9 @@
 //!    directions, `sK = K0' + c I` with `c` the level scale `sqrt(l_min
 //!    l_max)` of the restricted Hessian, as [`casimir::find_definite_choice`]
 //!    constructs it;
-//! 5. `Q = sym(P A~ + A~^T P + sum_i B_i^T P B_i)` and `Sigma^2 =
+//! 5. `Q = sum_i (B_i^T P B_i + sym(P B_i^2))` (the generator form with
+//!    the drift part `P A + A^T P`, zero for an energy–Casimir `P`, left
+//!    out rather than formed as rounding) and `Sigma^2 =
 //!    max(0, lambda_max(sQ, sP))`; the infimum over the Casimir Hessian is
 //!    the restricted `lambda_max(Z^T sQ Z, Z^T sP Z)` (the noise conserves
 //!    every conserved quantity, so `Q` does not depend on it), and when the
@@ -41,10 +46,8 @@
 //! multipliers (a family to optimise over), noise that does not conserve a
 //! first integral (`Q` then depends on the Casimir Hessian), data whose
 //! magnitudes leave `2^±100` (products could leave the double range),
-//! a rank of `G` or an existence of multipliers that floating point cannot
-//! decide, a conserved gradient whose terms cancel to near their rounding
-//! (a zero gradient computed as 1e-17 must not become a direction), a
-//! restricted Hessian whose sign is within its rounding (bounded from the
+//! conserved gradients that are independent but nearly dependent (`cond(G)`
+//! above 1e7), a restricted Hessian whose sign is within its rounding (bounded from the
 //! magnitudes of the derivatives' terms and the multipliers' accuracy) of
 //! the definiteness tolerance, and any eigen-solver failure.
 
@@ -298,64 +301,73 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
             .all(|x| *x == 0.0)
             .then(|| (DVector::zeros(0), DMatrix::identity(n, n), DMatrix::zeros(n, 0), 0.0, 1.0, vec![]))
     } else {
-        // Columns of unit length: the rank, the range and the multipliers'
-        // combination do not depend on how the conserved quantities are
-        // scaled. A gradient with no terms at mu_e is zero exactly (and has
-        // multiplier 0); one whose terms cancel to near its rounding is not
-        // decided by floating point (a zero gradient computed as 1e-17
-        // would become a unit column in a random direction).
-        let lengths: Vec<f64> = conserved.iter().map(|d| frobenius(&d.gradient)).collect();
-        // The relative accuracy of the unit columns: their terms' rounding
-        // over their length, and the SVD's own.
-        let mut accuracy = 64.0 * (n as f64 + 4.0) * f64::EPSILON;
-        for (d, len) in conserved.iter().zip(&lengths) {
-            let size = frobenius(&d.gradient_size);
-            if size > 0.0 && *len <= 1e9 * rounding * size {
-                return Err("a conserved gradient at mu_e is not resolved above its rounding (its terms cancel)");
+        // The gradients exactly (cheap at mu_e): whether multipliers exist
+        // and the rank of G are decided in rational arithmetic, as the exact
+        // pipeline decides them. (Floating point cannot tell a residual
+        // `G lambda + Dh` of 1e-16 from rounding, nor a zero gradient from
+        // one computed as 1e-17: reviews found false `stable` verdicts from
+        // both.)
+        let exact_g: Vec<Vec<Rational>> = system
+            .casimirs()
+            .iter()
+            .chain(system.first_integrals())
+            .map(|p| p.gradient_at(system.equilibrium()))
+            .collect();
+        let g_matrix = exact::Matrix::from_fn(n, m, |i, j| exact_g[j][i].clone());
+        let rank = g_matrix.rank();
+        let with_dh = exact::Matrix::from_fn(n, m + 1, |i, j| {
+            if j < m {
+                exact_g[j][i].clone()
+            } else {
+                system.hamiltonian_gradient()[i].clone()
             }
-            if *len > 0.0 {
-                accuracy += rounding * size / len;
-            }
-        }
-        let g =
-            DMatrix::from_fn(n, m, |i, j| if lengths[j] > 0.0 { conserved[j].gradient[i] / lengths[j] } else { 0.0 });
-        let gf = faer::Mat::<f64>::from_fn(n, m, |i, j| g[(i, j)]);
-        let svd = gf.svd().map_err(|_| "the SVD of the gradient matrix")?;
-        let s: Vec<f64> = (0..m.min(n)).map(|i| svd.S()[i]).collect();
-        let top = s.iter().fold(0.0f64, |a, x| a.max(*x));
-        // A singular value between 1e-13 and 1e-7 of the largest: the rank
-        // is not decided by floating point.
-        if s.iter().any(|&x| x > 1e-13 * top && x <= 1e-7 * top) {
-            return Err("the rank of the conserved gradients is numerically ambiguous");
-        }
-        let rank = s.iter().filter(|&&x| x > 1e-7 * top && x > 0.0).count();
-        if rank < m {
+        });
+        if with_dh.rank() > rank {
+            // Dh is not in the span of the conserved gradients: no multipliers.
+            None
+        } else if rank < m {
             return Err("free multipliers (a family to optimise over)");
-        }
-        let u = DMatrix::from_fn(n, n, |i, j| svd.U()[(i, j)]);
-        let v = DMatrix::from_fn(m, m, |i, j| svd.V()[(i, j)]);
-        let mut lambda = DVector::zeros(m);
-        for i in 0..rank {
-            lambda += v.column(i) * (-u.column(i).dot(&dh_v) / s[i]);
-        }
-        let residual = (&g * &lambda + &dh_v).norm();
-        let relative = if dh_v.norm() > 0.0 { residual / dh_v.norm() } else { residual };
-        if relative > 1e-10 && relative <= 1e-6 {
-            return Err("whether multipliers exist is numerically ambiguous");
-        }
-        for (l, len) in lambda.iter_mut().zip(&lengths) {
-            if *len > 0.0 {
+        } else {
+            // Columns of unit length: the range and the multipliers'
+            // combination do not depend on how the conserved quantities
+            // are scaled. Each column is the rounded exact gradient.
+            let columns: Vec<Vec<f64>> =
+                exact_g.iter().map(|g| g.iter().map(exact::rational_to_f64).collect()).collect();
+            let lengths: Vec<f64> = columns.iter().map(|g| frobenius(g)).collect();
+            let g = DMatrix::from_fn(n, m, |i, j| columns[j][i] / lengths[j]);
+            // The relative accuracy of the unit columns (rounding to doubles
+            // and the normalisation) and of the SVD.
+            let accuracy = 64.0 * (n as f64 + 4.0) * f64::EPSILON;
+            let gf = faer::Mat::<f64>::from_fn(n, m, |i, j| g[(i, j)]);
+            let svd = gf.svd().map_err(|_| "the SVD of the gradient matrix")?;
+            let s: Vec<f64> = (0..m.min(n)).map(|i| svd.S()[i]).collect();
+            let top = s.iter().fold(0.0f64, |a, x| a.max(*x));
+            // Independent exactly, but nearly dependent in floating point:
+            // the computed ker G^T would be too far off the exact one.
+            if s[m - 1].is_nan() || s[m - 1] <= 1e-7 * top {
+                return Err("the conserved gradients are independent but nearly dependent (cond(G) above 1e7)");
+            }
+            let u = DMatrix::from_fn(n, n, |i, j| svd.U()[(i, j)]);
+            let v = DMatrix::from_fn(m, m, |i, j| svd.V()[(i, j)]);
+            let mut lambda = DVector::zeros(m);
+            for i in 0..rank {
+                lambda += v.column(i) * (-u.column(i).dot(&dh_v) / s[i]);
+            }
+            let residual = (&g * &lambda + &dh_v).norm();
+            if residual > 1e-6 * dh_v.norm() {
+                // Exactly in the span, yet not solved in floating point.
+                return Err("the multipliers are not resolved in floating point");
+            }
+            for (l, len) in lambda.iter_mut().zip(&lengths) {
                 *l /= len;
             }
-        }
-        // The computed range of G (and its complement ker G^T) is within
-        // the angle theta of the exact one (Wedin: the columns' error over
-        // the smallest singular value, the columns being of unit length).
-        let theta = 2.0 * (m as f64).sqrt() * accuracy / s[rank - 1];
-        (relative <= 1e-10).then(|| {
+            // The computed range of G (and its complement ker G^T) is within
+            // the angle theta of the exact one (Wedin: the columns' error
+            // over the smallest singular value, the columns of unit length).
+            let theta = 2.0 * (m as f64).sqrt() * accuracy / s[m - 1];
             let frame = (u.columns(rank, n - rank).into_owned(), u.columns(0, rank).into_owned());
-            (lambda, frame.0, frame.1, theta, top / s[rank - 1], lengths)
-        })
+            Some((lambda, frame.0, frame.1, theta, top / s[m - 1], lengths))
+        }
     };
     // The spectrum of A (instability, and a consistency check of a definite form).
     let spectrum = spectrum_f64(&a).map_err(|_| "the eigenvalues of A")?;
@@ -477,11 +489,18 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
     let margin_d = DMatrix::<f64>::identity(rk, rk) * level;
     // Q does not depend on the Casimir Hessian (the noise and the drift
     // conserve every conserved quantity): the form of B serves.
+    // Q = sym(P A~ + A~^T P) + sum B^T P B is, for an energy–Casimir P,
+    // exactly the paper's formula sum_i (B_i^T P B_i + sym(P B_i^2)): the
+    // drift part P A + A^T P vanishes. It is formed that way, so that its
+    // rounding (about eps |P| |A|, which swamped Sigma^2 when the noise is
+    // small beside the drift: a review found values 6000 times too low) is
+    // not added.
     let generator = |p: &DMatrix<f64>| -> DMatrix<f64> {
-        let pa = p * &a_tilde;
-        let mut q = &pa + pa.transpose();
+        let mut q = DMatrix::zeros(n, n);
         for bm in &noise {
-            q += bm.transpose() * p * bm;
+            let pb = p * bm;
+            q += bm.transpose() * &pb;
+            q += symmetric(&pb * bm);
         }
         symmetric(q)
     };
