@@ -196,14 +196,9 @@ fn in_range(x: &Rational) -> bool {
     x.is_zero() || exact::binary_exponent(x).is_some_and(|e| e.abs() <= MAGNITUDE_LIMIT)
 }
 
-/// The drift `A`, the noise operators `B_i` and the Itô drift `A~` in
+/// The drift `A` and the noise operators `B_i` in
 /// floating point (the same formulas as [`crate::linearise`]).
-fn linearise_f64(
-    system: &System,
-    mu: &[f64],
-    dh: &[f64],
-    hh: &DMatrix<f64>,
-) -> (DMatrix<f64>, Vec<DMatrix<f64>>, DMatrix<f64>) {
+fn linearise_f64(system: &System, mu: &[f64], dh: &[f64], hh: &DMatrix<f64>) -> (DMatrix<f64>, Vec<DMatrix<f64>>) {
     let algebra = system.algebra();
     let n = algebra.dim();
     let mut lambda = DMatrix::zeros(n, n); // Lambda(mu)_ab = c^k_ab mu_k
@@ -224,11 +219,7 @@ fn linearise_f64(
         }
     }
     a += lambda.transpose() * hh;
-    let mut a_tilde = a.clone();
-    for b in &noise {
-        a_tilde += (b * b) * 0.5;
-    }
-    (a, noise, a_tilde)
+    (a, noise)
 }
 
 fn symmetric(m: DMatrix<f64>) -> DMatrix<f64> {
@@ -287,8 +278,8 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
     let rounding = 64.0 * (n as f64 + 4.0) * f64::EPSILON;
     let frobenius = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     let m = conserved.len();
-    let (a, noise, a_tilde) = linearise_f64(system, &mu, &dh, &hh);
-    if a_tilde.iter().chain(hh.iter()).chain(&dh).any(|x| !x.is_finite()) {
+    let (a, noise) = linearise_f64(system, &mu, &dh, &hh);
+    if a.iter().chain(noise.iter().flatten()).chain(hh.iter()).chain(&dh).any(|x| !x.is_finite()) {
         return Err("a derivative is not finite in double precision");
     }
 
