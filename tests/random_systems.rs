@@ -279,6 +279,23 @@ fn agrees_with_the_large_pipeline(
         // the large pipeline's a drift residual of rounding size.)
         prop_assert!((ls - es).abs() <= 1e-4 * es.abs() + 1e-9, "Sigma^2 large {}, exact {}\n{}", ls, es, text);
     }
+    // A verified bound (docs/large.md) is the growth constant of an exactly
+    // conserved, exactly critical form of the family, so it is at least the
+    // exact engine's infimum over that family (computed in rational
+    // arithmetic); a verified verdict is never contradicted.
+    if let Some(upper) = a.sigma2_upper {
+        prop_assert_eq!(l, "stable");
+        prop_assert!(e != "linearly_unstable", "verified stable, exact {}\n{}", e, text);
+        if let (Some(infimum), false) = (exact["optimisation"]["infimum"].as_f64(), a.q_depends_on_casimirs) {
+            prop_assert!(
+                upper >= infimum - 1e-12 * infimum.abs(),
+                "verified upper {} below the exact infimum {}\n{}",
+                upper,
+                infimum,
+                text
+            );
+        }
+    }
     Ok(())
 }
 

@@ -187,6 +187,8 @@ def test_fluid_zeitlin_and_large_specs():
     big = ec.certify(FIXTURES / "large" / "chain-30.json")
     # Uncoupled copies of the major-axis body: the single body's 0.27.
     assert big.kind == "large" and big.sigma2 == pytest.approx(0.27, rel=1e-9)
+    # The verified final check (docs/large.md): a proved bound at or above it.
+    assert big.level == "verified_float" and 0.27 <= big.sigma2_upper <= 0.27 * 1.01
 
 
 def test_altered_certificates_fail_with_the_path():

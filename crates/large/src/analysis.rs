@@ -27,12 +27,14 @@
 //!    or `inconclusive`.
 
 use crate::system::LargeSystem;
+use crate::verified::{Choice, VerifiedPencil};
 use crate::LargeError;
 use exact::Rational;
 use fluid::dense::{largest_generalized, product, symmetric_eigen, symmetric_eigenvalues, FramePencil};
 use nalgebra::{DMatrix, DVector};
 use outcome::{Progress, Verdict, VerificationLevel};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// Settings, with documented defaults.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,6 +53,9 @@ pub struct LargeSettings {
     pub condition_limit: f64,
     /// Largest dimension for the dense spectrum of the drift. Default 2048.
     pub instability_max_dim: usize,
+    /// Largest dimension for the `verified_float` final check (two dense
+    /// verified Cholesky factorisations, `n^3/3` each). Default 2500.
+    pub verified_max_dim: usize,
 }
 
 impl Default for LargeSettings {
@@ -61,6 +66,7 @@ impl Default for LargeSettings {
             instability_tolerance: 1e-6,
             condition_limit: 1e10,
             instability_max_dim: 2048,
+            verified_max_dim: 2500,
         }
     }
 }
@@ -95,6 +101,19 @@ pub struct LargeAnalysis {
     pub q_depends_on_casimirs: bool,
     /// `Sigma^2` at the chosen form.
     pub sigma2: Option<f64>,
+    /// A proved upper bound on `Sigma^2` (level `verified_float`,
+    /// [`crate::verified`]).
+    pub sigma2_upper: Option<f64>,
+    /// The exact multipliers of the verified functional.
+    pub exact_multipliers: Option<Vec<Rational>>,
+    /// Why a stable verdict stays `numerical` (no verified check), if so.
+    pub verification: Option<String>,
+    /// The verified check's matrices, to prove other bounds (a stated
+    /// `sigma2_upper` when a certificate is checked).
+    pub pencil: Option<Arc<VerifiedPencil>>,
+    /// `Sigma^2` of the system as given is the pencil's times this (the
+    /// exact power-of-two rescaling of the noise).
+    pub pencil_scale: f64,
     /// Its infimum over the Casimir Hessian (when `Q` does not depend on it).
     pub infimum: Option<f64>,
     /// `cond(sP)`.
@@ -103,6 +122,22 @@ pub struct LargeAnalysis {
     pub drift_residual: f64,
     /// The largest real part of the drift's eigenvalues (without a form).
     pub growth_rate: Option<f64>,
+}
+
+/// The relative margins tried, in order, for the verified bound
+/// `sigma2 (1 + m)`.
+pub const VERIFIED_MARGINS: [f64; 4] = [1e-8, 1e-6, 1e-4, 1e-2];
+
+impl LargeAnalysis {
+    /// Whether `bar` (for the system as given) is proved an upper bound on
+    /// `Sigma^2` by the verified check ([`crate::verified`]); `false` when
+    /// there is no verified check.
+    pub fn proves_upper(&self, bar: f64) -> bool {
+        match &self.pencil {
+            Some(p) if self.pencil_scale > 0.0 => p.proves(bar / self.pencil_scale),
+            _ => false,
+        }
+    }
 }
 
 /// A sparse matrix as a map of its nonzero entries.
@@ -252,6 +287,21 @@ fn analyse_scaled(
         } else {
             a.sigma2 = Some(s2);
             a.infimum = a.infimum.map(back);
+            a.pencil_scale = back(1.0);
+            if let Some(upper) = a.sigma2_upper {
+                let scaled = back(upper);
+                // 2^(2e) is exact unless the result leaves the normal range
+                if scaled.is_finite() && scaled >= f64::MIN_POSITIVE && a.pencil_scale >= f64::MIN_POSITIVE {
+                    a.sigma2_upper = Some(scaled);
+                } else {
+                    a.sigma2_upper = None;
+                    a.level = VerificationLevel::Numerical;
+                    a.verification = Some(
+                        "the verified bound lies outside the normal double range after rescaling the noise".into(),
+                    );
+                    a.pencil = None;
+                }
+            }
         }
     }
     a.noise_residuals = system.noise_residuals();
@@ -279,6 +329,11 @@ fn analyse_normalised(
         restricted_margin: f64::NEG_INFINITY,
         q_depends_on_casimirs: false,
         sigma2: None,
+        sigma2_upper: None,
+        exact_multipliers: None,
+        verification: None,
+        pencil: None,
+        pencil_scale: 1.0,
         infimum: None,
         condition_number: None,
         drift_residual: 0.0,
@@ -707,6 +762,41 @@ fn analyse_normalised(
     out.sigma2 = Some(sigma2.max(0.0));
     out.infimum = infimum;
     out.verdict = Verdict::Stable;
+    // The verified_float final check (crate::verified).
+    progress.check()?;
+    if n > settings.verified_max_dim {
+        out.verification =
+            Some(format!("the verified check runs up to dimension {} (settings)", settings.verified_max_dim));
+    } else if sigma2.is_nan() || sigma2 <= 0.0 {
+        out.verification = Some("Sigma^2 is not positive: no bound above it is tried".into());
+    } else {
+        let choice =
+            Choice { sign, multipliers: lambda.as_slice(), rank, u: &u, v: &v, singular_values: &s_values, k: &k };
+        match VerifiedPencil::build(system, &choice) {
+            Err(why) => out.verification = Some(why),
+            Ok(pencil) => {
+                out.exact_multipliers = Some(pencil.multipliers.clone());
+                if !pencil.form_is_definite() {
+                    out.verification = Some("P is not proved definite by the verified Cholesky test".into());
+                } else {
+                    let proved = VERIFIED_MARGINS.iter().map(|m| sigma2 * (1.0 + m)).find(|bar| pencil.proves(*bar));
+                    match proved {
+                        Some(bar) => {
+                            out.sigma2_upper = Some(bar);
+                            out.level = VerificationLevel::VerifiedFloat;
+                        }
+                        None => {
+                            out.verification = Some(format!(
+                                "bar P - Q is not proved positive definite at sigma2 (1 + m) for m up to {:e}",
+                                VERIFIED_MARGINS[VERIFIED_MARGINS.len() - 1]
+                            ))
+                        }
+                    }
+                }
+                out.pencil = Some(Arc::new(pencil));
+            }
+        }
+    }
     out.reason = format!(
         "the second variation is {} definite on ker G^T (relative margin {:.3e}): formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t), Sigma^2 by a dense generalized eigenproblem in dimension {n}{}",
         if sign > 0.0 { "positive" } else { "negative" },

@@ -19,7 +19,10 @@
 //!   Casimir Hessian by the Schur completion ([`fluid::dense::FramePencil`]),
 //!   `Q` from sparse drift and noise operators, `Sigma^2` by a dense
 //!   generalized eigenproblem, and the drift's spectrum when no form is
-//!   definite. Level `numerical`.
+//!   definite. Level `numerical` until the final check:
+//! * [`verified`]: the `verified_float` final check, for the exact second
+//!   variation of an exactly critical conserved functional (exact rational
+//!   multipliers) with every rounding bounded.
 
 #![warn(missing_docs)]
 
@@ -28,6 +31,7 @@ pub mod analysis;
 pub mod parse;
 pub mod poly;
 pub mod system;
+pub mod verified;
 
 /// Why a large system could not be built or analysed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

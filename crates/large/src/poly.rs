@@ -289,6 +289,51 @@ impl SparsePoly {
         g
     }
 
+    /// The Hessian at a rational point, exactly, as `(i, j) -> value` with
+    /// `i <= j` (each symmetric pair once; the diagonal once), the nonzero
+    /// entries only.
+    ///
+    /// ```
+    /// use large::poly::SparsePoly;
+    /// use exact::Rational;
+    /// // p = x0^2 x1 / 3 at (2, 5): d00 = 2 x1 / 3 = 10/3, d01 = 2 x0 / 3 = 4/3, d11 = 0
+    /// let (x0, x1) = (SparsePoly::var(2, 0), SparsePoly::var(2, 1));
+    /// let p = x0.mul(&x0).mul(&x1).scale(&Rational::new_small(1, 3));
+    /// let h = p.hessian_at(&[Rational::from(2), Rational::from(5)]);
+    /// assert_eq!(h[&(0, 0)], Rational::new_small(10, 3));
+    /// assert_eq!(h[&(0, 1)], Rational::new_small(4, 3));
+    /// assert_eq!(h.len(), 2);
+    /// ```
+    pub fn hessian_at(&self, x: &[Rational]) -> BTreeMap<(usize, usize), Rational> {
+        let mut h: BTreeMap<(usize, usize), Rational> = BTreeMap::new();
+        for (m, c) in &self.terms {
+            for (k, (i, ei)) in m.iter().enumerate() {
+                for (l, (j, ej)) in m.iter().enumerate().skip(k) {
+                    let factor = if k == l {
+                        if *ei < 2 {
+                            continue;
+                        }
+                        i64::from(*ei) * (i64::from(*ei) - 1)
+                    } else {
+                        i64::from(*ei) * i64::from(*ej)
+                    };
+                    let mut t = c * &Rational::from(factor);
+                    for (q, (v, f)) in m.iter().enumerate() {
+                        let power = i64::from(*f) - i64::from(q == k) - i64::from(q == l);
+                        for _ in 0..power {
+                            t = &t * &x[*v as usize];
+                        }
+                    }
+                    if !t.is_zero() {
+                        *h.entry((*i as usize, *j as usize)).or_insert_with(Rational::zero) += t;
+                    }
+                }
+            }
+        }
+        h.retain(|_, v| !v.is_zero());
+        h
+    }
+
     /// The Hessian at a point in floating point, as `(i, j, value)` with
     /// `i <= j` (each symmetric pair once; the diagonal once).
     pub fn hessian_at_f64(&self, x: &[f64]) -> BTreeMap<(usize, usize), f64> {

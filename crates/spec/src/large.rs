@@ -220,6 +220,7 @@ pub fn large_certificate_document(
         level: LevelOrNone(None),
         checks: BTreeMap::new(),
         sigma2: None,
+        sigma2_upper: None,
         infimum: None,
         stopping: None,
         spec_sha256: spec_digest(&spec.raw),
@@ -237,6 +238,8 @@ pub fn large_certificate_document(
             condition_number: None,
             drift_residual: Float(0.0),
             growth_rate: None,
+            exact_multipliers: None,
+            verification: None,
         },
         spec: spec.raw.clone(),
     };
@@ -276,21 +279,41 @@ pub fn large_certificate_document(
             checks.insert("residuals".to_string(), "exact: the residuals are computed in rational arithmetic from the sparse structure constants and polynomials".to_string());
         }
         Verdict::Stable => {
-            checks.insert(
-                "form".to_string(),
-                "numerical: the multipliers by least squares (analysis.multiplier_residual), the restricted Hessian's eigenvalues on ker G^T (analysis.restricted_margin), the Casimir Hessian by a Schur completion; nothing is proved".to_string(),
-            );
-            checks.insert(
-                "sigma2".to_string(),
-                "numerical: lambda_max(sQ, sP) by a dense generalized eigenproblem (faer); infimum: lambda_max restricted to ker G^T".to_string(),
-            );
+            r.exact_multipliers =
+                a.exact_multipliers.as_ref().map(|m| m.iter().map(|x| ExactRational(x.clone())).collect());
+            r.verification = a.verification.clone();
             doc.sigma2 = a.sigma2.map(Float);
             doc.infimum = a.infimum.map(Float);
-            doc.stopping = stopping_record(
-                spec.stopping,
-                a.sigma2,
-                "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta, with the numerical Sigma^2: an estimate, not a guarantee",
-            );
+            if let (Some(upper), Some(VerificationLevel::VerifiedFloat)) = (a.sigma2_upper, doc.level.0) {
+                checks.insert(
+                    "form".to_string(),
+                    "verified_float: the multipliers are exact rationals with G lambda + Dh = 0 proved in rational arithmetic (analysis.exact_multipliers), so the functional s (h + lambda.C) + (C - C_e)^T K' (C - C_e)/2 is conserved and exactly critical; its exact Hessian P is proved positive definite by a floating-point Cholesky test with every rounding between the exact data and the tested matrix bounded (Rump-style)".to_string(),
+                );
+                checks.insert(
+                    "sigma2".to_string(),
+                    "verified_float: sigma2_upper P - Q is proved positive definite for the exact P and the exact Q = sum_i (B_i^T P B_i + sym(P B_i^2)) (the drift part is exactly zero for a conserved critical functional), roundings bounded; sigma2 is lambda_max(sQ, sP) by a dense generalized eigenproblem (faer), an estimate; infimum: lambda_max restricted to ker G^T".to_string(),
+                );
+                doc.sigma2_upper = Some(Float(upper));
+                doc.stopping = stopping_record(
+                    spec.stopping,
+                    Some(upper),
+                    "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta, with Sigma^2 = sigma2_upper, for the linearised SDE",
+                );
+            } else {
+                checks.insert(
+                    "form".to_string(),
+                    "numerical: the multipliers by least squares (analysis.multiplier_residual), the restricted Hessian's eigenvalues on ker G^T (analysis.restricted_margin), the Casimir Hessian by a Schur completion; nothing is proved (analysis.verification says why)".to_string(),
+                );
+                checks.insert(
+                    "sigma2".to_string(),
+                    "numerical: lambda_max(sQ, sP) by a dense generalized eigenproblem (faer); infimum: lambda_max restricted to ker G^T".to_string(),
+                );
+                doc.stopping = stopping_record(
+                    spec.stopping,
+                    a.sigma2,
+                    "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta, with the numerical Sigma^2: an estimate, not a guarantee",
+                );
+            }
         }
         Verdict::LinearlyUnstable => {
             checks.insert(
@@ -343,8 +366,23 @@ pub(crate) fn check_large_certificate_with(
     if cert.get("spec_sha256").and_then(Value::as_str) != Some(spec_digest(&spec.raw).as_str()) {
         return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
     }
-    let analysis = analyse_large_with(&spec.system, &spec.settings, progress);
+    let mut analysis = analyse_large_with(&spec.system, &spec.settings, progress);
     progress.check()?;
+    // A stated sigma2_upper below the re-derived one stands only if the
+    // verified check proves it; then the rest is compared at that bound.
+    if let (Ok(a), Some(stated)) = (&mut analysis, cert.get("sigma2_upper").and_then(Value::as_f64)) {
+        if let Some(derived) = a.sigma2_upper {
+            if stated < derived {
+                if !(stated.is_finite() && stated > 0.0 && a.proves_upper(stated)) {
+                    return Err(fail(
+                        "$.sigma2_upper",
+                        format!("{stated:e} is not proved: sigma2_upper P - Q is not verified positive definite there (the engine proves {derived:e})"),
+                    ));
+                }
+                a.sigma2_upper = Some(stated);
+            }
+        }
+    }
     let expected = serde_json::to_value(large_certificate_document(&spec, &analysis)).unwrap_or_default();
     compare_with(&expected, cert, "$", 0.0, LARGE_TOLERANCE)?;
     let level = expected.get("level").and_then(Value::as_str).and_then(|s| s.parse::<VerificationLevel>().ok());

@@ -969,6 +969,11 @@ pub struct LargeCertificateDocument {
     /// `Sigma^2` at the chosen form, when stable.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sigma2: Option<Float>,
+    /// A proved upper bound on `Sigma^2` (level `verified_float`): `P ≻ 0`
+    /// and `sigma2_upper P - Q ≻ 0` for the exact second variation
+    /// (docs/large.md). `check` accepts a smaller value only if it proves it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_upper: Option<Float>,
     /// The infimum of `Sigma^2` over the Casimir Hessian, when `Q` does not
     /// depend on it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -1016,6 +1021,13 @@ pub struct LargeAnalysisRecord {
     /// The drift's largest real part, when its spectrum was computed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub growth_rate: Option<Float>,
+    /// The exact multipliers of the verified functional (`G lambda + Dh = 0`
+    /// exactly), when the verified check ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exact_multipliers: Option<Vec<ExactRational>>,
+    /// Why a stable verdict has no verified bound, when it has none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verification: Option<String>,
 }
 
 /// The JSON Schema of a large system's certificate.
