@@ -498,6 +498,14 @@ fn an_edited_verified_certificate_fails_its_check() {
             other => panic!("{factor}: {other:?}"),
         }
     }
+    // A stopping time inflated by 9e-10 (inside the comparison's 1e-9) is
+    // more than the proved bound guarantees: refused.
+    let mut edited = cert.clone();
+    edited["stopping"]["T"] = json!(cert["stopping"]["T"].as_f64().unwrap() * (1.0 + 9e-10));
+    match spec::check_certificate_value(&edited) {
+        Err(spec::CheckError::Failed { path, .. }) => assert_eq!(path, "$.stopping.T"),
+        other => panic!("{other:?}"),
+    }
     let mut edited = cert.clone();
     edited["analysis"]["exact_multipliers"][0] = json!("-7/31");
     assert!(spec::check_certificate_value(&edited).is_err());
@@ -520,6 +528,20 @@ fn the_verified_check_falls_back_honestly() {
     assert!(cert.get("sigma2_upper").is_none());
     let why = cert["analysis"]["verification"].as_str().unwrap();
     assert!(why.contains("rationals"), "{why}");
+    spec::check_certificate_value(&cert).expect("re-checks");
+
+    // The Hamiltonian and the Casimirs times 1e-180: P is about 1e-180, its
+    // rounding errors about 1e-196 (squares below the double range: the
+    // radii are computed scaled), Sigma^2 unchanged (the pencil is scaled).
+    let mut v = chain(22, "0", ["3", "2", "1"], 0, "3/10");
+    v["hamiltonian"] = json!(format!("1e-180*({})", v["hamiltonian"].as_str().unwrap()));
+    for c in v["casimirs"].as_array_mut().unwrap() {
+        *c = json!(format!("1e-180*({})", c.as_str().unwrap()));
+    }
+    let cert = large(&v);
+    assert_eq!(cert["level"], "verified_float", "{}", cert["analysis"]);
+    let u = cert["sigma2_upper"].as_f64().unwrap();
+    assert!((0.27..=0.27 * 1.011).contains(&u), "{u}");
     spec::check_certificate_value(&cert).expect("re-checks");
 
     let cert = large(&chain(22, "0", ["3", "2", "1"], 0, "3e-151"));

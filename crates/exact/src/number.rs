@@ -435,9 +435,27 @@ pub fn rational_to_f64_up(r: &Rational) -> f64 {
     if !x.is_finite() {
         return if r.is_negative() { f64::MIN } else { f64::INFINITY };
     }
-    match Rational::from_float(x) {
-        Some(exact_x) if &exact_x < r => x.next_up(),
-        _ => x,
+    // `rational_to_f64` may be off by more than one unit in the last place
+    // either way (a quotient of two rounded integers): step up until the
+    // exact value of the double is at least `r`, then down while the next
+    // double below still is, so the result is the smallest double >= r.
+    let mut x = x;
+    while x.is_finite() {
+        match Rational::from_float(x) {
+            Some(exact_x) if &exact_x < r => x = x.next_up(),
+            _ => break,
+        }
+    }
+    while x.is_finite() {
+        match Rational::from_float(x.next_down()) {
+            Some(below) if &below >= r => x = x.next_down(),
+            _ => break,
+        }
+    }
+    if x.is_finite() {
+        x
+    } else {
+        f64::INFINITY
     }
 }
 
@@ -494,6 +512,27 @@ pub(crate) fn one() -> Rational {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// `rational_to_f64` divides two rounded integers, which can land two
+    /// units below the quotient; one step up was not always enough (a
+    /// review found this quotient 2e-17 relative below after one step).
+    #[test]
+    fn rounding_up_is_at_least_the_rational() {
+        let r = Rational::new(2604018746780635317i64.into(), 1456756553584590308i64.into());
+        let x = rational_to_f64_up(&r);
+        assert!(Rational::from_float(x).unwrap() >= r);
+        assert!(Rational::from_float(x.next_down()).unwrap() < r, "the smallest double above");
+    }
+
+    proptest! {
+        #[test]
+        fn rounding_up_never_falls_below(n in 1i64..i64::MAX, d in 1i64..i64::MAX) {
+            let r = Rational::new(n.into(), d.into());
+            let x = rational_to_f64_up(&r);
+            prop_assert!(Rational::from_float(x).unwrap() >= r);
+            prop_assert!(Rational::from_float(x.next_down()).unwrap() < r);
+        }
+    }
 
     /// The definition, by big integers only: the smallest multiple of
     /// `10^e` that is `>= x`.

@@ -100,7 +100,8 @@ pub fn verified_positive_definite_within(a: &DMatrix<f64>, radius: f64) -> bool 
         return false; // the error bounds below assume (n+1)u is small
     }
     let g = nn * u / (1.0 - nn * u);
-    let trace: f64 = (0..n).map(|i| a[(i, i)]).sum();
+    // (the sum of n terms, inflated for its own rounding, gamma_n < 2 n u)
+    let trace: f64 = (0..n).map(|i| a[(i, i)]).sum::<f64>() * (1.0 + 2.0 * nn * u);
     let max_diag = (0..n).map(|i| a[(i, i)]).fold(0.0, f64::max);
     // c0 >= g/(1-g) (1+u) trace + u max_diag, then c = c0 / (1 - u) so that
     // c >= c0 + u c; inflate by (1 + 16 u) per rounded operation above.
@@ -113,7 +114,7 @@ pub fn verified_positive_definite_within(a: &DMatrix<f64>, radius: f64) -> bool 
     // Plain Cholesky (inner-product form), the algorithm the bound is about,
     // on R^T stored by columns: r[j * n + k] = R[k][j], so the inner
     // products read two contiguous columns. Higham's bound holds for any
-    // order of summation in each inner product, so `dot` may sum in four
+    // order of summation in each inner product, so `dot` may sum in sixteen
     // interleaved parts (which lets the compiler vectorise it; the large
     // pipeline runs this test at dimension 2016).
     let mut r = vec![0.0f64; n * n];

@@ -284,6 +284,9 @@ fn analyse_scaled(
                     .into();
             a.sigma2 = None;
             a.infimum = None;
+            a.sigma2_upper = None;
+            a.pencil = None;
+            a.level = VerificationLevel::Numerical;
         } else {
             a.sigma2 = Some(s2);
             a.infimum = a.infimum.map(back);
@@ -709,7 +712,9 @@ fn analyse_normalised(
     let sq = generator_form(&sp, &a_tilde, &noise);
     let (pz, pzw, pw) = blocks(&(&base_frame * sign));
     let (qz, qzw, qw) = blocks(&frame_coordinates(&sq));
-    let level = (lo.abs() * hi).sqrt().max(f64::MIN_POSITIVE);
+    // (the geometric mean as a product of roots: lo * hi underflows for
+    // a system scaled by 1e-180)
+    let level = (lo.abs().sqrt() * hi.sqrt()).max(f64::MIN_POSITIVE);
     let frame = FramePencil { pz, pzw, pw, qz, qzw, qw };
     let (k, sigma2, infimum, condition) = if out.q_depends_on_casimirs {
         // Q moves with K: the reference choice, unoptimised.

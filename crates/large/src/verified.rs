@@ -74,6 +74,37 @@ fn rounded(x: &Rational) -> Option<(f64, f64)> {
     err.is_finite().then_some((f, err))
 }
 
+/// An upper bound on `sqrt(sum x_i^2)` that neither underflows nor
+/// overflows: the terms are scaled by the power of two near the largest
+/// magnitude (exact, except for terms that become subnormal: their error,
+/// and that of squares below the normal range, is covered by the absolute
+/// term `sqrt(count) 2^-500` in the scaled units), summed, and scaled back.
+/// Squaring every error bound without scaling lost every bound below about
+/// 1e-162 (a review found radii of 7e-305 for errors of 1e-196).
+fn norm_up<I: Iterator<Item = f64> + Clone>(values: I) -> f64 {
+    let m = values.clone().fold(0.0f64, |a, x| a.max(x.abs()));
+    if m == 0.0 {
+        return 0.0;
+    }
+    if !m.is_finite() {
+        return f64::INFINITY;
+    }
+    // 2^-e with 2^e <= m < 2^(e+1) for normal m; subnormal m gets 2^1022
+    let e = ((m.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    let scale = fluid::banded::pow2(-e.max(-1022));
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for x in values {
+        let y = x * scale;
+        sum += y * y;
+        count += 1;
+    }
+    let count = count as f64;
+    let scaled = sum.sqrt() * (1.0 + 4.0 * (count + 4.0) * U) + count.sqrt() * fluid::banded::pow2(-500);
+    // dividing by a power of two is exact unless the result leaves the
+    // normal range (then it rounds by less than MIN_POSITIVE)
+    scaled / scale + f64::MIN_POSITIVE
+}
+
 /// A sparse matrix of doubles with the Frobenius norm of its entrywise
 /// rounding bound, and the largest number of entries in a column.
 struct Rounded {
@@ -85,22 +116,20 @@ struct Rounded {
 
 fn round_matrix(m: &Exact, n: usize) -> Option<Rounded> {
     let mut entries = Vec::with_capacity(m.len());
-    let (mut err2, mut norm2) = (0.0f64, 0.0f64);
+    let mut errors = Vec::with_capacity(m.len());
     let mut counts = vec![0usize; n];
     for (&(r, c), x) in m {
         let (f, e) = rounded(x)?;
         if f != 0.0 || e != 0.0 {
             entries.push((r, c, f));
-            err2 += e * e;
-            norm2 += f * f;
+            errors.push(e);
             counts[c] += 1;
         }
     }
-    let inflate = 1.0 + 4.0 * (m.len() as f64 + 4.0) * U;
     Some(Rounded {
+        error: norm_up(errors.iter().copied()),
+        norm: norm_up(entries.iter().map(|e| e.2)),
         entries,
-        error: err2.sqrt() * inflate + f64::MIN_POSITIVE,
-        norm: norm2.sqrt() * inflate,
         column_count: counts.into_iter().max().unwrap_or(0),
     })
 }
@@ -124,8 +153,7 @@ fn sparse_product(a: &Exact, b: &Exact) -> Exact {
 
 /// The Frobenius norm of a dense matrix, rounded upwards.
 fn frobenius_up(m: &DMatrix<f64>) -> f64 {
-    let s: f64 = m.iter().map(|x| x * x).sum();
-    s.sqrt() * (1.0 + 4.0 * (m.len() as f64 + 4.0) * U)
+    norm_up(m.iter().copied())
 }
 
 /// Copy the lower triangle onto the upper one, so the matrix is exactly
@@ -240,14 +268,17 @@ impl VerifiedPencil {
             }
         }
         let mut p = DMatrix::<f64>::zeros(n, n);
-        let mut s_err2 = 0.0f64;
+        // each entry's error, twice for an off-diagonal one (both triangles)
+        let mut s_errors = Vec::with_capacity(2 * s_exact.len());
         for (&(i, j), x) in &s_exact {
             let (f, e) = rounded(x).ok_or("an entry of the Hessian is beyond the double range")?;
             p[(j.max(i), j.min(i))] = choice.sign * f;
-            s_err2 += if i == j { e * e } else { 2.0 * e * e };
+            s_errors.push(e);
+            if i != j {
+                s_errors.push(e);
+            }
         }
-        let s_error = s_err2.sqrt() * (1.0 + 4.0 * (s_exact.len() as f64 + 4.0) * U) + f64::MIN_POSITIVE;
-        // G, rounded, and K' = V_r S^-1 K S^-1 V_r^T (symmetric by mirroring).
+        let s_error = norm_up(s_errors.into_iter());
         let rank = choice.rank;
         // G rounded, with each column's rounding bound; the bounds below are
         // taken with the columns scaled to unit size (D = diag |g_j|), so
@@ -255,25 +286,24 @@ impl VerifiedPencil {
         // matching row and column of K') leaves them unchanged:
         // || |G| |K'| |G|^T || <= ||G D^-1||_F^2 ||D K' D||_F.
         let mut g = DMatrix::<f64>::zeros(n, r);
-        let mut col_err2 = vec![0.0f64; r];
+        let mut col_errors = vec![Vec::new(); r];
         for (j, c) in conserved.iter().enumerate() {
             for (i, x) in c.gradient_at(mu) {
                 let (f, e) = rounded(&x).ok_or("a conserved gradient is beyond the double range")?;
                 g[(i, j)] = f;
-                col_err2[j] += e * e;
+                col_errors[j].push(e);
             }
         }
-        let inflate = 1.0 + 4.0 * (n as f64 + 4.0) * U;
-        // (a zero gradient keeps the scale 1: its column adds nothing)
-        let d: Vec<f64> = (0..r).map(|j| g.column(j).norm()).map(|x| if x > 0.0 { x } else { 1.0 }).collect();
+        // d_j: an upper bound on |g_j| (a zero gradient keeps the scale 1:
+        // its column adds nothing), so |g_j| / d_j <= 1.
+        let d: Vec<f64> =
+            (0..r).map(|j| norm_up(g.column(j).iter().copied())).map(|x| if x > 0.0 { x } else { 1.0 }).collect();
         if d.iter().any(|x| !x.is_finite()) {
             return Err("a conserved gradient is not finite in double precision".into());
         }
-        // ||G D^-1||_F (each column's norm over its computed norm: about 1)
-        // and ||E_G D^-1||_F, rounded upwards.
-        let g_hat = (r as f64).sqrt() * inflate * inflate;
-        let e_hat =
-            (0..r).map(|j| col_err2[j] / (d[j] * d[j])).sum::<f64>().sqrt() * inflate * inflate + f64::MIN_POSITIVE;
+        // ||G D^-1||_F <= sqrt r, and ||E_G D^-1||_F, rounded upwards.
+        let g_hat = (r as f64).sqrt() * (1.0 + 4.0 * U);
+        let e_hat = norm_up((0..r).map(|j| norm_up(col_errors[j].iter().copied()) / d[j] * (1.0 + 2.0 * U)));
         if rank > 0 {
             let mut vs = DMatrix::<f64>::zeros(r, rank);
             for i in 0..rank {
@@ -288,16 +318,10 @@ impl VerifiedPencil {
                 return Err("the Casimir Hessian is not finite in the gradients' coordinates".into());
             }
             let t = fluid::dense::product(&g, &fluid::dense::product(&kp, &g.transpose()));
-            let k_hat = {
-                let mut s2 = 0.0f64;
-                for a in 0..r {
-                    for b in 0..r {
-                        let x = d[a] * kp[(a, b)] * d[b];
-                        s2 += x * x;
-                    }
-                }
-                s2.sqrt() * (1.0 + 4.0 * ((r * r) as f64 + 8.0) * U)
-            };
+            // ||D K' D||_F: each entry two products (relative error 2u)
+            let k_hat =
+                norm_up((0..r).flat_map(|a| (0..r).map(move |b| (a, b))).map(|(a, b)| d[a] * kp[(a, b)] * d[b]))
+                    * (1.0 + 4.0 * U);
             for j in 0..n {
                 for i in j..n {
                     p[(i, j)] += t[(i, j)];
