@@ -326,6 +326,24 @@ fn so_n(n: usize) -> (Vec<String>, Vec<Value>) {
     (pairs.iter().map(|(i, j)| format!("M_{i}_{j}")).collect(), rows)
 }
 
+/// The free rigid body on so(n) (Manakov inertia `J_a = a + 1`) turning in
+/// the plane (0, 1), noise `3/10` along it, as a spec.
+fn so_n_spec(n: usize) -> Value {
+    let (names, rows) = so_n(n);
+    let pairs: Vec<(usize, usize)> = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
+    let h: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2/{}", 2 * (i + j + 2))).collect();
+    let c: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2")).collect();
+    json!({
+        "name": format!("so{n}"),
+        "algebra": {"coordinates": names, "structure_constants": rows},
+        "parameters": {"sigma": "3/10"},
+        "hamiltonian": h.join(" + "),
+        "casimirs": [format!("({})/2", c.join(" + "))],
+        "equilibrium": pairs.iter().map(|p| json!(if *p == (0, 1) { 1 } else { 0 })).collect::<Vec<_>>(),
+        "noise": [pairs.iter().map(|p| if *p == (0, 1) { json!("sigma") } else { json!(0) }).collect::<Vec<_>>()],
+    })
+}
+
 /// The free rigid body on so(n) (Manakov inertia `J_a = a + 1`), turning in
 /// the plane of the two smallest moments, noise along it: the exact engine
 /// certifies so(4), so(5) and so(8) (6 to 28 coordinates), the large
@@ -333,24 +351,9 @@ fn so_n(n: usize) -> (Vec<String>, Vec<Value>) {
 /// coordinates, beyond the exact engine).
 #[test]
 fn the_so_n_rigid_body_agrees_with_the_exact_engine() {
-    let spec_of = |n: usize| -> Value {
-        let (names, rows) = so_n(n);
-        let pairs: Vec<(usize, usize)> = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).collect();
-        let h: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2/{}", 2 * (i + j + 2))).collect();
-        let c: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2")).collect();
-        json!({
-            "name": format!("so{n}"),
-            "algebra": {"coordinates": names, "structure_constants": rows},
-            "parameters": {"sigma": "3/10"},
-            "hamiltonian": h.join(" + "),
-            "casimirs": [format!("({})/2", c.join(" + "))],
-            "equilibrium": pairs.iter().map(|p| json!(if *p == (0, 1) { 1 } else { 0 })).collect::<Vec<_>>(),
-            "noise": [pairs.iter().map(|p| if *p == (0, 1) { json!("sigma") } else { json!(0) }).collect::<Vec<_>>()],
-        })
-    };
     let mut values = vec![];
     for n in [4usize, 5, 8] {
-        let v = spec_of(n);
+        let v = so_n_spec(n);
         let e = exact(&v);
         assert_eq!(e["verdict"], "stable", "so({n}): {}", e["reason"]);
         let parsed = spec::parse_spec(&v.to_string()).unwrap();
@@ -360,7 +363,7 @@ fn the_so_n_rigid_body_agrees_with_the_exact_engine() {
         assert!((l - x).abs() <= 1e-9 * x, "so({n}): large {l}, exact {x}");
         values.push(x);
     }
-    let big = large(&spec_of(13));
+    let big = large(&so_n_spec(13));
     assert_eq!(big["verdict"], "stable", "{}", big["reason"]);
     let s = big["sigma2"].as_f64().unwrap();
     assert!((s - values[2]).abs() <= 1e-9 * s, "so(13) {s} vs so(8) {}", values[2]);
@@ -446,34 +449,12 @@ fn verified_bounds_enclose_independent_values() {
             assert!(u >= infimum, "k = {k}: {u} < {infimum}");
         }
     }
-    let (names, rows) = so_n(13);
-    let pairs: Vec<(usize, usize)> = (0..13).flat_map(|i| (i + 1..13).map(move |j| (i, j))).collect();
-    let h: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2/{}", 2 * (i + j + 2))).collect();
-    let c: Vec<String> = pairs.iter().map(|(i, j)| format!("M_{i}_{j}^2")).collect();
-    let so13 = json!({
-        "name": "so13",
-        "algebra": {"coordinates": names, "structure_constants": rows},
-        "parameters": {"sigma": "3/10"},
-        "hamiltonian": h.join(" + "),
-        "casimirs": [format!("({})/2", c.join(" + "))],
-        "equilibrium": pairs.iter().map(|p| json!(if *p == (0, 1) { 1 } else { 0 })).collect::<Vec<_>>(),
-        "noise": [pairs.iter().map(|p| if *p == (0, 1) { json!("sigma") } else { json!(0) }).collect::<Vec<_>>()],
-    });
+    let so13 = so_n_spec(13);
     let cert = large(&so13);
     assert_eq!(cert["analysis"]["sign"], -1.0);
     let (_, u) = bound(&cert);
     // so(8) by the exact engine (as in the_so_n_rigid_body_agrees_with_the_exact_engine)
-    let mut so8 = so13.clone();
-    let (names8, rows8) = so_n(8);
-    let pairs8: Vec<(usize, usize)> = (0..8).flat_map(|i| (i + 1..8).map(move |j| (i, j))).collect();
-    so8["algebra"] = json!({"coordinates": names8, "structure_constants": rows8});
-    so8["hamiltonian"] =
-        json!(pairs8.iter().map(|(i, j)| format!("M_{i}_{j}^2/{}", 2 * (i + j + 2))).collect::<Vec<_>>().join(" + "));
-    so8["casimirs"] =
-        json!([format!("({})/2", pairs8.iter().map(|(i, j)| format!("M_{i}_{j}^2")).collect::<Vec<_>>().join(" + "))]);
-    so8["equilibrium"] = json!(pairs8.iter().map(|p| json!(if *p == (0, 1) { 1 } else { 0 })).collect::<Vec<_>>());
-    so8["noise"] =
-        json!([pairs8.iter().map(|p| if *p == (0, 1) { json!("sigma") } else { json!(0) }).collect::<Vec<_>>()]);
+    let so8 = so_n_spec(8);
     let e = exact(&so8);
     assert_eq!(e["optimisation"]["attained"], true, "{}", e["optimisation"]);
     let x = e["sigma2"].as_f64().unwrap();
