@@ -127,6 +127,11 @@ fn bad_harmonics_name_the_field_and_exit_2() {
             "between 2 and 48",
         ),
         (
+            json!({"name": "b", "zeitlin": {"N": 8, "equilibrium": "z", "noise": []}, "settings": {"matrix_free_max_n": 2048}}),
+            "$.settings.matrix_free_max_n",
+            "between 2 and 1024",
+        ),
+        (
             json!({"name": "b", "zeitlin": {"N": 8, "equilibrium": "z", "noise": []}, "settings": {"equilibrium_tolerance": 0}}),
             "$.settings.equilibrium_tolerance",
             "between 1e-15 and 1e-3",
@@ -177,6 +182,14 @@ fn the_cli_certifies_checks_and_refuses_tampering() {
         ("$.sigma2_upper", edit("tilted-energy-casimir-n32", &|c| scale(&mut c["sigma2_upper"], 1.0 - 1e-7))),
         ("$.growth_rate", edit("rossby-haurwitz-l3-n8", &|c| scale(&mut c["growth_rate"], 1.0 - 1e-7))),
         (
+            "$.matrix_free.eigenvalue[0]",
+            edit("rossby-haurwitz-l3-n64", &|c| scale(&mut c["matrix_free"]["eigenvalue"][0], 1.0 + 1e-7)),
+        ),
+        (
+            "$.matrix_free.backward_error",
+            edit("rossby-haurwitz-l3-n64", &|c| scale(&mut c["matrix_free"]["backward_error"], 1.0 - 1e-7)),
+        ),
+        (
             "$.dense.restricted_margin",
             edit("rossby-haurwitz-l2-n7", &|c| scale(&mut c["dense"]["restricted_margin"], 1.0 + 1e-7)),
         ),
@@ -196,6 +209,31 @@ fn the_cli_certifies_checks_and_refuses_tampering() {
         assert_eq!(out.status.code(), Some(1), "{path}: {}", stderr(&out));
         assert!(stderr(&out).contains(path), "{path}: {}", stderr(&out));
     }
+}
+
+/// A state zonal in no frame above `dense_max_n` is analysed matrix-free:
+/// the same verdict and growth rate as the dense analysis of the same spec
+/// with `dense_max_n` raised to N (1e-8 relative), the limit recorded in
+/// the certificate's settings, and above `matrix_free_max_n` an
+/// `inconclusive` that names the setting.
+#[test]
+fn a_state_above_dense_max_n_is_analysed_matrix_free() {
+    let state = json!({"harmonics": [[3, 1, 1.0], [3, -2, 0.6], [3, 0, -0.2]]});
+    let spec = |settings: Value| json!({"name": "rh", "zeitlin": {"N": 20, "equilibrium": state, "noise": []}, "settings": settings});
+    let free = certify(&spec(json!({"dense_max_n": 16})));
+    let dense = certify(&spec(json!({"dense_max_n": 20})));
+    assert_eq!(free["verdict"], "linearly_unstable", "{}", free["reason"]);
+    assert_eq!(dense["verdict"], "linearly_unstable", "{}", dense["reason"]);
+    assert!(dense.get("matrix_free").is_none() && free.get("dense").is_none());
+    assert_eq!(free["settings"]["matrix_free_max_n"], 256);
+    assert!(dense["settings"].get("matrix_free_max_n").is_none());
+    let (a, b) = (free["growth_rate"].as_f64().unwrap(), dense["growth_rate"].as_f64().unwrap());
+    assert!((a - b).abs() <= 1e-8 * b, "matrix-free {a}, dense {b}");
+    assert_eq!(free["matrix_free"]["indefinite"], true);
+    assert_eq!(spec::check_zeitlin_certificate(&free).unwrap().verdict.as_str(), "linearly_unstable");
+    let capped = certify(&spec(json!({"dense_max_n": 16, "matrix_free_max_n": 18})));
+    assert_eq!(capped["verdict"], "inconclusive");
+    assert!(capped["reason"].as_str().unwrap().contains("settings.matrix_free_max_n"), "{}", capped["reason"]);
 }
 
 /// A `.npy` file as NumPy writes it (format 1.0: magic, header length,

@@ -889,6 +889,12 @@ pub struct ZeitlinSettingsDoc {
     /// state zonal about no axis (2 to 48, default 32; `O(N^6)` work).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dense_max_n: Option<Count>,
+    /// Fields given by harmonics: largest `N` for the matrix-free analysis
+    /// of a state zonal about no axis above `dense_max_n` (2 to 1024,
+    /// default 256; some 50 s at N = 256 on two cores, about 8x per
+    /// doubling of N).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix_free_max_n: Option<Count>,
 }
 
 /// Deserialise a document from a JSON value, naming the JSON path of the

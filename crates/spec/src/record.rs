@@ -811,6 +811,10 @@ pub struct ZeitlinCertificateDocument {
     /// Fields given by harmonics, zonal in no frame: the dense analysis.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dense: Option<ZeitlinDenseRecord>,
+    /// Fields given by harmonics, zonal in no frame, above `dense_max_n`:
+    /// the matrix-free analysis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix_free: Option<ZeitlinMatrixFreeRecord>,
     /// The settings in force (all of them).
     pub settings: crate::document::ZeitlinSettingsDoc,
     /// The spec exactly as given.
@@ -936,6 +940,42 @@ pub struct ZeitlinDenseRecord {
     pub condition_number: Option<Float>,
     /// `|P A + A^T P|_F / (|P|_F |A|_F)` for `P` the Hessian of `H + C_Phi`.
     pub drift_residual: Float,
+}
+
+/// The matrix-free analysis of a state zonal in no frame
+/// (`zeitlin::matrix_free`): operators applied to `N x N` matrices, never
+/// formed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinMatrixFreeRecord {
+    /// `N^2 - 1`.
+    pub dimension: u64,
+    /// Whether the eigenvalues of `W_e` are distinct (else no
+    /// energy–Casimir test is made).
+    pub distinct_eigenvalues: bool,
+    /// The smallest and largest Lanczos Ritz values of the Hessian of `H +
+    /// C_Phi` restricted to the orbit's tangent space (each lies within the
+    /// spectrum: a negative and a positive one prove it indefinite).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restricted_ritz: Option<[Float; 2]>,
+    /// Whether the Ritz values prove the restricted Hessian indefinite.
+    pub indefinite: bool,
+    /// `max |<R X, A Y> + <A X, R Y>| / (|R X| |A Y| + |A X| |R Y|)` over
+    /// three random pairs (zero to rounding for a conserved form).
+    pub drift_residual: Float,
+    /// `|A|_est = max |pi_j - pi_k| / hbar + |K|_est` (the scale of the
+    /// backward error).
+    pub drift_norm: Float,
+    /// The growing eigenvalue `[real part, imaginary part]`, when accepted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eigenvalue: Option<[Float; 2]>,
+    /// Its backward error `|A v - lambda v|_F / |v|_F`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub backward_error: Option<Float>,
+    /// The rightmost converged eigenvalue `[real part, imaginary part,
+    /// backward error]`, accepted or not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best: Option<[Float; 3]>,
 }
 
 /// The JSON Schema of a Zeitlin certificate.

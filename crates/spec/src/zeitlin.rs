@@ -21,7 +21,7 @@ use crate::json::{as_object, child, index, required, type_name, Result, SpecErro
 use crate::parse::Stopping;
 use crate::record::{
     Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinDenseRecord, ZeitlinFileRecord,
-    ZeitlinFormRecord, ZeitlinFrameRecord, ZeitlinModelRecord, ZeitlinResidualsRecord,
+    ZeitlinFormRecord, ZeitlinFrameRecord, ZeitlinMatrixFreeRecord, ZeitlinModelRecord, ZeitlinResidualsRecord,
 };
 use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use serde_json::Value;
@@ -397,6 +397,15 @@ fn read_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<GeneralSettings
         }
         g.dense_max_n = m as usize;
     }
+    if let Some(Count(m)) = doc.matrix_free_max_n {
+        if !(2..=1024).contains(&m) {
+            return Err(SpecError::new(
+                child(path, "matrix_free_max_n"),
+                format!("must be between 2 and 1024, got {m}"),
+            ));
+        }
+        g.matrix_free_max_n = m as usize;
+    }
     g.zonal = read_zonal_settings(doc, path)?;
     Ok(g)
 }
@@ -430,8 +439,10 @@ fn read_zonal_settings(doc: &ZeitlinSettingsDoc, path: &str) -> Result<ZeitlinSe
 }
 
 /// The settings as the certificate records them (all keys; those of the
-/// general pipeline only where it ran).
-fn settings_document(g: &GeneralSettings, general: bool) -> ZeitlinSettingsDoc {
+/// general pipeline only where it ran, and `matrix_free_max_n` only where
+/// it matters, above `dense_max_n`, so certificates written before it
+/// existed still check).
+fn settings_document(g: &GeneralSettings, general: bool, n: usize) -> ZeitlinSettingsDoc {
     let s = &g.zonal;
     ZeitlinSettingsDoc {
         tolerance: Some(Real(s.tolerance)),
@@ -441,6 +452,7 @@ fn settings_document(g: &GeneralSettings, general: bool) -> ZeitlinSettingsDoc {
         equilibrium_tolerance: general.then_some(Real(g.equilibrium_tolerance)),
         noise_tolerance: general.then_some(Real(g.noise_tolerance)),
         dense_max_n: general.then_some(Count(g.dense_max_n as u64)),
+        matrix_free_max_n: (general && n > g.dense_max_n).then_some(Count(g.matrix_free_max_n as u64)),
     }
 }
 
@@ -552,7 +564,8 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
         frame: None,
         compatible_noise: vec![],
         dense: None,
-        settings: settings_document(&spec.settings, general),
+        matrix_free: None,
+        settings: settings_document(&spec.settings, general, n),
         spec: spec.raw.clone(),
     };
     let mut checks = BTreeMap::new();
@@ -647,8 +660,33 @@ fn fill_general(
                 kind: "general".into(),
                 axis: None,
                 off_diagonal: None,
-                meaning: "W_e commutes with n.S for no axis n: it is zonal in no frame, and the energy–Casimir method runs densely in real orthonormal coordinates of su(N) in W_e's eigenbasis (no momentum multiplier: criticality would need [n.S, W_e] = 0)".into(),
+                meaning: if g.matrix_free.is_some() {
+                    "W_e commutes with n.S for no axis n: it is zonal in no frame, and above dense_max_n the analysis runs matrix-free (operators applied to N x N matrices): Lanczos on the restricted Hessian of H + C_Phi, then a search for growing eigenvalues of the drift (no momentum multiplier: criticality would need [n.S, W_e] = 0)".into()
+                } else {
+                    "W_e commutes with n.S for no axis n: it is zonal in no frame, and the energy–Casimir method runs densely in real orthonormal coordinates of su(N) in W_e's eigenbasis (no momentum multiplier: criticality would need [n.S, W_e] = 0)".into()
+                },
             });
+            if let Some(m) = &g.matrix_free {
+                doc.residuals.drift = Float(m.drift_residual);
+                doc.matrix_free = Some(ZeitlinMatrixFreeRecord {
+                    dimension: m.dimension as u64,
+                    distinct_eigenvalues: m.distinct_eigenvalues,
+                    restricted_ritz: m.restricted_ritz.map(|(lo, hi)| [Float(lo), Float(hi)]),
+                    indefinite: m.indefinite,
+                    drift_residual: Float(m.drift_residual),
+                    drift_norm: Float(m.drift_norm),
+                    eigenvalue: m.eigenvalue.map(|(re, im)| [Float(re), Float(im)]),
+                    backward_error: m.backward_error.map(Float),
+                    best: m.best.map(|(re, im, e)| [Float(re), Float(im), Float(e)]),
+                });
+                if g.verdict == Verdict::LinearlyUnstable {
+                    doc.growth_rate = m.eigenvalue.map(|(re, _)| Float(re));
+                    checks.insert(
+                        "instability".to_string(),
+                        "numerical: an eigenpair (lambda, v) of the drift found matrix-free (Arnoldi on a Strang-split propagator exp(tau A), then Davidson on A preconditioned by the transport), accepted when its backward error |A v - lambda v|_F / |v|_F, computed with A in the spin basis, is at most 1e-6 of |A|_est and 1e-3 of Re lambda: lambda is an exact eigenvalue of A + E with |E|_F that small (evidence, not a proof, for a non-normal A)".to_string(),
+                    );
+                }
+            }
             if let Some(d) = &g.dense {
                 doc.residuals.drift = Float(d.drift_residual);
                 doc.dense = Some(ZeitlinDenseRecord {

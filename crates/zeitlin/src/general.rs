@@ -32,6 +32,7 @@
 
 use crate::analysis::{analyse_with, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
 use crate::isospectral::StreamSolver;
+use crate::matrix_free::{matrix_free_analysis, MatrixFreeAnalysis, MatrixFreeSettings};
 use crate::sphere::rotation_to_axis;
 use nalgebra::{Complex, DMatrix};
 use outcome::{Progress, Verdict, VerificationLevel};
@@ -65,6 +66,13 @@ pub struct GeneralSettings {
     /// Largest `N` for the dense analysis of a state that is zonal in no
     /// frame (`N^2 - 1` unknowns, `O(N^6)` work). Default 32.
     pub dense_max_n: usize,
+    /// Largest `N` for the matrix-free analysis
+    /// ([`crate::matrix_free`]) of such a state above `dense_max_n`
+    /// (`O(N^3)` per operator application, a few thousand applications).
+    /// Default 256.
+    pub matrix_free_max_n: usize,
+    /// The matrix-free analysis's settings.
+    pub matrix_free: MatrixFreeSettings,
 }
 
 impl Default for GeneralSettings {
@@ -74,6 +82,8 @@ impl Default for GeneralSettings {
             equilibrium_tolerance: 1e-10,
             noise_tolerance: 1e-10,
             dense_max_n: 32,
+            matrix_free_max_n: 256,
+            matrix_free: MatrixFreeSettings::default(),
         }
     }
 }
@@ -156,6 +166,8 @@ pub struct GeneralAnalysis {
     pub zonal: Option<ZonalReduction>,
     /// The dense analysis.
     pub dense: Option<DenseAnalysis>,
+    /// The matrix-free analysis (zonal in no frame, above `dense_max_n`).
+    pub matrix_free: Option<MatrixFreeAnalysis>,
     /// `hbar = 2/sqrt(N^2 - 1)`.
     pub hbar: f64,
 }
@@ -348,6 +360,7 @@ pub fn analyse_general_with(
         frame: None,
         zonal: None,
         dense: None,
+        matrix_free: None,
         hbar: hb,
     };
     let p = solver.solve(&w).map_err(|e| ZeitlinError::Numerical(e.to_string()))?;
@@ -419,11 +432,28 @@ pub fn analyse_general_with(
         return Ok(out);
     }
     out.frame = Some(Frame::General);
-    if n > settings.dense_max_n {
+    if n > settings.dense_max_n && n > settings.matrix_free_max_n {
         out.reason = format!(
-            "W_e is zonal about no axis, and such states are analysed densely only up to N = {} (settings.dense_max_n; N^2 - 1 unknowns, O(N^6) work)",
-            settings.dense_max_n
+            "W_e is zonal about no axis, and such states are analysed densely up to N = {} (settings.dense_max_n; N^2 - 1 unknowns, O(N^6) work) and matrix-free up to N = {} (settings.matrix_free_max_n)",
+            settings.dense_max_n, settings.matrix_free_max_n
         );
+        return Ok(out);
+    }
+    if n > settings.dense_max_n {
+        progress.plan(1);
+        let mut m = matrix_free_analysis(&solver, &w, &p, &settings.matrix_free, progress)?;
+        progress.settle();
+        // Back to the user's units: the drift is linear in W_e.
+        m.eigenvalue = m.eigenvalue.map(|(re, im)| (re * s_w, im * s_w));
+        m.backward_error = m.backward_error.map(|e| e * s_w);
+        m.best = m.best.map(|(re, im, e)| (re * s_w, im * s_w, e * s_w));
+        m.drift_norm *= s_w;
+        m.tau /= s_w;
+        out.reason = matrix_free_reason(&m, n);
+        if m.eigenvalue.is_some() {
+            out.verdict = Verdict::LinearlyUnstable;
+        }
+        out.matrix_free = Some(m);
         return Ok(out);
     }
     let xs: Vec<DMatrix<C>> = noise.iter().map(|(x, _)| x.clone()).collect();
@@ -477,6 +507,40 @@ pub fn analyse_general_with(
     }
     out.dense = Some(d);
     Ok(out)
+}
+
+/// The verdict's sentence for a matrix-free analysis (the verdict is
+/// `linearly_unstable` when a growing eigenpair was accepted, else
+/// `inconclusive`).
+fn matrix_free_reason(m: &MatrixFreeAnalysis, n: usize) -> String {
+    let form = match (m.distinct_eigenvalues, m.restricted_ritz, m.indefinite) {
+        (false, _, _) => "W_e has repeated eigenvalues, for which no energy–Casimir test is made".to_string(),
+        (true, Some((lo, hi)), true) => format!(
+            "no energy–Casimir form is definite (Lanczos Ritz values {lo:.6e} and {hi:.6e} of the restricted Hessian prove it indefinite)"
+        ),
+        (true, Some((lo, hi)), false) => format!(
+            "the restricted Hessian's Ritz values ({lo:.6e} to {hi:.6e}) all have one sign, so a definite form may exist, but the matrix-free analysis does not compute Sigma^2 (the dense one does, up to N = 48)"
+        ),
+        (true, None, _) => "no energy–Casimir test was made".to_string(),
+    };
+    match (m.eigenvalue, m.backward_error) {
+        (Some((re, im)), Some(e)) => format!(
+            "{form}, and the drift has the eigenvalue {re:.9e} ± {im:.6e} i, found matrix-free (Arnoldi on a split propagator, then Davidson; dimension {}), with backward error |A v - lambda v|_F / |v|_F = {e:.3e}: linearly unstable (numerical)",
+            m.dimension
+        ),
+        _ => {
+            let best = match m.best {
+                Some((re, im, e)) => format!(
+                    "; the rightmost converged eigenvalue, {re:.6e} ± {im:.6e} i (backward error {e:.3e}), is below the resolution or not accepted"
+                ),
+                None => String::new(),
+            };
+            format!(
+                "{form}, and the matrix-free search (N = {n}, dimension {}) found no growing eigenvalue of the drift{best}: no verdict (a search that finds nothing proves nothing)",
+                m.dimension
+            )
+        }
+    }
 }
 
 /// A unit axis `n` with `[n.S, W] = 0` (relative to `|S_3|_F |W|_F`, within

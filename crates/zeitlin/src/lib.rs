@@ -22,5 +22,6 @@ pub mod eigen;
 pub mod general;
 pub mod isospectral;
 pub mod laplacian;
+pub mod matrix_free;
 pub mod sphere;
 pub mod zonal;

@@ -271,3 +271,122 @@ fn bad_input_names_the_field() {
     assert!(bad(nan, vec![]).contains("equilibrium: an entry is not finite"));
     assert!(bad(DMatrix::zeros(3, 3), vec![]).contains("expected 4 x 4"));
 }
+
+/// The matrix-free analysis (`zeitlin::matrix_free`), run through the
+/// general pipeline by lowering `dense_max_n` below N, against the drift
+/// assembled independently on gl(N) (faer's eigenvalues of the `2N^2`
+/// real form): a growing state's rate to 1e-8 relative, and nothing for a
+/// spectrally stable one. The restricted Hessian is proved indefinite by
+/// its Ritz values, as the dense analysis finds (`restricted_margin < 0`).
+#[test]
+fn the_matrix_free_search_finds_the_independent_drifts_rate() {
+    let matrix_free = GeneralSettings { dense_max_n: 2, ..Default::default() };
+    type Harmonics = Vec<(usize, i64, f64)>;
+    let states: [(usize, Harmonics); 5] = [
+        (8, vec![(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]),
+        (11, vec![(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]),
+        (9, vec![(4, 1, 1.0), (4, -3, 0.5), (4, 2, 0.3)]),
+        (7, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
+        (9, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
+    ];
+    let mut saw = (0, 0);
+    for (n, coefficients) in states {
+        let w = from_harmonics(n, &coefficients).unwrap();
+        let g = analyse_general(&GeneralProblem { n, w: w.clone(), noise: vec![] }, &matrix_free).unwrap();
+        assert_eq!(g.frame, Some(Frame::General), "{coefficients:?}");
+        assert!(g.dense.is_none());
+        let m = g.matrix_free.as_ref().expect("the matrix-free analysis ran");
+        assert!(m.drift_residual < 1e-13, "{}", m.drift_residual);
+        let dense = analyse_general(&GeneralProblem { n, w: w.clone(), noise: vec![] }, &GeneralSettings::default())
+            .unwrap()
+            .dense
+            .unwrap();
+        assert_eq!(m.indefinite, dense.restricted_margin < -1e-9, "N = {n} {coefficients:?}");
+        let rate = dense_growth(&w);
+        match m.eigenvalue {
+            Some((re, _)) => {
+                // An eigenvalue of A + E, |E|_F the backward error: within a
+                // modest condition number times it of A's own.
+                let e = m.backward_error.unwrap();
+                assert!(e <= 1e-6 * m.drift_norm && e <= 1e-3 * re);
+                assert!(
+                    (re - rate).abs() <= 10.0 * e,
+                    "N = {n} {coefficients:?}: matrix-free {re}, independent {rate}, backward error {e:e}"
+                );
+                assert_eq!(g.verdict, Verdict::LinearlyUnstable, "{}", g.reason);
+                saw.0 += 1;
+            }
+            None => {
+                assert!(rate < 1e-6, "N = {n} {coefficients:?}: missed the rate {rate}: {}", g.reason);
+                assert_eq!(g.verdict, Verdict::Inconclusive, "{}", g.reason);
+                assert!(g.reason.contains("found no growing eigenvalue"), "{}", g.reason);
+                saw.1 += 1;
+            }
+        }
+    }
+    assert_eq!(saw, (3, 2), "three growing and two spectrally stable states");
+}
+
+/// The matrix-free verdict scales like the dense one: `W -> k W` multiplies
+/// the eigenvalue by `k` (the state is normalised by a power of two first),
+/// from 1e-200 to 1e200.
+#[test]
+fn the_matrix_free_rate_moves_only_with_the_units() {
+    let n = 8;
+    let settings = GeneralSettings { dense_max_n: 2, ..Default::default() };
+    let w = from_harmonics(n, &[(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]).unwrap();
+    let base = analyse_general(&GeneralProblem { n, w: w.clone(), noise: vec![] }, &settings).unwrap();
+    let (re, im) = base.matrix_free.unwrap().eigenvalue.unwrap();
+    // The fixture's dense rate (rossby-haurwitz-l3-n8.cert.json).
+    assert!((re - 0.1838226221867269).abs() < 1e-9, "{re}");
+    for k in [1e-200, 3.0, 1e200] {
+        let g = analyse_general(&GeneralProblem { n, w: &w * c(k), noise: vec![] }, &settings).unwrap();
+        let (r, i) = g.matrix_free.unwrap().eigenvalue.unwrap();
+        assert!((r / k - re).abs() <= 1e-9 * re && (i / k - im).abs() <= 1e-9 * im, "k = {k}: {r} {i}");
+    }
+}
+
+/// The definite branch is never reached by a true equilibrium zonal in no
+/// frame (docs/zeitlin.md); on the artificial pencil of the dense test
+/// (`P_e` replaced by `W_e`, every Daleckii–Krein weight 1, `G + I`
+/// definite) the Ritz values have one sign, the form is not called
+/// indefinite, and no `Sigma^2` is claimed.
+#[test]
+fn the_matrix_free_analysis_does_not_call_a_definite_form_indefinite() {
+    use zeitlin::isospectral::StreamSolver;
+    use zeitlin::matrix_free::{matrix_free_analysis, MatrixFreeSettings};
+    let n = 9;
+    let w = from_harmonics(n, &[(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2), (2, 1, 0.3)]).unwrap();
+    let solver = StreamSolver::new(n).unwrap();
+    let m = matrix_free_analysis(&solver, &w, &w, &MatrixFreeSettings::default(), &outcome::Progress::new()).unwrap();
+    let (lo, hi) = m.restricted_ritz.unwrap();
+    assert!(!m.indefinite && lo > 0.0 && hi > lo, "{lo} {hi}");
+}
+
+/// The analysis is the same bit for bit on one thread and on two (the
+/// products split their columns in blocks of 64 whatever the thread
+/// count, so N = 72 splits), and a cancelled run is an error, not a
+/// verdict.
+#[test]
+fn the_matrix_free_analysis_is_reproducible_and_cancellable() {
+    use zeitlin::isospectral::StreamSolver;
+    use zeitlin::matrix_free::{matrix_free_analysis, MatrixFreeSettings};
+    let n = 72;
+    let w = from_harmonics(n, &[(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]).unwrap();
+    let solver = StreamSolver::new(n).unwrap();
+    let p = solver.solve(&w).unwrap();
+    let settings = MatrixFreeSettings::default();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| matrix_free_analysis(&solver, &w, &p, &settings, &outcome::Progress::new()).unwrap())
+    };
+    let (one, two) = (run(1), run(2));
+    assert_eq!(one, two);
+    assert!(one.eigenvalue.is_some());
+    let cancelled = outcome::Progress::new();
+    cancelled.cancel();
+    assert!(matches!(
+        matrix_free_analysis(&solver, &w, &p, &settings, &cancelled),
+        Err(zeitlin::analysis::ZeitlinError::Cancelled(_))
+    ));
+}
