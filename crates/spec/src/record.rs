@@ -973,9 +973,13 @@ pub struct ZeitlinMatrixFreeRecord {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub backward_error: Option<Float>,
     /// The rightmost converged eigenvalue `[real part, imaginary part,
-    /// backward error]`, accepted or not.
+    /// backward error]` when its real part is above `resolution` but it
+    /// was not accepted (below the resolution a real part is rounding, and
+    /// is not recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub best: Option<[Float; 3]>,
+    /// Real parts below `1e-4 |W_e|_op` are not told apart from zero.
+    pub resolution: Float,
 }
 
 /// The JSON Schema of a Zeitlin certificate.

@@ -677,7 +677,11 @@ fn fill_general(
                     drift_norm: Float(m.drift_norm),
                     eigenvalue: m.eigenvalue.map(|(re, im)| [Float(re), Float(im)]),
                     backward_error: m.backward_error.map(Float),
-                    best: m.best.map(|(re, im, e)| [Float(re), Float(im), Float(e)]),
+                    best: m
+                        .best
+                        .filter(|(re, _, _)| *re > m.resolution && m.eigenvalue.is_none())
+                        .map(|(re, im, e)| [Float(re), Float(im), Float(e)]),
+                    resolution: Float(m.resolution),
                 });
                 if g.verdict == Verdict::LinearlyUnstable {
                     doc.growth_rate = m.eigenvalue.map(|(re, _)| Float(re));

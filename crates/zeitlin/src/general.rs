@@ -448,6 +448,7 @@ pub fn analyse_general_with(
         m.backward_error = m.backward_error.map(|e| e * s_w);
         m.best = m.best.map(|(re, im, e)| (re * s_w, im * s_w, e * s_w));
         m.drift_norm *= s_w;
+        m.resolution *= s_w;
         m.tau /= s_w;
         out.reason = matrix_free_reason(&m, n);
         if m.eigenvalue.is_some() {
@@ -529,9 +530,15 @@ fn matrix_free_reason(m: &MatrixFreeAnalysis, n: usize) -> String {
             m.dimension
         ),
         _ => {
+            // A real part below the resolution is rounding (it differs
+            // between machines): only its bound is printed.
             let best = match m.best {
-                Some((re, im, e)) => format!(
-                    "; the rightmost converged eigenvalue, {re:.6e} ± {im:.6e} i (backward error {e:.3e}), is below the resolution or not accepted"
+                Some((re, im, e)) if re > m.resolution => format!(
+                    "; the rightmost converged eigenvalue, {re:.6e} ± {im:.6e} i, has the backward error {e:.3e}, too large to accept"
+                ),
+                Some(_) => format!(
+                    "; every converged eigenvalue has a real part below the resolution {:.3e} (1e-4 |W_e|_op)",
+                    m.resolution
                 ),
                 None => String::new(),
             };

@@ -7,6 +7,8 @@
 //! * [`zonal`]: zonal harmonics `T_{l0}` and the quantisation of a profile `omega(z)`;
 //! * [`general`]: equilibria and noise given as matrices: the checks, the zonal frame of a
 //!   tilted zonal state, and a dense analysis of states zonal in no frame;
+//! * [`matrix_free`]: the analysis of states zonal in no frame at large N, without forming
+//!   any `(N^2 - 1)`-square matrix;
 //! * [`sphere`]: quflow's real spherical-harmonic basis `T_lm`, spin matrices and rotations;
 //! * [`analysis`]: the per-block energy–Casimir–momentum form, `Q`, and `Sigma^2`;
 //! * [`isospectral`]: Monte Carlo of the full nonlinear model with the

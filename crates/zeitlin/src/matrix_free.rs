@@ -127,6 +127,9 @@ pub struct MatrixFreeAnalysis {
     /// The converged eigenvalue of largest real part, accepted or not (a
     /// rate below the resolution, for example), with its backward error.
     pub best: Option<(f64, f64, f64)>,
+    /// The resolution `rate_tolerance |W_e|_op`: real parts below it are not
+    /// told apart from zero (a neutral eigenvalue's real part is rounding).
+    pub resolution: f64,
     /// The propagator's time step `tau`.
     pub tau: f64,
     /// `N x N` products spent (the work, in units of `O(N^3)`).
@@ -434,6 +437,7 @@ pub fn matrix_free_analysis(
         eigenvalue: None,
         backward_error: None,
         best: None,
+        resolution: settings.rate_tolerance * w_op,
         tau: 0.0,
         products: 0,
     };

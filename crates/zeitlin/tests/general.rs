@@ -277,17 +277,20 @@ fn bad_input_names_the_field() {
 /// assembled independently on gl(N) (faer's eigenvalues of the `2N^2`
 /// real form): a growing state's rate to 1e-8 relative, and nothing for a
 /// spectrally stable one. The restricted Hessian is proved indefinite by
-/// its Ritz values, as the dense analysis finds (`restricted_margin < 0`).
+/// its Ritz values, as the dense analysis finds (`restricted_margin < 0`),
+/// and with repeated eigenvalues neither makes the test.
 #[test]
 fn the_matrix_free_search_finds_the_independent_drifts_rate() {
     let matrix_free = GeneralSettings { dense_max_n: 2, ..Default::default() };
     type Harmonics = Vec<(usize, i64, f64)>;
-    let states: [(usize, Harmonics); 5] = [
+    let states: [(usize, Harmonics); 6] = [
         (8, vec![(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]),
         (11, vec![(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]),
         (9, vec![(4, 1, 1.0), (4, -3, 0.5), (4, 2, 0.3)]),
         (7, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
         (9, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
+        // Repeated eigenvalues (degree 2, even N): no energy–Casimir test.
+        (8, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
     ];
     let mut saw = (0, 0);
     for (n, coefficients) in states {
@@ -301,7 +304,12 @@ fn the_matrix_free_search_finds_the_independent_drifts_rate() {
             .unwrap()
             .dense
             .unwrap();
-        assert_eq!(m.indefinite, dense.restricted_margin < -1e-9, "N = {n} {coefficients:?}");
+        assert_eq!(m.distinct_eigenvalues, dense.distinct_eigenvalues);
+        if m.distinct_eigenvalues {
+            assert_eq!(m.indefinite, dense.restricted_margin < -1e-9, "N = {n} {coefficients:?}");
+        } else {
+            assert!(!m.indefinite && m.restricted_ritz.is_none());
+        }
         let rate = dense_growth(&w);
         match m.eigenvalue {
             Some((re, _)) => {
@@ -324,7 +332,7 @@ fn the_matrix_free_search_finds_the_independent_drifts_rate() {
             }
         }
     }
-    assert_eq!(saw, (3, 2), "three growing and two spectrally stable states");
+    assert_eq!(saw, (3, 3), "three growing and three spectrally stable states");
 }
 
 /// The matrix-free verdict scales like the dense one: `W -> k W` multiplies
