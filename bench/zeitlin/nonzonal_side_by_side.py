@@ -43,10 +43,14 @@ build --release -p verify``; ``--verify PATH`` otherwise):
     python3 bench/zeitlin/nonzonal_side_by_side.py            # N = 16 32 64 128 256
     python3 bench/zeitlin/nonzonal_side_by_side.py --quick    # N = 16 32 64
     python3 bench/zeitlin/nonzonal_side_by_side.py --ns 16 32 48 --dense-max 48 --json out.json
+    python3 bench/zeitlin/nonzonal_side_by_side.py --threads 1 --ns 64 128 256   # BLAS on one thread
 
-Threads: nothing is pinned. numpy's BLAS and the engine (rayon) use what the
-machine gives; ``OMP_NUM_THREADS``/``OPENBLAS_NUM_THREADS`` and the load
-average are recorded. If quflow is importable (here or by
+Threads: by default nothing is pinned. numpy's BLAS and the engine (rayon)
+use what the machine gives; ``OMP_NUM_THREADS``/``OPENBLAS_NUM_THREADS`` and
+the load average are recorded. ``--threads K`` pins numpy's BLAS (not the
+engine) to K threads: on a loaded 2-core machine, ARPACK with 2 OpenBLAS
+threads was measured about 20 times slower than with 1 (18.6 against 0.88 ms
+per matvec at N = 64). If quflow is importable (here or by
 ``--quflow-python``, default ``/tmp/qfvenv/bin/python`` if present), W_e is
 also compared with ``quflow.shr2mat`` at the dense N.
 
@@ -65,11 +69,26 @@ import sys
 import tempfile
 import time
 
-import numpy as np
-import scipy
-import scipy.linalg as sla
-import scipy.sparse as sps
-import scipy.sparse.linalg as spla
+
+def _blas_threads_from_argv():
+    """--threads K pins numpy's BLAS (OPENBLAS/OMP/MKL_NUM_THREADS) before numpy is imported.
+
+    Default: nothing is pinned (the machine's default). The engine's rayon pool
+    is never pinned by this script.
+    """
+    for i, a in enumerate(sys.argv):
+        if a.startswith("--threads"):
+            k = a.split("=", 1)[1] if "=" in a else sys.argv[i + 1]
+            for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+                os.environ[var] = k
+
+
+_blas_threads_from_argv()
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+import scipy.linalg as sla  # noqa: E402
+import scipy.sparse as sps  # noqa: E402
+import scipy.sparse.linalg as spla  # noqa: E402
 
 HARMONICS = [[3, 1, 1.0], [3, -2, 0.6], [3, 0, -0.2]]
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
@@ -464,6 +483,8 @@ def main():
     ap.add_argument("--cap", type=float, default=300.0, help="wall-clock cap per ARPACK run, seconds")
     ap.add_argument("--verify", default=os.path.join(REPO, "target", "release", "verify"))
     ap.add_argument("--quflow-python", default="/tmp/qfvenv/bin/python")
+    ap.add_argument("--threads", help="pin numpy's BLAS to this many threads (default: not pinned); measured "
+                                      "here: under load, multi-threaded OpenBLAS made ARPACK about 20x slower")
     ap.add_argument("--json", help="also write all measurements here")
     args = ap.parse_args()
 
@@ -547,7 +568,8 @@ def main():
     print()
     print(qf_note)
     print(f"numpy {np.__version__} ({report['blas']}), scipy {scipy.__version__}, python {report['python']}; "
-          f"{os.cpu_count()} cores; threads not pinned: " + ", ".join(f"{k}={v}" for k, v in env.items())
+          f"{os.cpu_count()} cores; BLAS threads " + (f"pinned to {args.threads} (--threads)" if args.threads
+                                                        else "not pinned") + ": " + ", ".join(f"{k}={v}" for k, v in env.items())
           + f"; load average (1, 5, 15 min) start {' '.join(f'{x:.2f}' for x in report['load_start'])}, end "
           f"{' '.join(f'{x:.2f}' for x in report['load_end'])}; engine one run per N (wall clock); ARPACK "
           f"k = 4, which = 'LR', ncv = {args.ncv}, maxiter = {args.maxiter}, tol = {args.tol}, cap {args.cap:.0f} s")
