@@ -18,12 +18,14 @@ fn load(rel: &str) -> AnySpec {
 
 /// One spec of each long pipeline: an incompressible fluid, the
 /// compressible generator (compatible noise), a zonal Zeitlin state, a
-/// tilted one (the general pipeline), a large system.
-const LONG: [&str; 5] = [
+/// tilted one (the general pipeline), one zonal in no frame (the
+/// matrix-free analysis), a large system.
+const LONG: [&str; 6] = [
     "fixtures/fluids/tanh-mixing-layer.json",
     "fixtures/fluids/compressible-compatible-noise.json",
     "fixtures/zeitlin/energy-casimir-n32.json",
     "fixtures/zeitlin/tilted-energy-casimir-n32.json",
+    "fixtures/zeitlin/rossby-haurwitz-l3-n64.json",
     "fixtures/large/chain-30.json",
 ];
 

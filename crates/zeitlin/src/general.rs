@@ -331,7 +331,8 @@ pub fn analyse_general(problem: &GeneralProblem, settings: &GeneralSettings) -> 
 /// [`analyse_general`] with progress and cancellation: a zonal state
 /// reports the zonal analysis's block operations
 /// ([`crate::analysis::analyse_with`]); the dense analysis counts as one
-/// step per solve and is cancelled between its solves.
+/// step per solve and is cancelled between its solves; the matrix-free one
+/// counts one step per operator iteration and is cancelled between them.
 pub fn analyse_general_with(
     problem: &GeneralProblem,
     settings: &GeneralSettings,
@@ -440,7 +441,6 @@ pub fn analyse_general_with(
         return Ok(out);
     }
     if n > settings.dense_max_n {
-        progress.plan(1);
         let mut m = matrix_free_analysis(&solver, &w, &p, &settings.matrix_free, progress)?;
         progress.settle();
         // Back to the user's units: the drift is linear in W_e.

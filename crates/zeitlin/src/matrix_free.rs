@@ -325,6 +325,7 @@ fn davidson(
     let mut best = (theta, basis[0].clone(), f64::INFINITY);
     for _ in 0..steps {
         progress.check()?;
+        progress.step(1);
         let k = basis.len();
         let h = DMatrix::from_fn(k, k, |i, j| cdot(&images[j], &basis[i]));
         let mut pairs = small_eigen(&h)?;
@@ -413,6 +414,11 @@ pub fn matrix_free_analysis(
 ) -> Result<MatrixFreeAnalysis, ZeitlinError> {
     let n = w.nrows();
     let hb = hbar(n);
+    // One step per operator iteration: Lanczos, Arnoldi, the projection,
+    // and up to three Davidson runs (a run that converges early leaves its
+    // budget to the final settle).
+    let budget = settings.lanczos_steps + (settings.cycles.max(1) + 1) * settings.krylov + 3 * settings.davidson_steps;
+    progress.plan(budget as u64);
     let h = w * C::new(0.0, -1.0);
     let (omega, u) = hermitian_eigen(&((&h + h.adjoint()) * C::new(0.5, 0.0)))
         .ok_or_else(|| numerical("the eigenvalues of -i W_e did not converge"))?;
@@ -490,6 +496,7 @@ pub fn matrix_free_analysis(
         let (mut alpha, mut beta) = (vec![], vec![]);
         for _ in 0..settings.lanczos_steps.clamp(1, n * n - n) {
             progress.check()?;
+            progress.step(1);
             let mut x = restricted(basis.last().expect("a vector"))?;
             let (coef, norm) = orthogonalise(&basis, &mut x);
             alpha.push(coef[coef.len() - 1]);
@@ -545,6 +552,7 @@ pub fn matrix_free_analysis(
         let mut size = m;
         for j in 0..m {
             progress.check()?;
+            progress.step(1);
             let mut y = frame.strang(&basis[j], tau, rk_steps)?;
             let (coef, norm) = orthogonalise(&basis, &mut y);
             for (i, c) in coef.iter().enumerate() {
@@ -581,6 +589,7 @@ pub fn matrix_free_analysis(
     // Rayleigh–Ritz of A on the Krylov basis: the candidates.
     progress.check()?;
     let av: Vec<DMatrix<C>> = basis.iter().map(|v| frame.drift(v)).collect::<Result<_, _>>()?;
+    progress.step(settings.krylov as u64);
     let k = basis.len();
     let ha = DMatrix::from_fn(k, k, |i, j| dot(&basis[i], &av[j]));
     let mut pairs = small_eigen(&ha)?;
