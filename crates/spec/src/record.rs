@@ -955,7 +955,8 @@ pub struct ZeitlinMatrixFreeRecord {
     pub distinct_eigenvalues: bool,
     /// The smallest and largest Lanczos Ritz values of the Hessian of `H +
     /// C_Phi` restricted to the orbit's tangent space (each lies within the
-    /// spectrum: a negative and a positive one prove it indefinite).
+    /// spectrum: a negative and a positive one prove it indefinite); one
+    /// within 1e-12 of the larger in size is rounding and given as 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restricted_ritz: Option<[Float; 2]>,
     /// Whether the Ritz values prove the restricted Hessian indefinite.

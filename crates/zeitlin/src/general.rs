@@ -520,7 +520,7 @@ fn matrix_free_reason(m: &MatrixFreeAnalysis, n: usize) -> String {
             "no energy–Casimir form is definite (Lanczos Ritz values {lo:.6e} and {hi:.6e} of the restricted Hessian prove it indefinite)"
         ),
         (true, Some((lo, hi)), false) => format!(
-            "the restricted Hessian's Ritz values ({lo:.6e} to {hi:.6e}) all have one sign, so a definite form may exist, but the matrix-free analysis does not compute Sigma^2 (the dense one does, up to N = 48)"
+            "the restricted Hessian's Ritz values ({lo:.6e} to {hi:.6e}) do not prove it indefinite (that needs one beyond 1e-9 of the largest on each side), so a definite form may exist, but the matrix-free analysis does not compute Sigma^2 (the dense one does, up to N = 48)"
         ),
         (true, None, _) => "no energy–Casimir test was made".to_string(),
     };

@@ -107,7 +107,8 @@ pub struct MatrixFreeAnalysis {
     /// test is made).
     pub distinct_eigenvalues: bool,
     /// The smallest and largest Ritz values of the restricted Hessian `R`
-    /// (bounds: `lambda_min(R) <= first`, `lambda_max(R) >= second`).
+    /// (bounds: `lambda_min(R) <= first`, `lambda_max(R) >= second`); one
+    /// within `1e-12` of the larger in size is rounding and given as 0.
     pub restricted_ritz: Option<(f64, f64)>,
     /// Whether those Ritz values prove `R` indefinite (one negative, one
     /// positive, each beyond `1e-9` of the larger in size).
@@ -514,9 +515,12 @@ pub fn matrix_free_analysis(
             _ => 0.0,
         });
         let ritz = crate::eigen::symmetric_eigenvalues(&t).ok_or_else(|| numerical("the Lanczos matrix"))?;
-        let (lo, hi) = (ritz[0], ritz[k - 1]);
+        // A Ritz value within 1e-12 of the larger in size is rounding (its
+        // digits differ between machines): it is recorded as 0.
+        let size = ritz[0].abs().max(ritz[k - 1].abs());
+        let snap = |x: f64| if x.abs() <= 1e-12 * size { 0.0 } else { x };
+        let (lo, hi) = (snap(ritz[0]), snap(ritz[k - 1]));
         out.restricted_ritz = Some((lo, hi));
-        let size = lo.abs().max(hi.abs());
         out.indefinite = lo < -1e-9 * size && hi > 1e-9 * size;
     }
 

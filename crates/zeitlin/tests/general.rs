@@ -283,7 +283,7 @@ fn bad_input_names_the_field() {
 fn the_matrix_free_search_finds_the_independent_drifts_rate() {
     let matrix_free = GeneralSettings { dense_max_n: 2, ..Default::default() };
     type Harmonics = Vec<(usize, i64, f64)>;
-    let states: [(usize, Harmonics); 6] = [
+    let states: [(usize, Harmonics); 7] = [
         (8, vec![(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]),
         (11, vec![(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]),
         (9, vec![(4, 1, 1.0), (4, -3, 0.5), (4, 2, 0.3)]),
@@ -291,6 +291,10 @@ fn the_matrix_free_search_finds_the_independent_drifts_rate() {
         (9, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
         // Repeated eigenvalues (degree 2, even N): no energy–Casimir test.
         (8, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
+        // The smallest N with a state zonal about no axis: the restricted
+        // Hessian's smallest eigenvalue is 0 (its Ritz value, -8e-17, is
+        // recorded as 0), so the form is not called indefinite.
+        (3, vec![(2, 1, 1.0), (2, -2, 0.35), (2, 0, 0.2)]),
     ];
     let mut saw = (0, 0);
     for (n, coefficients) in states {
@@ -332,7 +336,7 @@ fn the_matrix_free_search_finds_the_independent_drifts_rate() {
             }
         }
     }
-    assert_eq!(saw, (3, 3), "three growing and three spectrally stable states");
+    assert_eq!(saw, (3, 4), "three growing and four spectrally stable states");
 }
 
 /// The matrix-free verdict scales like the dense one: `W -> k W` multiplies
