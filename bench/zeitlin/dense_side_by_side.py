@@ -147,65 +147,7 @@ def run_engine(verify, n, reps, workdir):
 # The dense construction
 # --------------------------------------------------------------------------
 
-def spin_matrices(n):
-    """Hermitian S_1, S_2, S_3 of the spin-(N-1)/2 representation, as in tests/zeitlin.rs."""
-    s = (n - 1) / 2
-    mj = s - np.arange(n)
-    sp = np.zeros((n, n))
-    for j in range(1, n):
-        sp[j - 1, j] = np.sqrt(s * (s + 1) - mj[j] * (mj[j] + 1))
-    return [(sp + sp.T) / 2 + 0j, -0.5j * (sp - sp.T), np.diag(mj) + 0j]
-
-
-def ad(a):
-    """w -> [a, w] on column-major vec(w): kron(I, a) - kron(a^T, I)."""
-    import scipy.sparse as sps
-
-    a = sps.csr_matrix(a)
-    eye = sps.identity(a.shape[0], format="csr")
-    return (sps.kron(eye, a) - sps.kron(a.T, eye)).tocsr()
-
-
-def su_basis(n):
-    """Orthonormal basis of su(N) for Re tr(A B^*)/N, as columns of vec(E_a).
-
-    Ordered by diagonal m = 1..N-1 (pairs (j, j+m), real then imaginary part)
-    and then the N-1 trace-free diagonal elements (Helmert vectors, deliberately
-    not the u_l of the quantisation), so that each block m is a contiguous
-    slice of the coordinates.
-    """
-    import scipy.sparse as sps
-
-    rows, cols, vals, slices = [], [], [], {}
-    col = 0
-    r = np.sqrt(n / 2)
-    idx = lambda i, j: i + j * n  # noqa: E731  (column-major vec)
-    for m in range(1, n):
-        start = col
-        for j in range(n - m):
-            k = j + m
-            rows += [idx(j, k), idx(k, j)]
-            cols += [col, col]
-            vals += [r, -r]
-            rows += [idx(j, k), idx(k, j)]
-            cols += [col + 1, col + 1]
-            vals += [1j * r, 1j * r]
-            col += 2
-        slices[m] = slice(start, col)
-    start = col
-    for q in range(1, n):
-        h = np.zeros(n)
-        h[:q] = 1.0
-        h[q] = -q
-        h /= np.sqrt(q * (q + 1))
-        for i in range(q + 1):
-            rows.append(idx(i, i))
-            cols.append(col)
-            vals.append(1j * np.sqrt(n) * h[i])
-        col += 1
-    slices[0] = slice(start, col)
-    v = sps.csc_matrix((np.array(vals, dtype=complex), (rows, cols)), shape=(n * n, n * n - 1))
-    return v, slices
+from su_numpy import ad, rel, spin_matrices, su_basis  # noqa: E402  (beside this script)
 
 
 def dense_sigma2(n, cert, eigh_reps):
@@ -416,10 +358,6 @@ def run_quflow(job, python):
 
 
 # --------------------------------------------------------------------------
-
-def rel(a, b):
-    return abs(a - b) / max(abs(a), abs(b), 1e-300)
-
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

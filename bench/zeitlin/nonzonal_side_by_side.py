@@ -54,9 +54,8 @@ per matvec at N = 64). If quflow is importable (here or by
 ``--quflow-python``, default ``/tmp/qfvenv/bin/python`` if present), W_e is
 also compared with ``quflow.shr2mat`` at the dense N.
 
-Provenance: ``spin_matrices``, ``ad``, ``su_basis`` and ``rel`` are copied
-unchanged from ``bench/zeitlin/dense_side_by_side.py`` (not imported: importing
-it would pin every thread count to 1 through its ``_threads_from_argv``). The
+Provenance: ``spin_matrices``, ``ad``, ``su_basis`` and ``rel`` come from
+``su_numpy.py`` beside this script, shared with ``dense_side_by_side.py``. The
 non-zonal basis (``laplacian_blocks``, ``harmonic``) generalises that
 script's m = 0 construction to every diagonal m, following quflow's
 ``compute_basis``/``shr2mat`` conventions.
@@ -98,65 +97,7 @@ REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 # Copied from bench/zeitlin/dense_side_by_side.py
 # --------------------------------------------------------------------------
 
-def spin_matrices(n):
-    """Hermitian S_1, S_2, S_3 of the spin-(N-1)/2 representation, as in tests/zeitlin.rs."""
-    s = (n - 1) / 2
-    mj = s - np.arange(n)
-    sp = np.zeros((n, n))
-    for j in range(1, n):
-        sp[j - 1, j] = np.sqrt(s * (s + 1) - mj[j] * (mj[j] + 1))
-    return [(sp + sp.T) / 2 + 0j, -0.5j * (sp - sp.T), np.diag(mj) + 0j]
-
-
-def ad(a):
-    """w -> [a, w] on column-major vec(w): kron(I, a) - kron(a^T, I)."""
-    a = sps.csr_matrix(a)
-    eye = sps.identity(a.shape[0], format="csr")
-    return (sps.kron(eye, a) - sps.kron(a.T, eye)).tocsr()
-
-
-def su_basis(n):
-    """Orthonormal basis of su(N) for Re tr(A B^*)/N, as columns of vec(E_a).
-
-    Ordered by diagonal m = 1..N-1 (pairs (j, j+m), real then imaginary part)
-    and then the N-1 trace-free diagonal elements (Helmert vectors, deliberately
-    not the u_l of the quantisation), so that each block m is a contiguous
-    slice of the coordinates.
-    """
-    rows, cols, vals, slices = [], [], [], {}
-    col = 0
-    r = np.sqrt(n / 2)
-    idx = lambda i, j: i + j * n  # noqa: E731  (column-major vec)
-    for m in range(1, n):
-        start = col
-        for j in range(n - m):
-            k = j + m
-            rows += [idx(j, k), idx(k, j)]
-            cols += [col, col]
-            vals += [r, -r]
-            rows += [idx(j, k), idx(k, j)]
-            cols += [col + 1, col + 1]
-            vals += [1j * r, 1j * r]
-            col += 2
-        slices[m] = slice(start, col)
-    start = col
-    for q in range(1, n):
-        h = np.zeros(n)
-        h[:q] = 1.0
-        h[q] = -q
-        h /= np.sqrt(q * (q + 1))
-        for i in range(q + 1):
-            rows.append(idx(i, i))
-            cols.append(col)
-            vals.append(1j * np.sqrt(n) * h[i])
-        col += 1
-    slices[0] = slice(start, col)
-    v = sps.csc_matrix((np.array(vals, dtype=complex), (rows, cols)), shape=(n * n, n * n - 1))
-    return v, slices
-
-
-def rel(a, b):
-    return abs(a - b) / max(abs(a), abs(b), 1e-300)
+from su_numpy import ad, rel, spin_matrices, su_basis  # noqa: E402  (beside this script)
 
 
 # --------------------------------------------------------------------------
