@@ -433,7 +433,8 @@ pub fn matrix_free_analysis(
         let diag: f64 = (0..n).map(|j| wf[(j, j)].norm_sqr()).sum();
         (wf.norm_squared() - diag).max(0.0).sqrt() <= 1e-14 * wf.norm()
     };
-    let frame = Frame { solver, f, pi: pvals.clone(), wf, w_diagonal, hb, products: Cell::new(4) };
+    // Two products so far: F^* W_e F.
+    let frame = Frame { solver, f, pi: pvals.clone(), wf, w_diagonal, hb, products: Cell::new(2) };
     let mut out = MatrixFreeAnalysis {
         dimension: n * n - 1,
         distinct_eigenvalues: distinct,
@@ -605,7 +606,7 @@ pub fn matrix_free_analysis(
         let u = combine(&basis, y);
         let au = combine(&av, y);
         let (t, v, r) = davidson(&frame, (*theta, u, au), scale, settings.davidson_steps, progress)?;
-        if r <= 1e-6 {
+        if r <= settings.residual_tolerance {
             found.push((t, v));
         }
     }
