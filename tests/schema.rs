@@ -33,6 +33,7 @@ fn committed_schemas_match_the_types() {
         ("zeitlin-spec", spec::document::zeitlin_spec_schema()),
         ("zeitlin-certificate", spec::record::zeitlin_certificate_schema()),
         ("large-certificate", spec::record::large_certificate_schema()),
+        ("box-certificate", spec::box_cert::box_certificate_schema()),
     ];
     for (name, schema) in generated {
         // Not assert_eq: the two values are thousands of characters.
@@ -52,6 +53,8 @@ fn kind(spec: &Value) -> &'static str {
         "zeitlin-spec"
     } else if spec::is_large_spec(spec) {
         "large-spec"
+    } else if spec.get("box").is_some() {
+        "box-spec"
     } else {
         "spec"
     }
@@ -66,6 +69,7 @@ fn round_trip(kind: &str, v: &Value) -> Result<Value, spec::SpecError> {
             serde_json::to_value(spec::document::from_value::<spec::record::ZeitlinCertificateDocument>(v)?)
         }
         "large-spec" => serde_json::to_value(spec::document::from_value::<spec::record::LargeCertificateDocument>(v)?),
+        "box-spec" => serde_json::to_value(spec::document::from_value::<spec::box_cert::BoxCertificateDocument>(v)?),
         _ => serde_json::to_value(spec::document::from_value::<spec::record::CertificateDocument>(v)?),
     }
     .unwrap())
@@ -80,8 +84,10 @@ fn fixture_certificates_match_the_certificate_types() {
         let name = kind.replace("spec", "certificate");
         jsonschema::validator_for(&committed(&format!("{name}.schema.json"))).unwrap()
     };
-    let validators: BTreeMap<&str, _> =
-        ["spec", "fluid-spec", "zeitlin-spec", "large-spec"].into_iter().map(|k| (k, schema_of(k))).collect();
+    let validators: BTreeMap<&str, _> = ["spec", "fluid-spec", "zeitlin-spec", "large-spec", "box-spec"]
+        .into_iter()
+        .map(|k| (k, schema_of(k)))
+        .collect();
     let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
     let mut dirs = vec![root().join("fixtures")];
     while let Some(dir) = dirs.pop() {
@@ -111,7 +117,8 @@ fn fixture_certificates_match_the_certificate_types() {
         counts.get("spec") >= Some(&5)
             && counts.get("fluid-spec") >= Some(&2)
             && counts.get("zeitlin-spec") >= Some(&2)
-            && counts.get("large-spec") >= Some(&2),
+            && counts.get("large-spec") >= Some(&2)
+            && counts.get("box-spec") >= Some(&3),
         "{counts:?}"
     );
 }
@@ -146,7 +153,7 @@ fn every_fixture_is_valid_against_its_schema() {
     for (path, v) in &fixtures() {
         // A spec above 64 coordinates has the finite-dimensional spec's format.
         let kind = match kind(v) {
-            "large-spec" => "spec",
+            "large-spec" | "box-spec" => "spec",
             k => k,
         };
         let errors: Vec<String> = validators[kind].iter_errors(v).map(|e| e.to_string()).collect();

@@ -73,6 +73,23 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Certify a spec for every parameter value in a box (docs/boxes.md): writes a box certificate that `check` re-verifies exactly.
+    CertifyBox {
+        /// The spec (JSON, finite-dimensional).
+        spec: PathBuf,
+        /// A box side, `NAME=LO:HI` (exact rationals, LO < HI); repeat for each parameter. Replaces the spec's `box` section.
+        #[arg(long = "param", required = true)]
+        params: Vec<String>,
+        /// Largest number of bisections from the box to a sub-box (default 12).
+        #[arg(long)]
+        max_depth: Option<u64>,
+        /// Largest number of sub-boxes analysed (default 4096).
+        #[arg(long)]
+        max_boxes: Option<u64>,
+        /// Write the certificate here instead of stdout.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
     /// Simulate the nonlinear and the linearised system and draw the charts.
     Simulate(simulate_cmd::SimulateArgs),
     /// Certify a spec over a grid or random samples of its parameters (one JSON line per point).
@@ -87,8 +104,8 @@ enum Command {
     Report(report::ReportArgs),
     /// Print the JSON Schema of specs (for editors: validation and completion).
     Schema {
-        /// Which schema: `spec` (finite-dimensional systems), `fluid-spec`, `zeitlin-spec`, `certificate` (of a finite-dimensional spec), `fluid-certificate`, `zeitlin-certificate` or `large-certificate` (of a spec above 64 coordinates).
-        #[arg(value_parser = ["spec", "fluid-spec", "zeitlin-spec", "certificate", "fluid-certificate", "zeitlin-certificate", "large-certificate"], default_value = "spec")]
+        /// Which schema: `spec` (finite-dimensional systems), `fluid-spec`, `zeitlin-spec`, `certificate` (of a finite-dimensional spec), `fluid-certificate`, `zeitlin-certificate`, `large-certificate` (of a spec above 64 coordinates) or `box-certificate` (of a spec with a box).
+        #[arg(value_parser = ["spec", "fluid-spec", "zeitlin-spec", "certificate", "fluid-certificate", "zeitlin-certificate", "large-certificate", "box-certificate"], default_value = "spec")]
         which: String,
     },
     /// Re-check certificates.
@@ -182,16 +199,82 @@ fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failur
     Ok(())
 }
 
+/// `verify certify-box`: the spec with its `box` section set from
+/// `--param NAME=LO:HI` (and the bounds), certified as any spec with a box.
+fn certify_box_command(
+    spec_path: &Path,
+    params: &[String],
+    max_depth: Option<u64>,
+    max_boxes: Option<u64>,
+    output: Option<&Path>,
+) -> Result<(), Failure> {
+    if let Some(path) = output {
+        paths::check_output_file(path, "-o")?;
+    }
+    let text = read(spec_path)?;
+    let bad = |m: String| Failure::BadInput(format!("{}: {m}", spec_path.display()));
+    let mut value: Value = spec::parse_json(&text).map_err(|e| bad(e.to_string()))?;
+    if !value.is_object() || value.get("fluid").is_some() || value.get("zeitlin").is_some() {
+        return Err(bad("certify-box takes a finite-dimensional spec (a Lie algebra, a Hamiltonian, ...)".into()));
+    }
+    let mut sides = serde_json::Map::new();
+    for p in params {
+        let (name, range) = p
+            .split_once('=')
+            .ok_or_else(|| Failure::BadInput(format!("--param {}: expected NAME=LO:HI", messages::excerpt(p))))?;
+        let (lo, hi) = range
+            .split_once(':')
+            .ok_or_else(|| Failure::BadInput(format!("--param {}: expected NAME=LO:HI", messages::excerpt(p))))?;
+        if sides.insert(name.to_string(), serde_json::json!([lo, hi])).is_some() {
+            return Err(Failure::BadInput(format!("--param {}: given twice", messages::excerpt(name))));
+        }
+    }
+    let mut section = serde_json::json!({"parameters": sides});
+    if let Some(d) = max_depth {
+        section["max_depth"] = d.into();
+    }
+    if let Some(m) = max_boxes {
+        section["max_boxes"] = m.into();
+    }
+    value["box"] = section;
+    let spec = spec::spec_from_value(value).map_err(|e| bad(e.to_string()))?;
+    let cert = spec::box_cert::certify_box_spec(&spec);
+    let pretty = spec::to_pretty_json(&cert);
+    match output {
+        Some(path) => paths::write_atomic(path, pretty.as_bytes()).map_err(|e| paths::write_failure(path, &e))?,
+        None => print!("{pretty}"),
+    }
+    eprintln!("{}", summary(&cert));
+    Ok(())
+}
+
 /// One or two lines for a human.
 fn summary(cert: &Value) -> String {
     let mut s = format!(
         "{}: {} ({})",
         messages::excerpt(cert["name"].as_str().unwrap_or("?")),
         cert["verdict"].as_str().unwrap_or("?"),
-        cert["level"].as_str().unwrap_or("?")
+        cert["level"].as_str().unwrap_or(if cert["kind"] == "box" {
+            "exact, for every parameter in the box"
+        } else {
+            "?"
+        })
     );
     if let Some(s2) = cert.get("sigma2") {
         s.push_str(&format!(", Sigma^2 = {}", table::format_number(s2)));
+    }
+    if cert.get("kind").and_then(Value::as_str) == Some("box") {
+        let subs = cert["sub_boxes"].as_array().map_or(0, Vec::len);
+        s.push_str(&format!(", {subs} sub-boxes"));
+        if let Some(sup) = cert.get("sup_sigma2") {
+            s.push_str(&format!(", sup Sigma^2 <= {}", table::format_number(sup)));
+        }
+        if let Some(f) = cert.get("undecided_fraction").and_then(Value::as_f64).filter(|f| *f > 0.0) {
+            s.push_str(&format!(", undecided {:.3}% of the box", 100.0 * f));
+        }
+        if let Some(l) = cert.get("limit").and_then(Value::as_str) {
+            s.push_str(&format!(" ({l} reached)"));
+        }
     }
     if let Some(st) = cert.get("stopping") {
         s.push_str(&format!(
@@ -261,7 +344,28 @@ fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
                         }
                     })
                     .unwrap_or_default();
-                println!("ok   {}: {} {}{}", path.display(), messages::excerpt(&report.name), report.verdict, s2);
+                let boxed = serde_json::from_str::<Value>(&text).ok().filter(spec::box_cert::is_box_certificate);
+                match boxed {
+                    // A box's verdict and its bound over the whole box.
+                    Some(cert) => println!(
+                        "ok   {}: {} box {}{}",
+                        path.display(),
+                        messages::excerpt(&report.name),
+                        cert["verdict"].as_str().unwrap_or("?"),
+                        cert.get("sup_sigma2")
+                            .map(|x| format!(", sup Sigma^2 <= {}", table::format_number(x)))
+                            .unwrap_or_default()
+                    ),
+                    None => {
+                        println!(
+                            "ok   {}: {} {}{}",
+                            path.display(),
+                            messages::excerpt(&report.name),
+                            report.verdict,
+                            s2
+                        )
+                    }
+                }
             }
             Err(CheckError::BadInput(e)) => bad(format!("{}: {e}", path.display())),
             Err(e) => {
@@ -298,6 +402,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Some(Command::Certify { spec, output }) => certify_command(&spec, output.as_deref()),
         Some(Command::Check { certificates }) => check_command(&certificates),
+        Some(Command::CertifyBox { spec, params, max_depth, max_boxes, output }) => {
+            certify_box_command(&spec, &params, max_depth, max_boxes, output.as_deref())
+        }
         Some(Command::Schema { which }) => {
             let schema = match which.as_str() {
                 "spec" => spec::document::spec_schema(),
@@ -306,6 +413,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 "certificate" => spec::record::certificate_schema(),
                 "zeitlin-certificate" => spec::record::zeitlin_certificate_schema(),
                 "large-certificate" => spec::record::large_certificate_schema(),
+                "box-certificate" => spec::box_cert::box_certificate_schema(),
                 _ => spec::record::fluid_certificate_schema(),
             };
             println!("{}", serde_json::to_string_pretty(&schema).unwrap_or_default());

@@ -109,10 +109,10 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
         rows.push([
             excerpt(spec.name()),
             j["verdict"].as_str().unwrap_or("?").to_string(),
-            j.get("sigma2").map_or("-".into(), format_number),
+            j.get("sigma2").or_else(|| j.get("sup_sigma2")).map_or("-".into(), format_number),
             first_choice,
             j.get("stopping").map_or("-".into(), |s| format_number(&s["T"])),
-            j["level"].as_str().unwrap_or("?").to_string(),
+            j["level"].as_str().unwrap_or(if j["kind"] == "box" { "exact (box)" } else { "?" }).to_string(),
             status,
         ]);
         if let Some(b) = &overall {

@@ -128,6 +128,9 @@ fn check_value_with(
     progress: &outcome::Progress,
 ) -> Result<CheckReport, CheckError> {
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
+    if crate::box_cert::is_box_certificate(cert) {
+        return crate::box_cert::check_box_certificate(cert);
+    }
     if map.get("spec").is_some_and(crate::is_fluid_spec) {
         #[cfg(feature = "fluid")]
         return crate::fluid::check_fluid_certificate_with(cert, progress);

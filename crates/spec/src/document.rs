@@ -314,6 +314,35 @@ pub struct SpecDocument {
     /// Sweep annotations: ranges, boundaries, reference constants, domain.
     #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "objects::optional_object")]
     pub sweep: Option<SweepDoc>,
+    /// A box of parameter values (docs/boxes.md): `certify` then proves
+    /// the verdict and a bound on `Sigma^2` for every parameter in it, and
+    /// writes a box certificate.
+    #[serde(
+        rename = "box",
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "objects::optional_object"
+    )]
+    pub parameter_box: Option<BoxDoc>,
+}
+
+/// A box of parameter values: an interval per named parameter, and the
+/// bounds on the bisection.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BoxDoc {
+    /// `NAME: [LO, HI]` with `LO < HI`, for parameters of the spec.
+    pub parameters: BTreeMap<String, [Literal; 2]>,
+    /// Largest number of bisections from the box to a sub-box (default 12, at most 40).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_depth: Option<u64>,
+    /// Largest number of sub-boxes analysed (default 4096, at most 1000000).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_boxes: Option<u64>,
+    /// The proved bound per sub-box is the largest sampled `Sigma^2` times
+    /// `1 + margin` (default 1/1000; above 0, at most 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub margin: Option<Literal>,
 }
 
 /// The algebra: a builtin name, or coordinates and structure constants.

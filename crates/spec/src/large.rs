@@ -101,6 +101,12 @@ pub fn large_spec_from_value(value: Value) -> Result<LargeSpec> {
             format!("at most {LARGE_MAX_DIMENSION} coordinates (dense n x n floating-point work), got {n}"),
         ));
     }
+    if doc.parameter_box.is_some() {
+        return Err(SpecError::new(
+            child(root, "box"),
+            format!("box certificates run the exact pipeline: at most {} coordinates", algebra::MAX_DIMENSION),
+        ));
+    }
     if doc.settings.is_some() {
         return Err(SpecError::new(
             child(root, "settings"),

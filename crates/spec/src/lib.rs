@@ -39,6 +39,7 @@
 //! refused with a message naming the feature.
 #![warn(missing_docs)]
 
+pub mod box_cert;
 mod certificate;
 mod check;
 mod claims;
@@ -200,6 +201,7 @@ impl AnySpec {
     /// Run the matching pipeline and return the certificate JSON.
     pub fn certify(&self) -> serde_json::Value {
         match self {
+            AnySpec::Lie(s) if s.parameter_box.is_some() => box_cert::certify_box_spec(s),
             AnySpec::Lie(s) => certify(s).json,
             #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => certify_fluid(s),
@@ -237,7 +239,7 @@ impl AnySpec {
             AnySpec::Lie(s) => {
                 progress.plan(1);
                 progress.check()?;
-                let json = certify(s).json;
+                let json = if s.parameter_box.is_some() { box_cert::certify_box_spec(s) } else { certify(s).json };
                 progress.settle();
                 Ok(json)
             }

@@ -66,6 +66,8 @@ pub struct Spec {
     pub settings: EngineSettings,
     /// The optional `sweep` section (ranges, boundaries, reference constants).
     pub sweep: SweepSection,
+    /// The optional `box` section: `certify` then certifies the whole box.
+    pub parameter_box: Option<crate::box_cert::BoxSection>,
     shape: Arc<Shape>,
 }
 
@@ -108,6 +110,7 @@ pub fn spec_from_value(value: Value) -> Result<Spec> {
         stopping: shape.stopping,
         settings: shape.settings.clone(),
         sweep: shape.sweep.clone(),
+        parameter_box: shape.parameter_box.clone(),
         shape: Arc::new(shape),
     })
 }
@@ -185,6 +188,7 @@ struct Shape {
     discovery: Option<DiscoveryReport>,
     builtin: Option<String>,
     sweep: SweepSection,
+    parameter_box: Option<crate::box_cert::BoxSection>,
 }
 
 /// Casimirs as expressions (re-read per parameter set) or fixed polynomials.
@@ -287,6 +291,11 @@ fn read_shape(value: &Value) -> Result<Shape> {
     let stopping = doc.stopping.as_ref().map(|s| read_stopping(s, &child(root, "stopping"))).transpose()?;
     let names: Vec<String> = parameters.keys().cloned().collect();
     let sweep = read_sweep_section(doc.sweep.as_ref(), &child(root, "sweep"), &names)?;
+    let parameter_box = doc
+        .parameter_box
+        .as_ref()
+        .map(|b| crate::box_cert::read_box_section(b, &child(root, "box"), &parameters))
+        .transpose()?;
 
     // Casimirs: given, builtin, or discovered.
     let (casimirs, casimir_source, discovery) = match given_casimirs {
@@ -324,6 +333,7 @@ fn read_shape(value: &Value) -> Result<Shape> {
         discovery,
         builtin: builtin_name,
         sweep,
+        parameter_box,
     })
 }
 
@@ -412,6 +422,76 @@ fn build_system(shape: &Shape, parameters: &BTreeMap<String, Rational>) -> Resul
         }
         _ => SpecError::new(root, e.to_string()),
     })
+}
+
+impl Spec {
+    /// The system with the box parameters `names` kept symbolic (the
+    /// other parameters at their values): the spec's expressions re-read
+    /// as rational functions of those parameters. Errors name the JSON path.
+    pub fn box_system(&self, names: &[String]) -> Result<boxes::BoxSystem> {
+        let shape = &self.shape;
+        let root = "$";
+        let coordinates: Vec<String> = shape.algebra.coordinates().to_vec();
+        let n = coordinates.len();
+        let fixed: BTreeMap<String, Rational> =
+            self.parameters.iter().filter(|(k, _)| !names.contains(k)).map(|(k, v)| (k.clone(), v.clone())).collect();
+        let symbols = boxes::BoxSymbols::new(&coordinates, names, &fixed);
+        let nv = symbols.nvars();
+        let read = |e: &Expr, path: &str| -> Result<boxes::Frac> {
+            boxes::parse_box_expression(&e.text, &symbols)
+                .map_err(|err| SpecError::new(path, format!("in '{}' (box parameters symbolic): {err}", e.text)))
+        };
+        let constant = |e: &Expr, path: &str| -> Result<boxes::Frac> {
+            let f = read(e, path)?;
+            if boxes::parse::has_coordinates(f.num(), n) {
+                return Err(SpecError::new(path, "must be a constant (it may use parameters but not coordinates)"));
+            }
+            Ok(f)
+        };
+        let hamiltonian = read(&shape.hamiltonian, &child(root, "hamiltonian"))?;
+        let cpath = child(root, "casimirs");
+        let casimirs = match &shape.casimirs {
+            Casimirs::Given(texts) => {
+                texts.iter().enumerate().map(|(i, t)| read(t, &index(&cpath, i))).collect::<Result<Vec<_>>>()?
+            }
+            Casimirs::Fixed(polys) => {
+                polys.iter().map(|p| boxes::Frac::from_poly(boxes::symbolic::extend(p, nv))).collect()
+            }
+        };
+        let fpath = child(root, "first_integrals");
+        let first_integrals = shape
+            .first_integrals
+            .iter()
+            .enumerate()
+            .map(|(i, t)| read(t, &index(&fpath, i)))
+            .collect::<Result<Vec<_>>>()?;
+        let epath = child(root, "equilibrium");
+        let equilibrium = shape
+            .equilibrium
+            .iter()
+            .enumerate()
+            .map(|(i, t)| constant(t, &index(&epath, i)))
+            .collect::<Result<Vec<_>>>()?;
+        let npath = child(root, "noise");
+        let noise = shape
+            .noise
+            .iter()
+            .enumerate()
+            .map(|(i, field)| {
+                let p = index(&npath, i);
+                field.iter().enumerate().map(|(j, t)| constant(t, &index(&p, j))).collect::<Result<Vec<_>>>()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(boxes::BoxSystem {
+            algebra: shape.algebra.clone(),
+            parameters: names.to_vec(),
+            hamiltonian,
+            casimirs,
+            first_integrals,
+            equilibrium,
+            noise,
+        })
+    }
 }
 
 pub(crate) fn is_identifier(s: &str) -> bool {

@@ -1,0 +1,450 @@
+//! The box certificate: bisection of the box, a choice at each sub-box's
+//! centre, and an exact proof over the whole sub-box (docs/boxes.md).
+
+use crate::bernstein::{matrix_positive_on_box, sign_on_box, ParamBox};
+use crate::frac::{common_denominator, times_denominator, Frac};
+use crate::symbolic::{matrix_at, specialise, value_at, BoxChoice, BoxSystem, BoxSystemError, Forms, Symbolic};
+use exact::{Matrix, Poly, Rational};
+use num_traits::Zero;
+use outcome::{Sign, Verdict};
+
+/// Bounds on the work and the margin of the growth bound.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoxSettings {
+    /// Largest number of bisections from the whole box to a sub-box
+    /// (default 12: a side of 1/64 of the box's in two parameters).
+    pub max_depth: u32,
+    /// Largest number of sub-boxes analysed (default 4096).
+    pub max_boxes: usize,
+    /// The bound `S` per sub-box is the largest sampled `Sigma^2` times
+    /// `1 + margin` (default `1/1000`).
+    pub margin: Rational,
+}
+
+impl Default for BoxSettings {
+    fn default() -> Self {
+        BoxSettings { max_depth: 12, max_boxes: 4096, margin: Rational::new(1.into(), 1000.into()) }
+    }
+}
+
+/// What is proved on one sub-box.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LeafOutcome {
+    /// `V = sign P` and `S V - sign Q` positive definite for every
+    /// parameter in the sub-box: stable in probability with
+    /// `Sigma^2 <= sigma2_upper`.
+    Stable {
+        /// The choice, fixed at the sub-box's centre.
+        choice: BoxChoice,
+        /// The proved bound `S`.
+        sigma2_upper: Rational,
+        /// The largest `Sigma^2` sampled (corners and centre), in floating
+        /// point, and where.
+        sampled: f64,
+        /// Where the largest sample was taken.
+        sampled_at: Vec<Rational>,
+    },
+    /// Nothing is claimed.
+    Undecided {
+        /// Why.
+        reason: String,
+        /// The pointwise verdict at the sub-box's centre, if analysed.
+        centre: Option<Verdict>,
+    },
+}
+
+/// One sub-box of the final partition.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Leaf {
+    /// The sub-box.
+    pub range: ParamBox,
+    /// Bisections from the whole box.
+    pub depth: u32,
+    /// What is proved there.
+    pub outcome: LeafOutcome,
+}
+
+/// The whole box's verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoxVerdict {
+    /// Every sub-box is proved stable.
+    Stable,
+    /// Some sub-boxes are proved stable, the rest undecided.
+    PartlyStable,
+    /// No sub-box is proved stable.
+    Undecided,
+    /// `mu_e` is not an equilibrium at the witness point.
+    NotAnEquilibrium,
+    /// The noise moves `mu_e` at the witness point.
+    NoiseIncompatible,
+}
+
+impl BoxVerdict {
+    /// The certificate's name for it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            BoxVerdict::Stable => "stable",
+            BoxVerdict::PartlyStable => "partly_stable",
+            BoxVerdict::Undecided => "undecided",
+            BoxVerdict::NotAnEquilibrium => "not_an_equilibrium",
+            BoxVerdict::NoiseIncompatible => "noise_incompatible",
+        }
+    }
+}
+
+/// The result of [`certify_box`].
+#[derive(Clone, Debug)]
+pub struct BoxReport {
+    /// The verdict.
+    pub verdict: BoxVerdict,
+    /// One sentence.
+    pub reason: String,
+    /// The partition (empty for the two verdicts with a witness).
+    pub leaves: Vec<Leaf>,
+    /// Where the equilibrium or the noise fails.
+    pub witness: Option<Vec<Rational>>,
+    /// Which bound stopped the bisection, if one did.
+    pub limit: Option<&'static str>,
+}
+
+impl BoxReport {
+    /// The largest proved bound over the stable sub-boxes.
+    pub fn sup_sigma2(&self) -> Option<Rational> {
+        self.leaves
+            .iter()
+            .filter_map(|l| match &l.outcome {
+                LeafOutcome::Stable { sigma2_upper, .. } => Some(sigma2_upper.clone()),
+                LeafOutcome::Undecided { .. } => None,
+            })
+            .max()
+    }
+
+    /// The volume of the undecided sub-boxes.
+    pub fn undecided_volume(&self) -> Rational {
+        self.leaves
+            .iter()
+            .filter(|l| matches!(l.outcome, LeafOutcome::Undecided { .. }))
+            .fold(Rational::zero(), |acc, l| acc + l.range.volume())
+    }
+}
+
+/// Why a sub-box's proof failed.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ProofFailure {
+    /// The choice gives no functional critical on the whole box.
+    #[error(transparent)]
+    Form(#[from] crate::symbolic::FormError),
+    /// A denominator is not proved to keep one sign.
+    #[error("a denominator is not proved nonzero on the sub-box")]
+    Denominator,
+    /// `V` is not proved positive definite.
+    #[error("the second variation is not proved definite on the sub-box")]
+    NotDefinite,
+    /// `S V - Q` is not proved positive definite.
+    #[error("Sigma^2 <= S is not proved on the sub-box")]
+    Bound,
+    /// `S` is negative.
+    #[error("the bound S is negative")]
+    NegativeBound,
+}
+
+/// Prove, exactly, that for every parameter in `range` the choice's
+/// `V = sign P` is positive definite and (unless `Q` vanishes
+/// identically) `S V - sign Q` is positive definite, so `Sigma^2 < S`.
+/// Every denominator involved (of the multipliers, `V` and `Q`) is first
+/// proved to keep one strict sign on the box, so the rational functions
+/// are the pipeline's quantities at every point; then `V` and `Q` are
+/// multiplied by their common denominator (its sign known) and the
+/// polynomial matrices are proved definite by their Bernstein coefficient
+/// matrices ([`crate::bernstein`]).
+pub fn prove_leaf(sym: &Symbolic, range: &ParamBox, choice: &BoxChoice, s: &Rational) -> Result<Forms, ProofFailure> {
+    if s.is_negative() {
+        return Err(ProofFailure::NegativeBound);
+    }
+    let forms = sym.forms(choice)?;
+    let n = sym.dim();
+    // Every denominator in sight (the inputs', the multipliers', V's and
+    // Q's) keeps one strict sign on the box: the functions are defined
+    // everywhere there and are the pipeline's quantities.
+    let entries = forms.multipliers.iter().chain(forms.v.iter().flatten()).chain(forms.q.iter().flatten());
+    let mut signs: Vec<(Poly, Sign)> = Vec::new();
+    for (f, _) in common_denominator(entries).iter().chain(sym.input_denominators()) {
+        if signs.iter().any(|(g, _)| g == f) {
+            continue;
+        }
+        let fs = sign_on_box(f, n, range).ok_or(ProofFailure::Denominator)?;
+        signs.push((f.clone(), fs));
+    }
+    // The sign of the common denominator of V and Q, from its own exponents.
+    let lcm = common_denominator(forms.v.iter().flatten().chain(forms.q.iter().flatten()));
+    let mut sign = Sign::Positive;
+    for (f, e) in &lcm {
+        let fs = signs.iter().find(|(g, _)| g == f).map(|(_, s)| *s).ok_or(ProofFailure::Denominator)?;
+        if fs == Sign::Negative && e % 2 == 1 {
+            sign = if sign == Sign::Positive { Sign::Negative } else { Sign::Positive };
+        }
+    }
+    let flip = |p: Poly| if sign == Sign::Negative { p.neg() } else { p };
+    let v: Vec<Vec<Poly>> =
+        forms.v.iter().map(|r| r.iter().map(|x| flip(times_denominator(x, &lcm))).collect()).collect();
+    if !matrix_positive_on_box(&v, n, range) {
+        return Err(ProofFailure::NotDefinite);
+    }
+    if !forms.q_zero {
+        let q: Vec<Vec<Poly>> =
+            forms.q.iter().map(|r| r.iter().map(|x| flip(times_denominator(x, &lcm))).collect()).collect();
+        let bound: Vec<Vec<Poly>> =
+            v.iter().zip(&q).map(|(vr, qr)| vr.iter().zip(qr).map(|(a, b)| a.scale(s).sub(b)).collect()).collect();
+        if !matrix_positive_on_box(&bound, n, range) {
+            return Err(ProofFailure::Bound);
+        }
+    }
+    Ok(forms)
+}
+
+/// `lambda_max(Q, V)` in floating point for exact `V` (positive definite)
+/// and `Q`; `None` if `V` is not numerically definite.
+pub fn growth_at(v: &Matrix, q: &Matrix) -> Option<f64> {
+    let l = v.to_dmatrix().cholesky()?.l();
+    let li = l.try_inverse()?;
+    let c = &li * q.to_dmatrix() * li.transpose();
+    let c = (&c + c.transpose()) * 0.5;
+    let e = c.symmetric_eigen().eigenvalues;
+    e.iter().all(|x| x.is_finite()).then(|| e.max())
+}
+
+/// The pointwise analysis at one parameter point: the system there, through
+/// the exact pipeline (`generator::analyse`, default settings).
+pub fn analyse_at(system: &BoxSystem, theta: &[Rational]) -> Option<(casimir::System, generator::Analysis)> {
+    let n = system.dim();
+    let poly = |f: &Frac| specialise(f, n, theta);
+    let value = |f: &Frac| value_at(f, n, theta);
+    let h = poly(&system.hamiltonian)?;
+    let casimirs = system.casimirs.iter().map(poly).collect::<Option<Vec<_>>>()?;
+    let first = system.first_integrals.iter().map(poly).collect::<Option<Vec<_>>>()?;
+    let mu = system.equilibrium.iter().map(value).collect::<Option<Vec<_>>>()?;
+    let noise =
+        system.noise.iter().map(|s| s.iter().map(value).collect::<Option<Vec<_>>>()).collect::<Option<Vec<_>>>()?;
+    let s = casimir::System::new(system.algebra.clone(), h, casimirs, first, mu, noise).ok()?;
+    let a = generator::analyse(&s, &generator::Settings::default());
+    Some((s, a))
+}
+
+/// The choices to try on a sub-box whose centre is stable: the optimised
+/// one, then the first definite one (a wider margin, a larger `Sigma^2`).
+fn centre_choices(analysis: &generator::Analysis) -> Vec<BoxChoice> {
+    let (Some(stable), Some(variation)) = (&analysis.stable, &analysis.variation) else {
+        return vec![];
+    };
+    let n = variation.dim();
+    let r = variation.num_conserved();
+    let free: Vec<usize> = (0..r).filter(|j| !variation.range_columns.contains(j)).collect();
+    // Rows of G[:, range] that are independent at the centre.
+    let g = &variation.gradients;
+    let cols = &variation.range_columns;
+    let sub_t = Matrix::from_fn(cols.len(), n, |j, i| g[(i, cols[j])].clone());
+    let pivot_rows = sub_t.pivot_columns();
+    let mut out = Vec::new();
+    for c in [&stable.choice, &stable.first_choice] {
+        let choice = BoxChoice {
+            sign: c.sign,
+            multipliers: c.multipliers.clone(),
+            free: free.clone(),
+            pivot_rows: pivot_rows.clone(),
+            m: c.m.clone(),
+        };
+        if !out.contains(&choice) {
+            out.push(choice);
+        }
+    }
+    out
+}
+
+/// The bound to prove: the largest `Sigma^2` sampled at the corners and the
+/// centre, times `1 + margin`, plus `margin * 1e-6` of the samples' scale,
+/// rounded up to 6 decimal digits. `None` if a sample fails.
+pub fn sampled_bound(
+    forms: &Forms,
+    n: usize,
+    range: &ParamBox,
+    margin: &Rational,
+) -> Option<(Rational, f64, Vec<Rational>)> {
+    let mut points = range.corners();
+    points.push(range.centre());
+    let mut best = (f64::NEG_INFINITY, range.centre());
+    let mut scale = 0.0f64;
+    for p in points {
+        let v = matrix_at(&forms.v, n, &p)?;
+        let q = matrix_at(&forms.q, n, &p)?;
+        let g = growth_at(&v, &q)?;
+        let neg = growth_at(&v, &q.scale(&Rational::from(-1)))?;
+        scale = scale.max(g.abs()).max(neg.abs());
+        if g > best.0 {
+            best = (g, p);
+        }
+    }
+    let m = exact::rational_to_f64(margin);
+    let target = best.0.max(0.0) * (1.0 + m) + m * 1e-6 * scale.max(f64::MIN_POSITIVE);
+    let s = exact::decimal_at_least(target, 6)?;
+    Some((s, best.0.max(0.0), best.1))
+}
+
+/// Look for a point where `residual` is defined and not zero: the
+/// centre, the corners, then a 5-point grid per parameter.
+fn witness(residual: &[Frac], n: usize, range: &ParamBox) -> Option<Vec<Rational>> {
+    let mut points = vec![range.centre()];
+    points.extend(range.corners());
+    let p = range.dim();
+    let steps = 5usize;
+    let total = steps.checked_pow(p as u32).unwrap_or(usize::MAX).min(4096);
+    for flat in 0..total {
+        let mut rest = flat;
+        let point = (0..p)
+            .map(|i| {
+                let k = rest % steps;
+                rest /= steps;
+                let t = Rational::new(((2 * k + 1) as i64).into(), ((2 * steps) as i64).into());
+                &range.lo[i] + t * (&range.hi[i] - &range.lo[i])
+            })
+            .collect();
+        points.push(point);
+    }
+    points.into_iter().find(|x| residual.iter().any(|r| value_at(r, n, x).is_some_and(|v| !v.is_zero())))
+}
+
+/// Certify the box: the equilibrium and the noise for every parameter,
+/// then bisection until every sub-box is proved stable or undecided at the
+/// depth or box limit.
+pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings) -> Result<BoxReport, BoxSystemError> {
+    let sym = system.symbolic()?;
+    let n = system.dim();
+    if !sym.equilibrium_holds() {
+        let w = witness(&sym.equilibrium_residual, n, range);
+        return Ok(match w {
+            Some(w) => BoxReport {
+                verdict: BoxVerdict::NotAnEquilibrium,
+                reason: "ad*_{Dh(mu_e)} mu_e is not zero at the witness point: mu_e is not an equilibrium there".into(),
+                leaves: vec![],
+                witness: Some(w),
+                limit: None,
+            },
+            None => BoxReport {
+                verdict: BoxVerdict::Undecided,
+                reason: "ad*_{Dh(mu_e)} mu_e is not identically zero on the box, and no sampled point shows where"
+                    .into(),
+                leaves: vec![],
+                witness: None,
+                limit: None,
+            },
+        });
+    }
+    let bad = sym.incompatible_noise();
+    if let Some(&i) = bad.first() {
+        if let Some(w) = witness(&sym.noise_residuals[i], n, range) {
+            return Ok(BoxReport {
+                verdict: BoxVerdict::NoiseIncompatible,
+                reason: format!("ad*_sigma mu_e is not zero for noise field {i} at the witness point"),
+                leaves: vec![],
+                witness: Some(w),
+                limit: None,
+            });
+        }
+    }
+    let mut queue = std::collections::VecDeque::from([(range.clone(), 0u32)]);
+    let mut leaves = Vec::new();
+    let mut analysed = 0usize;
+    let mut limit = None;
+    let width: Vec<Rational> = (0..range.dim()).map(|i| &range.hi[i] - &range.lo[i]).collect();
+    while let Some((b, depth)) = queue.pop_front() {
+        if analysed >= settings.max_boxes {
+            limit = Some("max_boxes");
+            leaves.push(Leaf {
+                range: b,
+                depth,
+                outcome: undecided("the box budget was spent before this sub-box", None),
+            });
+            continue;
+        }
+        analysed += 1;
+        let centre = b.centre();
+        let analysis = analyse_at(system, &centre);
+        let centre_verdict = analysis.as_ref().map(|(_, a)| a.verdict);
+        let mut proved = None;
+        if let Some((_, a)) = &analysis {
+            for choice in centre_choices(a) {
+                let Ok(forms) = sym.forms(&choice) else { continue };
+                let Some((s, sampled, at)) = sampled_bound(&forms, n, &b, &settings.margin) else { continue };
+                // Q = 0 identically: Sigma^2 = 0 needs no margin.
+                let s = if forms.q_zero { Rational::zero() } else { s };
+                if prove_leaf(&sym, &b, &choice, &s).is_ok() {
+                    proved = Some(LeafOutcome::Stable { choice, sigma2_upper: s, sampled, sampled_at: at });
+                    break;
+                }
+            }
+        }
+        if let Some(outcome) = proved {
+            leaves.push(Leaf { range: b, depth, outcome });
+            continue;
+        }
+        // A sub-box unstable at its centre and every corner (each proved
+        // pointwise by the exact Sturm test) is not split further: that
+        // saves the bisection of unstable regions down to the largest
+        // depth. Nothing is claimed for it (instability throughout is not
+        // proved), and a stable island inside it would stay undecided.
+        if centre_verdict == Some(Verdict::LinearlyUnstable)
+            && b.corners().iter().all(|c| analyse_at(system, c).is_some_and(|(_, a)| unstable_exactly(&a)))
+            && analysis.as_ref().is_some_and(|(_, a)| unstable_exactly(a))
+        {
+            leaves.push(Leaf { range: b, depth, outcome: undecided(UNSTABLE_CORNERS, centre_verdict) });
+            continue;
+        }
+        if depth >= settings.max_depth {
+            limit.get_or_insert("max_depth");
+            leaves.push(Leaf {
+                range: b,
+                depth,
+                outcome: undecided("not proved at the largest depth", centre_verdict),
+            });
+            continue;
+        }
+        // Bisect the side widest relative to the whole box's.
+        let i = (0..b.dim()).filter(|&i| !width[i].is_zero()).max_by(|&x, &y| {
+            ((&b.hi[x] - &b.lo[x]) / &width[x]).cmp(&((&b.hi[y] - &b.lo[y]) / &width[y])).then(y.cmp(&x))
+        });
+        match i {
+            Some(i) => {
+                let (lo, hi) = b.split(i);
+                queue.push_back((lo, depth + 1));
+                queue.push_back((hi, depth + 1));
+            }
+            None => {
+                leaves.push(Leaf { range: b, depth, outcome: undecided("not proved at this point", centre_verdict) })
+            }
+        }
+    }
+    let stable = leaves.iter().filter(|l| matches!(l.outcome, LeafOutcome::Stable { .. })).count();
+    let (verdict, reason) = if stable == leaves.len() {
+        (BoxVerdict::Stable, "the second variation is definite and Sigma^2 <= S on every sub-box: stable in probability for every parameter in the box".to_string())
+    } else if stable > 0 {
+        (
+            BoxVerdict::PartlyStable,
+            format!("{stable} of {} sub-boxes are proved stable; the others are undecided", leaves.len()),
+        )
+    } else {
+        (BoxVerdict::Undecided, "no sub-box is proved stable".to_string())
+    };
+    Ok(BoxReport { verdict, reason, leaves, witness: None, limit })
+}
+
+/// Why a sub-box unstable at its centre and corners is left whole.
+pub const UNSTABLE_CORNERS: &str = "linearly unstable at its centre and every corner (proved exactly at each point); not split further, and instability throughout the sub-box is not proved";
+
+fn unstable_exactly(a: &generator::Analysis) -> bool {
+    a.verdict == Verdict::LinearlyUnstable
+        && matches!(a.spectral_proof, Some(generator::SpectralProof::Unstable { .. }))
+}
+
+fn undecided(reason: &str, centre: Option<Verdict>) -> LeafOutcome {
+    LeafOutcome::Undecided { reason: reason.to_string(), centre }
+}

@@ -1,0 +1,528 @@
+//! Box certificates (docs/boxes.md): a spec with a `box` section is
+//! certified for every parameter value in the box, by the `boxes` crate,
+//! and the certificate is re-checked exactly by `check`.
+//!
+//! ```
+//! let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
+//! let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+//! value["box"] = serde_json::json!({"parameters": {"I2": ["3/2", "5/2"]}});
+//! let spec = spec::spec_from_value(value).unwrap();
+//! let cert = spec::box_cert::certify_box_spec(&spec);
+//! assert_eq!(cert["verdict"], "stable");
+//! assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Stable);
+//! ```
+
+use crate::certificate::{spec_digest, CERTIFICATE_VERSION, ENGINE_VERSION};
+use crate::check::{fail, CheckError, CheckReport};
+use crate::document::BoxDoc;
+use crate::json::{child, Result, SpecError};
+use crate::parse::{spec_from_value, Spec};
+use crate::record::{Engine, ExactRational, Float};
+use ::boxes::certify::sampled_bound;
+use ::boxes::symbolic::value_at;
+use ::boxes::{BoxChoice, BoxReport, BoxSettings, BoxVerdict, Leaf, LeafOutcome, ParamBox};
+use exact::{Matrix, Rational};
+use num_traits::{One, Zero};
+use outcome::{Sign, Verdict};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// Largest `max_depth` accepted.
+pub const MAX_BOX_DEPTH: u64 = 40;
+/// Largest `max_boxes` accepted.
+pub const MAX_BOX_COUNT: u64 = 1_000_000;
+
+/// A spec's `box` section, validated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoxSection {
+    /// The box parameters, in name order.
+    pub names: Vec<String>,
+    /// Their intervals.
+    pub range: ParamBox,
+    /// The bisection's bounds and the margin.
+    pub settings: BoxSettings,
+}
+
+/// Read and validate the `box` section (`path` is its JSON path).
+pub(crate) fn read_box_section(
+    doc: &BoxDoc,
+    path: &str,
+    parameters: &BTreeMap<String, Rational>,
+) -> Result<BoxSection> {
+    let ppath = child(path, "parameters");
+    if doc.parameters.is_empty() {
+        return Err(SpecError::new(&ppath, "name at least one parameter"));
+    }
+    let mut names = Vec::new();
+    let mut lo = Vec::new();
+    let mut hi = Vec::new();
+    for (name, [a, b]) in &doc.parameters {
+        let p = child(&ppath, name);
+        if !parameters.contains_key(name) {
+            let known: Vec<String> = parameters.keys().cloned().collect();
+            return Err(SpecError::new(&p, crate::sweep::unknown_parameter(name, &known)));
+        }
+        if a.0 >= b.0 {
+            return Err(SpecError::new(&p, format!("the interval [{}, {}] is empty: LO must be below HI", a.0, b.0)));
+        }
+        names.push(name.clone());
+        lo.push(a.0.clone());
+        hi.push(b.0.clone());
+    }
+    let mut settings = BoxSettings::default();
+    if let Some(d) = doc.max_depth {
+        if d > MAX_BOX_DEPTH {
+            return Err(SpecError::new(child(path, "max_depth"), format!("at most {MAX_BOX_DEPTH}, got {d}")));
+        }
+        settings.max_depth = d as u32;
+    }
+    if let Some(m) = doc.max_boxes {
+        if m == 0 || m > MAX_BOX_COUNT {
+            return Err(SpecError::new(child(path, "max_boxes"), format!("from 1 to {MAX_BOX_COUNT}, got {m}")));
+        }
+        settings.max_boxes = m as usize;
+    }
+    if let Some(m) = &doc.margin {
+        if !(m.0 > Rational::zero() && m.0 <= Rational::one()) {
+            return Err(SpecError::new(child(path, "margin"), format!("must be above 0 and at most 1, got {}", m.0)));
+        }
+        settings.margin = m.0.clone();
+    }
+    Ok(BoxSection { names, range: ParamBox { lo, hi }, settings })
+}
+
+/// A box certificate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[schemars(title = "verify: certificate over a box of parameters")]
+pub struct BoxCertificateDocument {
+    /// Version of the certificate format.
+    pub certificate_version: u64,
+    /// The engine that wrote it.
+    pub engine: Engine,
+    /// The spec's name.
+    pub name: String,
+    /// `box`.
+    pub kind: String,
+    /// `stable` (every sub-box), `partly_stable`, `undecided`,
+    /// `not_an_equilibrium` or `noise_incompatible` (at `witness`).
+    pub verdict: String,
+    /// Why, in a sentence.
+    pub reason: String,
+    /// The box parameters, in name order (the spec's `box` section).
+    pub parameters: Vec<String>,
+    /// A proved upper bound on `Sigma^2` over the stable sub-boxes (the
+    /// largest of their `sigma2_upper`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sup_sigma2: Option<Float>,
+    /// The same, exactly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sup_sigma2_exact: Option<ExactRational>,
+    /// The largest `Sigma^2` sampled (at sub-box corners and centres, for
+    /// the sub-box's functional): where the sup is approached.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampled_max: Option<SampleRecord>,
+    /// The undecided sub-boxes' share of the box's volume.
+    pub undecided_fraction: Float,
+    /// Which bound stopped the bisection (`max_depth`, `max_boxes`), if one did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit: Option<String>,
+    /// A point of the box where the equilibrium or the noise fails.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub witness: Option<Vec<ExactRational>>,
+    /// The partition of the box.
+    pub sub_boxes: Vec<SubBoxRecord>,
+    /// SHA-256 of the embedded spec's compact JSON.
+    pub spec_sha256: String,
+    /// The spec exactly as given (with its `box` section).
+    pub spec: Value,
+}
+
+/// A sampled `Sigma^2` and where.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SampleRecord {
+    /// The value (floating point).
+    pub sigma2: Float,
+    /// The parameters, in the order of `parameters`.
+    pub at: Vec<ExactRational>,
+}
+
+/// One sub-box: what is proved on it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SubBoxRecord {
+    /// Lower corner.
+    pub lo: Vec<ExactRational>,
+    /// Upper corner.
+    pub hi: Vec<ExactRational>,
+    /// Bisections from the box.
+    pub depth: u64,
+    /// `stable` or `undecided`.
+    pub verdict: String,
+    /// Why undecided.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// The pointwise verdict at the centre (undecided sub-boxes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_verdict: Option<Verdict>,
+    /// Stable: the sign of `P`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sign: Option<i64>,
+    /// Stable: the multipliers at the centre (Casimirs, then first integrals).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multipliers: Option<Vec<ExactRational>>,
+    /// Stable: the conserved quantities whose multipliers stay fixed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub free: Option<Vec<u64>>,
+    /// Stable: the rows of `G` solved for the other multipliers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pivot_rows: Option<Vec<u64>>,
+    /// Stable: the Casimir function's Hessian `M`.
+    #[serde(rename = "M", default, skip_serializing_if = "Option::is_none")]
+    pub m: Option<Vec<Vec<ExactRational>>>,
+    /// Stable: the proved bound `S` (`S V - sign Q` positive definite on the sub-box).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_upper: Option<ExactRational>,
+    /// Stable: the largest `Sigma^2` sampled on the sub-box.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_sampled: Option<Float>,
+}
+
+/// The JSON Schema of box certificates.
+pub fn box_certificate_schema() -> Value {
+    serde_json::to_value(schemars::schema_for!(BoxCertificateDocument)).unwrap_or(Value::Null)
+}
+
+fn exact_vec(v: &[Rational]) -> Vec<ExactRational> {
+    v.iter().cloned().map(ExactRational).collect()
+}
+
+fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
+    let mut r = SubBoxRecord {
+        lo: exact_vec(&leaf.range.lo),
+        hi: exact_vec(&leaf.range.hi),
+        depth: leaf.depth as u64,
+        verdict: String::new(),
+        reason: None,
+        centre_verdict: None,
+        sign: None,
+        multipliers: None,
+        free: None,
+        pivot_rows: None,
+        m: None,
+        sigma2_upper: None,
+        sigma2_sampled: None,
+    };
+    match &leaf.outcome {
+        LeafOutcome::Stable { choice, sigma2_upper, sampled, .. } => {
+            r.verdict = "stable".into();
+            r.sign = Some(choice.sign as i64);
+            r.multipliers = Some(exact_vec(&choice.multipliers));
+            r.free = Some(choice.free.iter().map(|&j| j as u64).collect());
+            r.pivot_rows = Some(choice.pivot_rows.iter().map(|&j| j as u64).collect());
+            r.m = Some(choice.m.to_rows().iter().map(|row| exact_vec(row)).collect());
+            r.sigma2_upper = Some(ExactRational(sigma2_upper.clone()));
+            r.sigma2_sampled = Some(Float(*sampled));
+        }
+        LeafOutcome::Undecided { reason, centre } => {
+            r.verdict = "undecided".into();
+            r.reason = Some(reason.clone());
+            r.centre_verdict = *centre;
+        }
+    }
+    r
+}
+
+fn fraction(part: &Rational, whole: &Rational) -> f64 {
+    if whole.is_zero() {
+        return 0.0;
+    }
+    exact::rational_to_f64(&(part / whole))
+}
+
+/// The certificate of a report.
+fn document(spec: &Spec, section: &BoxSection, report: &BoxReport) -> BoxCertificateDocument {
+    let sup = report.sup_sigma2();
+    let sampled_max = report
+        .leaves
+        .iter()
+        .filter_map(|l| match &l.outcome {
+            LeafOutcome::Stable { sampled, sampled_at, .. } => Some((*sampled, sampled_at.clone())),
+            LeafOutcome::Undecided { .. } => None,
+        })
+        .fold(None::<(f64, Vec<Rational>)>, |best, x| match best {
+            Some(b) if b.0 >= x.0 => Some(b),
+            _ => Some(x),
+        })
+        .map(|(v, at)| SampleRecord { sigma2: Float(v), at: exact_vec(&at) });
+    BoxCertificateDocument {
+        certificate_version: CERTIFICATE_VERSION,
+        engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
+        name: spec.name.clone(),
+        kind: "box".into(),
+        verdict: report.verdict.as_str().into(),
+        reason: report.reason.clone(),
+        parameters: section.names.clone(),
+        sup_sigma2: sup.as_ref().map(|s| Float(exact::rational_to_f64_up(s))),
+        sup_sigma2_exact: sup.map(ExactRational),
+        sampled_max,
+        undecided_fraction: Float(fraction(&report.undecided_volume(), &section.range.volume())),
+        limit: report.limit.map(str::to_string),
+        witness: report.witness.as_ref().map(|w| exact_vec(w)),
+        sub_boxes: report.leaves.iter().map(leaf_record).collect(),
+        spec_sha256: spec_digest(&spec.raw),
+        spec: spec.raw.clone(),
+    }
+}
+
+/// Certify a spec with a `box` section: the box certificate's JSON. A spec
+/// without one, or whose system the box refuses (a Casimir or first
+/// integral that holds at the spec's values but not for every parameter),
+/// gets a certificate with verdict `undecided` and the reason.
+pub fn certify_box_spec(spec: &Spec) -> Value {
+    let Some(section) = &spec.parameter_box else {
+        return serde_json::json!({"error": "the spec has no box section"});
+    };
+    let report =
+        match spec.box_system(&section.names).map_err(|e| e.to_string()).and_then(|system| {
+            ::boxes::certify_box(&system, &section.range, &section.settings).map_err(|e| e.to_string())
+        }) {
+            Ok(r) => r,
+            Err(why) => BoxReport {
+                verdict: BoxVerdict::Undecided,
+                reason: format!("the system is not the same for every parameter in the box: {why}"),
+                leaves: vec![],
+                witness: None,
+                limit: None,
+            },
+        };
+    serde_json::to_value(document(spec, section, &report)).unwrap_or(Value::Null)
+}
+
+/// Whether a certificate is a box certificate.
+pub fn is_box_certificate(cert: &Value) -> bool {
+    cert.get("kind").and_then(Value::as_str) == Some("box")
+}
+
+fn rationals(v: &[ExactRational]) -> Vec<Rational> {
+    v.iter().map(|x| x.0.clone()).collect()
+}
+
+/// Re-check a box certificate: the partition, every stable sub-box's proof
+/// (exactly, from the embedded spec and the recorded choice and bound), the
+/// witness, and every derived number. Nothing stored is trusted; the
+/// choices are only the proofs' inputs.
+pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+    let map = crate::json::as_object(cert, "$").map_err(CheckError::BadInput)?;
+    crate::check::check_engine(map)?;
+    let doc: BoxCertificateDocument = crate::document::from_value(cert)
+        .map_err(|e| fail(&e.path, format!("not a box certificate as this engine writes them: {}", e.message)))?;
+    let spec = spec_from_value(doc.spec.clone()).map_err(|e| {
+        fail(
+            &format!("$.spec{}", e.path.trim_start_matches('$')),
+            format!("the embedded spec is not valid: {}", e.message),
+        )
+    })?;
+    if doc.spec_sha256 != spec_digest(&spec.raw) {
+        return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
+    }
+    let Some(section) = &spec.parameter_box else {
+        return Err(fail("$.spec.box", "a box certificate's spec must have a box section".into()));
+    };
+    if doc.parameters != section.names {
+        return Err(fail("$.parameters", "differs from the spec's box section".into()));
+    }
+    let system = spec.box_system(&section.names).map_err(|e| fail("$.spec", e.to_string()))?;
+    let sym = system.symbolic().map_err(|e| fail("$.spec", e.to_string()))?;
+    let n = system.dim();
+    let np = section.names.len();
+    let range = &section.range;
+    let verdict = match doc.verdict.as_str() {
+        "not_an_equilibrium" | "noise_incompatible" => {
+            let Some(w) = &doc.witness else {
+                return Err(fail("$.witness", "missing for this verdict".into()));
+            };
+            let w = rationals(w);
+            if w.len() != np || !range.contains(&w) {
+                return Err(fail("$.witness", "not a point of the box".into()));
+            }
+            let residuals: Vec<&::boxes::Frac> = if doc.verdict == "not_an_equilibrium" {
+                sym.equilibrium_residual.iter().collect()
+            } else {
+                sym.noise_residuals.iter().flatten().collect()
+            };
+            if !residuals.iter().any(|r| value_at(r, n, &w).is_some_and(|v| !v.is_zero())) {
+                return Err(fail("$.witness", "the residual is zero (or undefined) there".into()));
+            }
+            if doc.verdict == "noise_incompatible" && !sym.equilibrium_holds() {
+                return Err(fail("$.verdict", "mu_e is not an equilibrium for every parameter".into()));
+            }
+            if !doc.sub_boxes.is_empty() {
+                return Err(fail("$.sub_boxes", "must be empty for this verdict".into()));
+            }
+            if doc.verdict == "not_an_equilibrium" {
+                Verdict::NotAnEquilibrium
+            } else {
+                Verdict::NoiseIncompatible
+            }
+        }
+        _ => {
+            check_partition(&doc, range, np)?;
+            if !sym.equilibrium_holds() {
+                return Err(fail("$.verdict", "mu_e is not an equilibrium for every parameter in the box".into()));
+            }
+            if !sym.incompatible_noise().is_empty() {
+                return Err(fail("$.verdict", "the noise moves mu_e for some parameter in the box".into()));
+            }
+            let mut sup: Option<Rational> = None;
+            let mut undecided = Rational::zero();
+            let mut sampled_max: Option<(f64, Vec<Rational>)> = None;
+            let mut stable = 0usize;
+            for (i, r) in doc.sub_boxes.iter().enumerate() {
+                let path = format!("$.sub_boxes[{i}]");
+                let b = ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) };
+                match r.verdict.as_str() {
+                    "stable" => {
+                        let choice = record_choice(r, &path)?;
+                        let s = r
+                            .sigma2_upper
+                            .as_ref()
+                            .map(|x| x.0.clone())
+                            .ok_or_else(|| fail(&path, "no sigma2_upper".into()))?;
+                        let forms = ::boxes::prove_leaf(&sym, &b, &choice, &s)
+                            .map_err(|e| fail(&format!("{path}.sigma2_upper"), format!("not proved: {e}")))?;
+                        let (_, sampled, at) = sampled_bound(&forms, n, &b, &section.settings.margin)
+                            .ok_or_else(|| fail(&path, "the samples could not be re-derived".into()))?;
+                        let stated = r.sigma2_sampled.map(|x| x.0).unwrap_or(f64::NAN);
+                        if !close(stated, sampled) {
+                            return Err(fail(
+                                &format!("{path}.sigma2_sampled"),
+                                format!("{stated:e} differs from the re-derived {sampled:e}"),
+                            ));
+                        }
+                        if sampled_max.as_ref().is_none_or(|m| sampled > m.0) {
+                            sampled_max = Some((sampled, at));
+                        }
+                        sup = Some(sup.map_or(s.clone(), |x: Rational| x.max(s)));
+                        stable += 1;
+                    }
+                    "undecided" => undecided += b.volume(),
+                    other => {
+                        return Err(fail(&format!("{path}.verdict"), format!("'{other}' is not a sub-box verdict")))
+                    }
+                }
+            }
+            let total = doc.sub_boxes.len();
+            let expected = if total > 0 && stable == total {
+                "stable"
+            } else if stable > 0 {
+                "partly_stable"
+            } else {
+                "undecided"
+            };
+            if doc.verdict != expected {
+                return Err(fail("$.verdict", format!("the sub-boxes prove '{expected}', not '{}'", doc.verdict)));
+            }
+            let stated_sup = doc.sup_sigma2_exact.as_ref().map(|x| x.0.clone());
+            if stated_sup != sup {
+                return Err(fail("$.sup_sigma2_exact", "is not the largest sub-box bound".into()));
+            }
+            let sup_f = sup.as_ref().map(exact::rational_to_f64_up);
+            if doc.sup_sigma2.map(|x| x.0) != sup_f {
+                return Err(fail("$.sup_sigma2", "is not the exact bound rounded up".into()));
+            }
+            if !close(doc.undecided_fraction.0, fraction(&undecided, &range.volume())) {
+                return Err(fail("$.undecided_fraction", "is not the undecided sub-boxes' share".into()));
+            }
+            match (&doc.sampled_max, &sampled_max) {
+                (None, None) => {}
+                (Some(stated), Some((v, at))) if close(stated.sigma2.0, *v) && &rationals(&stated.at) == at => {}
+                _ => return Err(fail("$.sampled_max", "is not the largest re-derived sample".into())),
+            }
+            if doc.witness.is_some() {
+                return Err(fail("$.witness", "only a failing equilibrium or noise has a witness".into()));
+            }
+            if let Some(l) = &doc.limit {
+                if l != "max_depth" && l != "max_boxes" {
+                    return Err(fail("$.limit", format!("'{l}' is not a limit")));
+                }
+            }
+            if expected == "stable" {
+                Verdict::Stable
+            } else {
+                Verdict::Inconclusive
+            }
+        }
+    };
+    let sigma2 = doc.sup_sigma2.map(|x| x.0).filter(|_| verdict == Verdict::Stable);
+    Ok(CheckReport { name: spec.name.clone(), verdict, level: None, sigma2 })
+}
+
+fn close(a: f64, b: f64) -> bool {
+    a == b || (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
+}
+
+/// The sub-boxes lie in the box, their interiors are disjoint, and their
+/// volumes add up to the box's: so (being closed) they cover it.
+fn check_partition(doc: &BoxCertificateDocument, range: &ParamBox, np: usize) -> std::result::Result<(), CheckError> {
+    let boxes: Vec<ParamBox> =
+        doc.sub_boxes.iter().map(|r| ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) }).collect();
+    let mut volume = Rational::zero();
+    for (i, b) in boxes.iter().enumerate() {
+        let path = format!("$.sub_boxes[{i}]");
+        if b.lo.len() != np || b.hi.len() != np {
+            return Err(fail(&path, format!("expected {np} bounds per corner")));
+        }
+        if (0..np).any(|k| b.lo[k] >= b.hi[k]) || !range.contains_box(b) {
+            return Err(fail(&path, "not a non-empty sub-box of the box".into()));
+        }
+        volume += b.volume();
+    }
+    // Sorted by the first lower bound, only boxes that overlap in the first
+    // parameter are compared.
+    let mut order: Vec<usize> = (0..boxes.len()).collect();
+    order.sort_by(|&a, &b| boxes[a].lo[0].cmp(&boxes[b].lo[0]));
+    for (k, &i) in order.iter().enumerate() {
+        for &j in &order[k + 1..] {
+            if boxes[j].lo[0] >= boxes[i].hi[0] {
+                break;
+            }
+            if boxes[i].interiors_meet(&boxes[j]) {
+                return Err(fail(&format!("$.sub_boxes[{j}]"), format!("overlaps sub-box {i}")));
+            }
+        }
+    }
+    if volume != range.volume() {
+        return Err(fail("$.sub_boxes", "the sub-boxes do not cover the box".into()));
+    }
+    Ok(())
+}
+
+fn record_choice(r: &SubBoxRecord, path: &str) -> std::result::Result<BoxChoice, CheckError> {
+    let missing = |what: &str| fail(path, format!("a stable sub-box needs '{what}'"));
+    let sign = match r.sign.ok_or_else(|| missing("sign"))? {
+        1 => Sign::Positive,
+        -1 => Sign::Negative,
+        s => return Err(fail(&format!("{path}.sign"), format!("must be 1 or -1, got {s}"))),
+    };
+    let m_rows = r.m.as_ref().ok_or_else(|| missing("M"))?;
+    let k = m_rows.len();
+    if m_rows.iter().any(|row| row.len() != k) {
+        return Err(fail(&format!("{path}.M"), "must be square".into()));
+    }
+    let m = Matrix::from_rows(&m_rows.iter().map(|row| rationals(row)).collect::<Vec<_>>());
+    if !m.is_symmetric() {
+        return Err(fail(&format!("{path}.M"), "must be symmetric".into()));
+    }
+    let to_usize = |v: &Vec<u64>| v.iter().map(|&x| usize::try_from(x).unwrap_or(usize::MAX)).collect::<Vec<_>>();
+    Ok(BoxChoice {
+        sign,
+        multipliers: rationals(r.multipliers.as_ref().ok_or_else(|| missing("multipliers"))?),
+        free: to_usize(r.free.as_ref().ok_or_else(|| missing("free"))?),
+        pivot_rows: to_usize(r.pivot_rows.as_ref().ok_or_else(|| missing("pivot_rows"))?),
+        m,
+    })
+}

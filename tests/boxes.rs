@@ -1,0 +1,311 @@
+//! Box certificates (docs/boxes.md) through the spec and the CLI: every
+//! verdict, the closed forms, tampering, bad input, invariance and
+//! determinism.
+
+use serde_json::{json, Value};
+use std::process::Command;
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+
+fn verify(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_verify")).current_dir(ROOT).args(args).output().expect("run verify")
+}
+
+fn fixture(name: &str) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(format!("{ROOT}/fixtures/{name}")).unwrap()).unwrap()
+}
+
+fn certify(spec: Value) -> Value {
+    let spec = spec::spec_from_value(spec).unwrap();
+    spec::box_cert::certify_box_spec(&spec)
+}
+
+fn q(text: &str) -> f64 {
+    exact::rational_to_f64(&exact::parse_number(text).unwrap())
+}
+
+fn rigid_body_box(i2: [&str; 2], i3: [&str; 2]) -> Value {
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"I2": i2, "I3": i3}});
+    v
+}
+
+/// The rigid body's closed form, `sigma^2 (b/a - 1)` with `a = 1/I2 -
+/// 1/I1`, `b = 1/I3 - 1/I1` (`b > a` on these boxes), `I1 = 3`, `sigma^2
+/// = 9/100`.
+fn rigid_body_sigma2(i2: f64, i3: f64) -> f64 {
+    let (a, b) = (1.0 / i2 - 1.0 / 3.0, 1.0 / i3 - 1.0 / 3.0);
+    0.09 * (a.max(b) / a.min(b) - 1.0)
+}
+
+#[test]
+fn the_committed_box_fixtures_check() {
+    for name in ["rigid-body-inertia-box", "lagrange-top-fluctuating-gravity-box", "lagrange-top-stability-map"] {
+        let out = verify(&["check", &format!("fixtures/boxes/{name}.cert.json")]);
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(String::from_utf8_lossy(&out.stdout).contains(" box "), "{name}");
+    }
+}
+
+/// Stable whole, with the closed form's sup (at the corner (5/2, 4/5):
+/// 1.1475) within the margin, and `check` confirms it.
+#[test]
+fn a_rigid_body_box_is_stable_with_the_closed_form_sup() {
+    let cert = certify(rigid_body_box(["3/2", "5/2"], ["4/5", "6/5"]));
+    assert_eq!(cert["verdict"], "stable", "{}", cert["reason"]);
+    let sup = cert["sup_sigma2"].as_f64().unwrap();
+    let truth = rigid_body_sigma2(2.5, 0.8);
+    assert!(sup >= truth && sup <= truth * 1.0011, "sup {sup} against {truth}");
+    assert_eq!(cert["sampled_max"]["at"], json!(["5/2", "4/5"]));
+    assert_eq!(cert["undecided_fraction"], 0.0);
+    let report = spec::check_certificate_value(&cert).unwrap();
+    assert_eq!(report.verdict, spec::Verdict::Stable);
+}
+
+/// Across `I2 = I1` the axis turns intermediate: partly stable, and no
+/// stable sub-box reaches `I2 >= 3`; the pointwise verdicts of a grid
+/// inside the stable sub-boxes (the sweep's) are stable with `Sigma^2`
+/// below their sub-box's bound.
+#[test]
+fn a_rigid_body_box_across_i2_equal_i1_is_partly_stable_and_consistent_with_points() {
+    let mut spec = rigid_body_box(["2", "4"], ["4/5", "6/5"]);
+    spec["box"]["max_depth"] = json!(8);
+    let cert = certify(spec.clone());
+    assert_eq!(cert["verdict"], "partly_stable", "{}", cert["reason"]);
+    let parsed = spec::spec_from_value(spec).unwrap();
+    let mut points = 0;
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        let hi: Vec<f64> = sub["hi"].as_array().unwrap().iter().map(|x| q(x.as_str().unwrap())).collect();
+        if sub["verdict"] != "stable" {
+            continue;
+        }
+        assert!(hi[0] < 3.0, "a stable sub-box reaches I2 = I1: {sub}");
+        // the sub-box's centre, certified pointwise
+        let centre: Vec<String> = (0..2)
+            .map(|i| {
+                let (a, b) = (&sub["lo"][i], &sub["hi"][i]);
+                let mid = (exact::parse_number(a.as_str().unwrap()).unwrap()
+                    + exact::parse_number(b.as_str().unwrap()).unwrap())
+                    / exact::Rational::from(2);
+                mid.to_string()
+            })
+            .collect();
+        let point = parsed
+            .with_parameters(&[
+                ("I2".into(), exact::parse_number(&centre[0]).unwrap()),
+                ("I3".into(), exact::parse_number(&centre[1]).unwrap()),
+            ])
+            .unwrap();
+        let c = spec::certify(&point).json;
+        assert_eq!(c["verdict"], "stable");
+        let bound = q(sub["sigma2_upper"].as_str().unwrap());
+        assert!(c["sigma2"].as_f64().unwrap() <= bound, "{c} above {bound}");
+        points += 1;
+    }
+    assert!(points > 10);
+    let undecided = cert["undecided_fraction"].as_f64().unwrap();
+    // I2 >= 3 is half the box; the bisection leaves a strip of width 2/2^4 below it
+    assert!((0.5..0.57).contains(&undecided), "{undecided}");
+    assert!(spec::check_certificate_value(&cert).is_ok());
+}
+
+/// The heavy top (Lagrange, noise about the symmetry axis) over `p` and
+/// `mgl`: stable exactly where `p^2 > 4 mgl I1`. At depth 14 every sub-box
+/// is 1/128 of the box's side in each parameter; the undecided part is the
+/// unstable region plus a band along the curve, and its excess over the
+/// unstable area (`int_{1/2}^{3/2} (2 sqrt(m) - 1) dm / 2 = 0.489043`,
+/// by hand) stays below 1% of the box.
+#[test]
+fn the_heavy_top_map_resolves_the_stability_boundary_to_one_percent() {
+    let mut spec = fixture("lagrange-top-fast.json");
+    spec["box"] = json!({"parameters": {"p": ["1", "3"], "mgl": ["1/2", "3/2"]}, "max_depth": 14});
+    let cert = certify(spec);
+    assert_eq!(cert["verdict"], "partly_stable");
+    let unstable_area = (4.0 / 3.0 * (1.5f64.powf(1.5) - 0.5f64.powf(1.5)) - 1.0) / 2.0;
+    assert!((unstable_area - 0.489043).abs() < 1e-6);
+    let undecided = cert["undecided_fraction"].as_f64().unwrap();
+    assert!(undecided > unstable_area && undecided < unstable_area + 0.01, "{undecided}");
+    // order: (mgl, p) by name
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        if sub["verdict"] == "stable" {
+            let mgl_hi = exact::parse_number(sub["hi"][0].as_str().unwrap()).unwrap();
+            let p_lo = exact::parse_number(sub["lo"][1].as_str().unwrap()).unwrap();
+            assert!(&p_lo * &p_lo > exact::Rational::from(4) * mgl_hi, "{sub}");
+        }
+    }
+}
+
+/// `Sigma^2 <= S` fails when `S` is edited below the truth by 1e-7, and
+/// any change to the partition, a choice or a derived number fails too.
+#[test]
+fn an_edited_box_certificate_fails_its_check() {
+    let cert = certify(rigid_body_box(["3/2", "5/2"], ["4/5", "6/5"]));
+    let truth = exact::parse_number("1.1475").unwrap();
+    type Edit = Box<dyn Fn(&mut Value)>;
+    let edits: Vec<(&str, Edit)> = vec![
+        (
+            "S below the sup by 1e-7",
+            Box::new(move |c| {
+                let s = &truth * &exact::parse_number("0.9999999").unwrap();
+                c["sub_boxes"][0]["sigma2_upper"] = json!(s.to_string());
+                c["sup_sigma2_exact"] = json!(s.to_string());
+                c["sup_sigma2"] = json!(exact::rational_to_f64_up(&s));
+            }),
+        ),
+        ("sup edited", Box::new(|c| c["sup_sigma2_exact"] = json!("1"))),
+        ("sign flipped", Box::new(|c| c["sub_boxes"][0]["sign"] = json!(-1))),
+        ("verdict", Box::new(|c| c["verdict"] = json!("partly_stable"))),
+        ("a side shrunk", Box::new(|c| c["sub_boxes"][0]["hi"][0] = json!("12/5"))),
+        ("the box widened", Box::new(|c| c["spec"]["box"]["parameters"]["I2"][1] = json!("3"))),
+        ("an undecided remainder hidden", Box::new(|c| c["undecided_fraction"] = json!(0.5))),
+    ];
+    for (what, edit) in edits {
+        let mut c = cert.clone();
+        edit(&mut c);
+        assert!(spec::check_certificate_value(&c).is_err(), "{what}: accepted");
+    }
+    // through the CLI: exit 1
+    let dir = std::env::temp_dir().join(format!("boxes-tamper-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("edited.cert.json");
+    let mut c = cert.clone();
+    c["sub_boxes"][0]["sign"] = json!(-1);
+    std::fs::write(&path, c.to_string()).unwrap();
+    let out = verify(&["check", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An equilibrium that holds only at one parameter value: the box is
+/// `not_an_equilibrium` with a witness where the residual is not zero;
+/// noise that moves it: `noise_incompatible`.
+#[test]
+fn witnesses_for_a_failing_equilibrium_and_noise() {
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["e"] = json!(0);
+    v["equilibrium"] = json!([1, "e", 0]);
+    v["box"] = json!({"parameters": {"e": ["0", "1/10"]}});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "not_an_equilibrium", "{}", cert["reason"]);
+    assert_eq!(cert["witness"], json!(["1/20"]));
+    assert!(spec::check_certificate_value(&cert).is_ok());
+    let mut forged = cert.clone();
+    forged["witness"] = json!(["0"]); // an equilibrium there
+    assert!(spec::check_certificate_value(&forged).is_err());
+
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["s"] = json!(0);
+    v["noise"] = json!([["sigma", "s", 0]]);
+    v["box"] = json!({"parameters": {"s": ["-1/10", "1/10"]}});
+    let cert = certify(v);
+    // the centre s = 0 is compatible: the witness is a corner
+    assert_eq!(cert["verdict"], "noise_incompatible", "{}", cert["reason"]);
+    assert_eq!(cert["witness"], json!(["-1/10"]));
+    assert!(spec::check_certificate_value(&cert).is_ok());
+}
+
+/// A Casimir that is one only at the spec's value of a box parameter: the
+/// box is undecided with the reason, not certified.
+#[test]
+fn a_casimir_that_depends_on_a_box_parameter_is_not_trusted() {
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["casimirs"] = json!(["(Pi1^2 + Pi2^2 + Pi3^2)/2 + (I2 - 2)*Pi1"]);
+    v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "undecided");
+    assert!(cert["reason"].as_str().unwrap().contains("not a Casimir for every parameter"), "{}", cert["reason"]);
+}
+
+/// The verdict and the sup do not depend on the scale or sign of the
+/// Casimir (random rescalings), and two runs write the same bytes.
+#[test]
+fn rescaled_casimirs_give_the_same_box_and_runs_repeat() {
+    let base = certify(rigid_body_box(["3/2", "5/2"], ["4/5", "6/5"]));
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    for _ in 0..4 {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let k = (state % 2000) as i64 - 1000;
+        let k = if k == 0 { 7 } else { k };
+        let d = 1 + (state >> 20) % 97;
+        let mut v = rigid_body_box(["3/2", "5/2"], ["4/5", "6/5"]);
+        v["casimirs"] = json!([format!("({k}/{d})*(Pi1^2 + Pi2^2 + Pi3^2)")]);
+        let c = certify(v);
+        assert_eq!(c["verdict"], base["verdict"], "k = {k}/{d}");
+        assert_eq!(c["sup_sigma2_exact"], base["sup_sigma2_exact"], "k = {k}/{d}");
+    }
+    let again = certify(rigid_body_box(["3/2", "5/2"], ["4/5", "6/5"]));
+    assert_eq!(spec::to_pretty_json(&again), spec::to_pretty_json(&base));
+}
+
+/// Bad input exits 2 and names the field.
+#[test]
+fn bad_box_input_names_the_field() {
+    let spec = "fixtures/rigid-body-major-axis.json";
+    for (args, field) in [
+        (vec!["--param", "J=1:2"], "$.box.parameters.J"),
+        (vec!["--param", "I2=3:2"], "$.box.parameters.I2"),
+        (vec!["--param", "I2=1:1"], "$.box.parameters.I2"),
+        (vec!["--param", "I2=a:2"], "$.box.parameters.I2"),
+        (vec!["--param", "I2=1:2", "--max-depth", "41"], "$.box.max_depth"),
+        (vec!["--param", "I2=1:2", "--max-boxes", "0"], "$.box.max_boxes"),
+    ] {
+        let mut all = vec!["certify-box", spec];
+        all.extend(args.iter().copied());
+        let out = verify(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(field), "{args:?}: {err}");
+    }
+    let out = verify(&["certify-box", spec, "--param", "I2"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = verify(&["certify-box", "fixtures/fluids/channel-sin-walls.json", "--param", "a=1:2"]);
+    assert_eq!(out.status.code(), Some(2));
+    // a spec's own box section: the same checks
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"I2": ["2", "1"]}});
+    assert_eq!(spec::spec_from_value(v).unwrap_err().path, "$.box.parameters.I2");
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"I2": ["1", "2"]}, "margin": "0"});
+    assert_eq!(spec::spec_from_value(v).unwrap_err().path, "$.box.margin");
+}
+
+/// Boxes at the ends of the doubles. A noise amplitude from 1e-150 to
+/// 2e-150 gives `Sigma^2` about 1e-300, certified with a positive bound;
+/// from 1e-308 to 2e-308 `Sigma^2` (about 1e-616) has no double, the
+/// pointwise engine says `inconclusive` and so nothing is certified (never
+/// a bound rounded to 0). A side up to 1e308 (an inertia) is certified
+/// exactly, and a box that reaches `I3 = 0` (where `h` is undefined) is
+/// never stable there.
+#[test]
+fn extreme_boxes_stay_exact() {
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"sigma": ["1e-150", "2e-150"]}});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "stable", "{}", cert["reason"]);
+    // Sigma^2 = 3 sigma^2 at I = (3, 2, 1): at most 1.2e-299
+    let sup = cert["sup_sigma2"].as_f64().unwrap();
+    assert!((1.2e-299..1.3e-299).contains(&sup), "{sup}");
+    assert!(spec::check_certificate_value(&cert).is_ok());
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"sigma": ["1e-308", "2e-308"]}, "max_depth": 2});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "undecided", "{}", cert["reason"]);
+    assert!(cert.get("sup_sigma2").is_none());
+    assert!(spec::check_certificate_value(&cert).is_ok());
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"I1": ["3", "1e308"]}, "max_depth": 4});
+    let cert = certify(v);
+    assert_ne!(cert["verdict"], "undecided", "{}", cert["reason"]);
+    assert!(spec::check_certificate_value(&cert).is_ok());
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"I3": ["0", "1"]}, "max_depth": 6});
+    let cert = certify(v);
+    assert_ne!(cert["verdict"], "stable");
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        if sub["verdict"] == "stable" {
+            assert_ne!(sub["lo"][0], "0", "a stable sub-box contains I3 = 0");
+        }
+    }
+}
