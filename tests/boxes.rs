@@ -309,3 +309,61 @@ fn extreme_boxes_stay_exact() {
         }
     }
 }
+
+/// `plot-sweep --box`: the map with the sub-boxes under a sweep's points,
+/// after checking that every point inside a stable sub-box is stable within
+/// its bound; a sweep line edited to contradict the box fails (exit 1).
+#[test]
+fn plot_sweep_draws_a_box_and_checks_the_points_against_it() {
+    let dir = std::env::temp_dir().join(format!("boxes-plot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let lines = dir.join("map.jsonl");
+    let out = verify(&[
+        "sweep",
+        "fixtures/lagrange-top-fast.json",
+        "--param",
+        "mgl=0.5:1.5:11",
+        "--param",
+        "p=1:3:11",
+        "-o",
+        lines.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let cert = "fixtures/boxes/lagrange-top-stability-map.cert.json";
+    let plot = |lines: &std::path::Path| {
+        verify(&[
+            "plot-sweep",
+            lines.to_str().unwrap(),
+            "--spec",
+            "fixtures/lagrange-top-fast.json",
+            "--box",
+            cert,
+            "--out",
+            dir.join("plots").to_str().unwrap(),
+        ])
+    };
+    let out = plot(&lines);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let said = String::from_utf8_lossy(&out.stderr);
+    let inside: usize = said.split("checked; ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!(inside > 20, "{said}");
+    assert!(dir.join("plots/lagrange-top-fast-map.png").is_file());
+    // (mgl, p) = (0.5, 3): deep in a stable sub-box; claim growth there
+    let text = std::fs::read_to_string(&lines).unwrap();
+    let edited: Vec<String> = text
+        .lines()
+        .map(|l| {
+            let mut v: Value = serde_json::from_str(l).unwrap();
+            if v["exact_parameters"] == json!({"mgl": "1/2", "p": "3"}) {
+                v["sigma2"] = json!(0.5);
+            }
+            v.to_string()
+        })
+        .collect();
+    let bad = dir.join("edited.jsonl");
+    std::fs::write(&bad, edited.join("\n")).unwrap();
+    let out = plot(&bad);
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("lies in a stable sub-box"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -178,7 +178,7 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
             .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", path.display())))?;
     }
     if let Some(dir) = &args.plot {
-        crate::sweep_plots::plot_files(std::slice::from_ref(&args.output), &args.plan.spec, dir, None)?;
+        crate::sweep_plots::plot_files(std::slice::from_ref(&args.output), &args.plan.spec, dir, None, None)?;
     }
     Ok(())
 }

@@ -220,7 +220,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", npz.display())))?;
     }
     if let (Some(dir), Some(out)) = (&args.plot, &args.output) {
-        crate::sweep_plots::plot_files(std::slice::from_ref(out), &args.plan.spec, dir, None)?;
+        crate::sweep_plots::plot_files(std::slice::from_ref(out), &args.plan.spec, dir, None, None)?;
     }
     if summary.invalid > 0 {
         return Err(bad(format!(

@@ -37,6 +37,87 @@ pub struct PlotSweepArgs {
     /// Shade stable points by `sigma2` (default) or `logT`.
     #[arg(long, default_value = "sigma2")]
     pub shade: String,
+    /// A box certificate of the same spec over the two swept parameters
+    /// (docs/boxes.md): its sub-boxes are drawn under the points, after
+    /// the certificate is checked and every point inside a stable sub-box
+    /// is checked to be stable with `Sigma^2` at most the sub-box's bound.
+    #[arg(long = "box")]
+    pub box_certificate: Option<PathBuf>,
+}
+
+/// A sub-box of a box certificate, in the map's two parameters.
+#[derive(Clone, Debug)]
+struct SubBox {
+    lo: [exact::Rational; 2],
+    hi: [exact::Rational; 2],
+    /// The proved bound, if stable.
+    bound: Option<exact::Rational>,
+}
+
+/// Read and check a box certificate for a map over `names` of `spec`.
+fn read_box(path: &Path, spec: &AnySpec, names: &[String]) -> Result<Vec<SubBox>, Failure> {
+    let bad = |m: String| Failure::BadInput(format!("{}: {m}", path.display()));
+    let text = read(path)?;
+    let cert: Value = serde_json::from_str(&text).map_err(|e| bad(format!("not JSON: {e}")))?;
+    if !spec::box_cert::is_box_certificate(&cert) {
+        return Err(bad("not a box certificate (kind \"box\")".into()));
+    }
+    spec::check_certificate_value(&cert)
+        .map_err(|e| Failure::Failed(format!("{}: the box certificate fails its check: {e}", path.display())))?;
+    // The box's system must be the swept one: the fields that define it
+    // agree (the name, the description, the stopping question and the
+    // sections for sweeps and boxes may differ).
+    for key in ["algebra", "parameters", "hamiltonian", "casimirs", "first_integrals", "equilibrium", "noise"] {
+        if cert["spec"].get(key) != spec.raw().get(key) {
+            return Err(bad(format!("its spec's {key} is not the swept spec's")));
+        }
+    }
+    let params: Vec<String> =
+        cert["parameters"].as_array().into_iter().flatten().filter_map(|v| v.as_str().map(String::from)).collect();
+    let index: Vec<usize> = names
+        .iter()
+        .map(|n| params.iter().position(|p| p == n))
+        .collect::<Option<Vec<_>>>()
+        .filter(|_| params.len() == names.len())
+        .ok_or_else(|| bad(format!("its parameters {params:?} are not the swept {names:?}")))?;
+    let rational = |v: &Value| exact::parse_certificate_rational(v.as_str().unwrap_or("")).ok();
+    let mut out = Vec::new();
+    for sub in cert["sub_boxes"].as_array().into_iter().flatten() {
+        let side = |which: &str, k: usize| rational(&sub[which][index[k]]);
+        let (Some(a), Some(b), Some(c), Some(d)) = (side("lo", 0), side("lo", 1), side("hi", 0), side("hi", 1)) else {
+            return Err(bad("a sub-box without its corners".into()));
+        };
+        let bound = if sub["verdict"] == "stable" {
+            sub["sigma2_upper"].as_str().and_then(|t| exact::parse_certificate_rational(t).ok())
+        } else {
+            None
+        };
+        out.push(SubBox { lo: [a, b], hi: [c, d], bound });
+    }
+    Ok(out)
+}
+
+/// Every point inside a stable sub-box (exactly, by its exact parameters)
+/// is stable with `Sigma^2` at most the sub-box's bound.
+fn check_points_in_boxes(points: &[Point], boxes: &[SubBox]) -> Result<usize, Failure> {
+    let mut inside = 0;
+    for p in points {
+        let Some(x) = &p.exact else { continue };
+        for b in boxes.iter().filter(|b| b.bound.is_some()) {
+            if (0..2).all(|k| b.lo[k] <= x[k] && x[k] <= b.hi[k]) {
+                inside += 1;
+                let bound = b.bound.as_ref().map(exact::rational_to_f64_up).unwrap_or(f64::NAN);
+                let ok = p.verdict == "stable" && p.sigma2.is_some_and(|s| s <= bound);
+                if !ok {
+                    return Err(Failure::Failed(format!(
+                        "the sweep point ({}, {}) lies in a stable sub-box with Sigma^2 <= {bound:e}, but the sweep says {} (Sigma^2 {:?})",
+                        x[0], x[1], p.verdict, p.sigma2
+                    )));
+                }
+            }
+        }
+    }
+    Ok(inside)
 }
 
 /// One point read back.
@@ -47,6 +128,8 @@ struct Point {
     sigma2: Option<f64>,
     t: Option<f64>,
     growth: Option<f64>,
+    /// The exact parameters (the first two), when the line has them.
+    exact: Option<[exact::Rational; 2]>,
 }
 
 /// Run `plot-sweep`.
@@ -58,7 +141,7 @@ pub fn run(args: &PlotSweepArgs) -> Result<(), Failure> {
             return Err(Failure::BadInput(format!("--shade: unknown '{}' (expected sigma2 or logT)", excerpt(other))))
         }
     };
-    let written = plot_files(&args.lines, &args.spec, &args.out, Some(shade))?;
+    let written = plot_files(&args.lines, &args.spec, &args.out, Some(shade), args.box_certificate.as_deref())?;
     for w in written {
         println!("{}", w.display());
     }
@@ -80,6 +163,7 @@ pub fn plot_files(
     spec_path: &Path,
     out: &Path,
     shade: Option<Shade>,
+    box_certificate: Option<&Path>,
 ) -> Result<Vec<PathBuf>, Failure> {
     let spec = parse_any_spec_in(&read(spec_path)?, spec_path.parent())
         .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
@@ -132,12 +216,20 @@ pub fn plot_files(
             }
             let Some(verdict) = v["verdict"].as_str() else { continue };
             let x = these.iter().map(|n| params[n.as_str()].as_f64().unwrap_or(f64::NAN)).collect();
+            let exact_of = |n: &String| {
+                v["exact_parameters"][n.as_str()].as_str().and_then(|t| exact::parse_certificate_rational(t).ok())
+            };
+            let exact = match these.as_slice() {
+                [a, b] => exact_of(a).zip(exact_of(b)).map(|(a, b)| [a, b]),
+                _ => None,
+            };
             points.push(Point {
                 x,
                 verdict: verdict.to_string(),
                 sigma2: v["sigma2"].as_f64(),
                 t: if v["T"] == "infinity" { Some(f64::INFINITY) } else { v["T"].as_f64() },
                 growth: v["growth_rate"].as_f64(),
+                exact,
             });
         }
     }
@@ -159,15 +251,31 @@ pub fn plot_files(
             Ok(vec![png(&stem, "sigma2"), png(&stem, "T")])
         }
         2 => {
+            let boxes = match box_certificate {
+                Some(path) => {
+                    let boxes = read_box(path, &spec, &names)?;
+                    let inside = check_points_in_boxes(&points, &boxes)?;
+                    eprintln!(
+                        "{}: checked; {inside} sweep point(s) lie in its stable sub-boxes, all stable within their bounds",
+                        path.display()
+                    );
+                    boxes
+                }
+                None => vec![],
+            };
             let map = Map {
                 spec: &spec,
                 names: [&names[0], &names[1]],
                 points: &points,
                 fixed: &fixed,
                 shade: shade.unwrap_or(Shade::Sigma2),
+                boxes: &boxes,
             };
             map.write(&stem).map_err(fail)?;
             Ok(vec![png(&stem, "map")])
+        }
+        _ if box_certificate.is_some() => {
+            Err(Failure::BadInput("--box: a box is drawn on maps of two swept parameters".into()))
         }
         n => Err(Failure::BadInput(format!(
             "{n} swept parameters: maps are drawn for one or two (sweep fewer, or fix the others)"
@@ -193,6 +301,9 @@ fn fixed_values(spec: &AnySpec) -> BTreeMap<String, f64> {
 fn eval(a: &Annotation, fixed: &BTreeMap<String, f64>, swept: &[(&str, f64)]) -> f64 {
     a.eval(|n| swept.iter().find(|(m, _)| *m == n).map(|(_, v)| *v).or_else(|| fixed.get(n).copied()))
 }
+
+/// An undecided sub-box of a box certificate.
+const UNDECIDED_BOX: RGBColor = RGBColor(225, 225, 225);
 
 fn verdict_colour(v: &str) -> RGBColor {
     match v {
@@ -221,6 +332,8 @@ struct Map<'a> {
     points: &'a [Point],
     fixed: &'a BTreeMap<String, f64>,
     shade: Shade,
+    /// A box certificate's sub-boxes, drawn under the points.
+    boxes: &'a [SubBox],
 }
 
 fn range_of(v: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -264,8 +377,9 @@ impl Map<'_> {
         DB::ErrorType: 'static,
     {
         area.fill(&WHITE)?;
-        let (x0, x1) = range_of(self.points.iter().map(|p| p.x[0]));
-        let (y0, y1) = range_of(self.points.iter().map(|p| p.x[1]));
+        let corner = |b: &SubBox, k: usize| [exact::rational_to_f64(&b.lo[k]), exact::rational_to_f64(&b.hi[k])];
+        let (x0, x1) = range_of(self.points.iter().map(|p| p.x[0]).chain(self.boxes.iter().flat_map(|b| corner(b, 0))));
+        let (y0, y1) = range_of(self.points.iter().map(|p| p.x[1]).chain(self.boxes.iter().flat_map(|b| corner(b, 1))));
         let dx = step(self.points.iter().map(|p| p.x[0])).unwrap_or((x1 - x0).max(1e-12) / 50.0);
         let dy = step(self.points.iter().map(|p| p.x[1])).unwrap_or((y1 - y0).max(1e-12) / 50.0);
         let on_grid = |v: f64, v0: f64, d: f64| d > 0.0 && (((v - v0) / d) - ((v - v0) / d).round()).abs() < 1e-6;
@@ -303,6 +417,17 @@ impl Map<'_> {
             if n > 0 {
                 legend.add(format!("{v} ({n})"), Mark::Swatch(verdict_colour(v).to_rgba()));
             }
+        }
+        let stable_boxes = self.boxes.iter().filter(|b| b.bound.is_some()).count();
+        if !self.boxes.is_empty() {
+            legend.add(
+                format!("proved stable sub-box ({stable_boxes})"),
+                Mark::Swatch(tint(verdict_colour("stable"), 0.12).to_rgba()),
+            );
+            legend.add(
+                format!("undecided sub-box ({})", self.boxes.len() - stable_boxes),
+                Mark::Swatch(UNDECIDED_BOX.to_rgba()),
+            );
         }
         let zeros = self.points.iter().filter(|p| zero(p)).count();
         if zeros > 0 {
@@ -378,7 +503,17 @@ impl Map<'_> {
                 _ => base,
             }
         };
-        if regular {
+        // The box certificate's sub-boxes under the points, with their edges.
+        chart.draw_series(self.boxes.iter().map(|b| {
+            let fill = if b.bound.is_some() { tint(verdict_colour("stable"), 0.12) } else { UNDECIDED_BOX };
+            let (x, y) = (corner(b, 0), corner(b, 1));
+            Rectangle::new([(x[0], y[0]), (x[1], y[1])], fill.filled())
+        }))?;
+        chart.draw_series(self.boxes.iter().map(|b| {
+            let (x, y) = (corner(b, 0), corner(b, 1));
+            Rectangle::new([(x[0], y[0]), (x[1], y[1])], RGBColor(90, 90, 90).stroke_width(1))
+        }))?;
+        if regular && self.boxes.is_empty() {
             chart.draw_series(self.points.iter().map(|p| {
                 Rectangle::new([(p.x[0] - px, p.x[1] - py), (p.x[0] + px, p.x[1] + py)], colour(p).filled())
             }))?;
