@@ -103,18 +103,27 @@ fn a_rigid_body_box_across_i2_equal_i1_is_partly_stable_and_consistent_with_poin
         points += 1;
     }
     assert!(points > 10);
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        if sub["verdict"] == "linearly_unstable" {
+            // I2 > I1: the intermediate axis; I2 = I1 itself is not unstable
+            assert!(q(sub["lo"][0].as_str().unwrap()) > 3.0, "{sub}");
+        }
+    }
     let undecided = cert["undecided_fraction"].as_f64().unwrap();
-    // I2 >= 3 is half the box; the bisection leaves a strip of width 2/2^4 below it
-    assert!((0.5..0.57).contains(&undecided), "{undecided}");
+    let unstable = cert["unstable_fraction"].as_f64().unwrap();
+    // depth 8: 4 halvings per side; the sub-boxes touching I2 = 3 (a strip
+    // of width 2 * 2/16) stay undecided, the rest is proved on each side
+    assert_eq!((undecided, unstable), (0.125, 0.4375));
     assert!(spec::check_certificate_value(&cert).is_ok());
 }
 
 /// The heavy top (Lagrange, noise about the symmetry axis) over `p` and
-/// `mgl`: stable exactly where `p^2 > 4 mgl I1`. At depth 14 every sub-box
-/// is 1/128 of the box's side in each parameter; the undecided part is the
-/// unstable region plus a band along the curve, and its excess over the
-/// unstable area (`int_{1/2}^{3/2} (2 sqrt(m) - 1) dm / 2 = 0.489043`,
-/// by hand) stays below 1% of the box.
+/// `mgl`: stable exactly where `p^2 > 4 mgl I1`, linearly unstable (a
+/// complex quadruple) where `p^2 < 4 mgl I1`. Every stable sub-box lies
+/// strictly on the first side and every unstable one on the second; the
+/// undecided sub-boxes form a band along the curve, each at most 1/100 of
+/// the box's side (depth 14: 1/128). The unstable area is
+/// `int_{1/2}^{3/2} (2 sqrt(m) - 1) dm / 2 = 0.489043` (by hand).
 #[test]
 fn the_heavy_top_map_resolves_the_stability_boundary_to_one_percent() {
     let mut spec = fixture("lagrange-top-fast.json");
@@ -124,13 +133,22 @@ fn the_heavy_top_map_resolves_the_stability_boundary_to_one_percent() {
     let unstable_area = (4.0 / 3.0 * (1.5f64.powf(1.5) - 0.5f64.powf(1.5)) - 1.0) / 2.0;
     assert!((unstable_area - 0.489043).abs() < 1e-6);
     let undecided = cert["undecided_fraction"].as_f64().unwrap();
-    assert!(undecided > unstable_area && undecided < unstable_area + 0.01, "{undecided}");
+    let unstable = cert["unstable_fraction"].as_f64().unwrap();
+    assert!(unstable < unstable_area && unstable + undecided > unstable_area, "{unstable} + {undecided}");
+    assert!(undecided < 0.02, "{undecided}");
     // order: (mgl, p) by name
+    let r = |v: &Value| exact::parse_number(v.as_str().unwrap()).unwrap();
+    let four = exact::Rational::from(4);
     for sub in cert["sub_boxes"].as_array().unwrap() {
-        if sub["verdict"] == "stable" {
-            let mgl_hi = exact::parse_number(sub["hi"][0].as_str().unwrap()).unwrap();
-            let p_lo = exact::parse_number(sub["lo"][1].as_str().unwrap()).unwrap();
-            assert!(&p_lo * &p_lo > exact::Rational::from(4) * mgl_hi, "{sub}");
+        let (mgl_lo, mgl_hi, p_lo, p_hi) = (r(&sub["lo"][0]), r(&sub["hi"][0]), r(&sub["lo"][1]), r(&sub["hi"][1]));
+        match sub["verdict"].as_str().unwrap() {
+            "stable" => assert!(&p_lo * &p_lo > &four * &mgl_hi, "{sub}"),
+            "linearly_unstable" => assert!(&p_hi * &p_hi < &four * &mgl_lo, "{sub}"),
+            // the band along the curve: sides of 1/128 of the box's, under 1%
+            _ => {
+                assert!((&p_hi - &p_lo) * exact::Rational::from(100) <= exact::Rational::from(2), "{sub}");
+                assert!((&mgl_hi - &mgl_lo) * exact::Rational::from(100) <= exact::Rational::from(1), "{sub}");
+            }
         }
     }
 }
@@ -158,6 +176,7 @@ fn an_edited_box_certificate_fails_its_check() {
         ("a side shrunk", Box::new(|c| c["sub_boxes"][0]["hi"][0] = json!("12/5"))),
         ("the box widened", Box::new(|c| c["spec"]["box"]["parameters"]["I2"][1] = json!("3"))),
         ("an undecided remainder hidden", Box::new(|c| c["undecided_fraction"] = json!(0.5))),
+        ("stable called unstable", Box::new(|c| c["sub_boxes"][0]["verdict"] = json!("linearly_unstable"))),
     ];
     for (what, edit) in edits {
         let mut c = cert.clone();
@@ -174,6 +193,34 @@ fn an_edited_box_certificate_fails_its_check() {
     let out = verify(&["check", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A box about the intermediate axis is `linearly_unstable` throughout;
+/// its unstable sub-box called stable, or the criterion edited, fails.
+#[test]
+fn a_box_about_the_intermediate_axis_is_linearly_unstable() {
+    let mut v = fixture("rigid-body-intermediate-axis.json");
+    // I = (2, 3, 1): I2 in [5/2, 7/2] stays above I1 = 2
+    v["box"] = json!({"parameters": {"I2": ["5/2", "7/2"]}});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "linearly_unstable", "{}", cert["reason"]);
+    assert_eq!(cert["unstable_fraction"], 1.0);
+    assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::LinearlyUnstable);
+    let mut forged = cert.clone();
+    forged["sub_boxes"][0]["verdict"] = json!("undecided");
+    assert!(spec::check_certificate_value(&forged).is_err());
+    let mut forged = cert.clone();
+    forged["sub_boxes"][0]["reason"] = json!("by inspection");
+    assert!(spec::check_certificate_value(&forged).is_err());
+    // across I2 = I1 = 2 no sub-box is unstable at I2 <= 2
+    let mut v = fixture("rigid-body-intermediate-axis.json");
+    v["box"] = json!({"parameters": {"I2": ["1", "3"]}, "max_depth": 6});
+    let cert = certify(v);
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        if sub["verdict"] == "linearly_unstable" {
+            assert!(q(sub["lo"][0].as_str().unwrap()) > 2.0, "{sub}");
+        }
+    }
 }
 
 /// An equilibrium that holds only at one parameter value: the box is

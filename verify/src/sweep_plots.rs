@@ -52,6 +52,8 @@ struct SubBox {
     hi: [exact::Rational; 2],
     /// The proved bound, if stable.
     bound: Option<exact::Rational>,
+    /// Whether linear instability is proved on it.
+    unstable: bool,
 }
 
 /// Read and check a box certificate for a map over `names` of `spec`.
@@ -92,17 +94,29 @@ fn read_box(path: &Path, spec: &AnySpec, names: &[String]) -> Result<Vec<SubBox>
         } else {
             None
         };
-        out.push(SubBox { lo: [a, b], hi: [c, d], bound });
+        out.push(SubBox { lo: [a, b], hi: [c, d], bound, unstable: sub["verdict"] == "linearly_unstable" });
     }
     Ok(out)
 }
 
 /// Every point inside a stable sub-box (exactly, by its exact parameters)
-/// is stable with `Sigma^2` at most the sub-box's bound.
+/// is stable with `Sigma^2` at most the sub-box's bound, and every point
+/// inside a sub-box proved linearly unstable is linearly unstable.
 fn check_points_in_boxes(points: &[Point], boxes: &[SubBox]) -> Result<usize, Failure> {
     let mut inside = 0;
     for p in points {
         let Some(x) = &p.exact else { continue };
+        for b in boxes.iter().filter(|b| b.unstable) {
+            if (0..2).all(|k| b.lo[k] <= x[k] && x[k] <= b.hi[k]) {
+                inside += 1;
+                if p.verdict != "linearly_unstable" {
+                    return Err(Failure::Failed(format!(
+                        "the sweep point ({}, {}) lies in a sub-box proved linearly unstable, but the sweep says {}",
+                        x[0], x[1], p.verdict
+                    )));
+                }
+            }
+        }
         for b in boxes.iter().filter(|b| b.bound.is_some()) {
             if (0..2).all(|k| b.lo[k] <= x[k] && x[k] <= b.hi[k]) {
                 inside += 1;
@@ -256,7 +270,7 @@ pub fn plot_files(
                     let boxes = read_box(path, &spec, &names)?;
                     let inside = check_points_in_boxes(&points, &boxes)?;
                     eprintln!(
-                        "{}: checked; {inside} sweep point(s) lie in its stable sub-boxes, all stable within their bounds",
+                        "{}: checked; {inside} sweep point(s) lie in its proved sub-boxes, all with the proved verdict (stable within the bound)",
                         path.display()
                     );
                     boxes
@@ -302,8 +316,17 @@ fn eval(a: &Annotation, fixed: &BTreeMap<String, f64>, swept: &[(&str, f64)]) ->
     a.eval(|n| swept.iter().find(|(m, _)| *m == n).map(|(_, v)| *v).or_else(|| fixed.get(n).copied()))
 }
 
-/// An undecided sub-box of a box certificate.
-const UNDECIDED_BOX: RGBColor = RGBColor(225, 225, 225);
+/// A box certificate's sub-box: pale blue (stable), pale red (linearly
+/// unstable) or grey (undecided).
+fn box_fill(stable: bool, unstable: bool) -> RGBColor {
+    if stable {
+        tint(verdict_colour("stable"), 0.12)
+    } else if unstable {
+        tint(verdict_colour("linearly_unstable"), 0.12)
+    } else {
+        RGBColor(225, 225, 225)
+    }
+}
 
 fn verdict_colour(v: &str) -> RGBColor {
     match v {
@@ -419,14 +442,17 @@ impl Map<'_> {
             }
         }
         let stable_boxes = self.boxes.iter().filter(|b| b.bound.is_some()).count();
+        let unstable_boxes = self.boxes.iter().filter(|b| b.unstable).count();
         if !self.boxes.is_empty() {
+            legend
+                .add(format!("proved stable sub-box ({stable_boxes})"), Mark::Swatch(box_fill(true, false).to_rgba()));
             legend.add(
-                format!("proved stable sub-box ({stable_boxes})"),
-                Mark::Swatch(tint(verdict_colour("stable"), 0.12).to_rgba()),
+                format!("proved linearly unstable sub-box ({unstable_boxes})"),
+                Mark::Swatch(box_fill(false, true).to_rgba()),
             );
             legend.add(
-                format!("undecided sub-box ({})", self.boxes.len() - stable_boxes),
-                Mark::Swatch(UNDECIDED_BOX.to_rgba()),
+                format!("undecided sub-box ({})", self.boxes.len() - stable_boxes - unstable_boxes),
+                Mark::Swatch(box_fill(false, false).to_rgba()),
             );
         }
         let zeros = self.points.iter().filter(|p| zero(p)).count();
@@ -505,7 +531,7 @@ impl Map<'_> {
         };
         // The box certificate's sub-boxes under the points, with their edges.
         chart.draw_series(self.boxes.iter().map(|b| {
-            let fill = if b.bound.is_some() { tint(verdict_colour("stable"), 0.12) } else { UNDECIDED_BOX };
+            let fill = box_fill(b.bound.is_some(), b.unstable);
             let (x, y) = (corner(b, 0), corner(b, 1));
             Rectangle::new([(x[0], y[0]), (x[1], y[1])], fill.filled())
         }))?;

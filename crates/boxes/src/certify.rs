@@ -44,6 +44,12 @@ pub enum LeafOutcome {
         /// Where the largest sample was taken.
         sampled_at: Vec<Rational>,
     },
+    /// `A` has an eigenvalue with positive real part for every parameter
+    /// in the sub-box ([`prove_unstable`]).
+    LinearlyUnstable {
+        /// Which sign condition proves it.
+        criterion: String,
+    },
     /// Nothing is claimed.
     Undecided {
         /// Why.
@@ -69,9 +75,14 @@ pub struct Leaf {
 pub enum BoxVerdict {
     /// Every sub-box is proved stable.
     Stable,
-    /// Some sub-boxes are proved stable, the rest undecided.
+    /// Some sub-boxes are proved stable, the others linearly unstable or
+    /// undecided.
     PartlyStable,
-    /// No sub-box is proved stable.
+    /// Every sub-box is proved linearly unstable.
+    LinearlyUnstable,
+    /// No sub-box is proved stable; some are proved linearly unstable.
+    PartlyUnstable,
+    /// Nothing is proved on any sub-box.
     Undecided,
     /// `mu_e` is not an equilibrium at the witness point.
     NotAnEquilibrium,
@@ -85,6 +96,8 @@ impl BoxVerdict {
         match self {
             BoxVerdict::Stable => "stable",
             BoxVerdict::PartlyStable => "partly_stable",
+            BoxVerdict::LinearlyUnstable => "linearly_unstable",
+            BoxVerdict::PartlyUnstable => "partly_unstable",
             BoxVerdict::Undecided => "undecided",
             BoxVerdict::NotAnEquilibrium => "not_an_equilibrium",
             BoxVerdict::NoiseIncompatible => "noise_incompatible",
@@ -114,7 +127,7 @@ impl BoxReport {
             .iter()
             .filter_map(|l| match &l.outcome {
                 LeafOutcome::Stable { sigma2_upper, .. } => Some(sigma2_upper.clone()),
-                LeafOutcome::Undecided { .. } => None,
+                _ => None,
             })
             .max()
     }
@@ -124,6 +137,14 @@ impl BoxReport {
         self.leaves
             .iter()
             .filter(|l| matches!(l.outcome, LeafOutcome::Undecided { .. }))
+            .fold(Rational::zero(), |acc, l| acc + l.range.volume())
+    }
+
+    /// The volume of the sub-boxes proved linearly unstable.
+    pub fn unstable_volume(&self) -> Rational {
+        self.leaves
+            .iter()
+            .filter(|l| matches!(l.outcome, LeafOutcome::LinearlyUnstable { .. }))
             .fold(Rational::zero(), |acc, l| acc + l.range.volume())
     }
 }
@@ -201,6 +222,63 @@ pub fn prove_leaf(sym: &Symbolic, range: &ParamBox, choice: &BoxChoice, s: &Rati
         }
     }
     Ok(forms)
+}
+
+/// The strict sign of a rational function on the box: every denominator
+/// factor and the numerator proved of one sign by their Bernstein
+/// coefficients.
+fn frac_sign(f: &Frac, n: usize, range: &ParamBox) -> Option<Sign> {
+    let mut sign = sign_on_box(f.num(), n, range)?;
+    for (g, e) in f.den() {
+        if sign_on_box(g, n, range)? == Sign::Negative && e % 2 == 1 {
+            sign = if sign == Sign::Positive { Sign::Negative } else { Sign::Positive };
+        }
+    }
+    Some(sign)
+}
+
+/// Prove that for every parameter in `range` the drift `A` has an
+/// eigenvalue with positive real part, from its characteristic polynomial
+/// `c` ([`Symbolic::characteristic_polynomial`]); the criterion used, or
+/// `None`.
+///
+/// The linearisation of a Lie–Poisson system at an equilibrium has a
+/// spectrum symmetric under `x -> -x`; when the coefficients show it
+/// (`c_i` identically zero unless `n - i` is even), `det(x I - A) =
+/// x^r y^j g(y)` with `y = x^2` and `g` monic with `g(0)` not identically
+/// zero. Every eigenvalue lies on the imaginary axis exactly when every
+/// root of `g` is real and at most 0. Then `g = prod (y + r_i)` with
+/// `r_i >= 0` has no negative coefficient. So either of these, proved on
+/// the whole box, gives a root `y` off `(-inf, 0]`, and `x = sqrt(y)` or
+/// `-sqrt(y)` has a positive real part:
+/// * a coefficient of `g` negative;
+/// * `g` of degree 2 with discriminant `g_1^2 - 4 g_0 < 0` (a complex pair).
+pub fn prove_unstable(c: &[Frac], n: usize, range: &ParamBox) -> Option<String> {
+    let deg = c.len().checked_sub(1)?;
+    if (0..deg).any(|i| (deg - i) % 2 == 1 && !c[i].is_zero()) {
+        return None;
+    }
+    let h: Vec<&Frac> = (deg % 2..=deg).step_by(2).map(|i| &c[i]).collect();
+    let j0 = h.iter().position(|x| !x.is_zero())?;
+    let g = &h[j0..];
+    let m = g.len() - 1;
+    if m == 0 {
+        return None;
+    }
+    for (i, gi) in g.iter().enumerate().take(m) {
+        if frac_sign(gi, n, range) == Some(Sign::Negative) {
+            return Some(format!(
+                "the coefficient of y^{i} in g(y) (det(x I - A) = x^r y^j g(y), y = x^2) is negative on the sub-box: g has a root off (-inf, 0], so A has an eigenvalue with positive real part"
+            ));
+        }
+    }
+    if m == 2 {
+        let disc = g[1].mul(g[1]).sub(&g[0].scale(&Rational::from(4)));
+        if frac_sign(&disc, n, range) == Some(Sign::Negative) {
+            return Some("g(y) = y^2 + g_1 y + g_0 (det(x I - A) = x^r y^j g(y), y = x^2) has a negative discriminant on the sub-box: a complex pair of roots y, so A has eigenvalues with positive real part".into());
+        }
+    }
+    None
 }
 
 /// `lambda_max(Q, V)` in floating point for exact `V` (positive definite)
@@ -351,6 +429,7 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
             });
         }
     }
+    let charpoly = std::cell::OnceCell::new();
     let mut queue = std::collections::VecDeque::from([(range.clone(), 0u32)]);
     let mut leaves = Vec::new();
     let mut analysed = 0usize;
@@ -386,6 +465,12 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
         if let Some(outcome) = proved {
             leaves.push(Leaf { range: b, depth, outcome });
             continue;
+        }
+        if centre_verdict == Some(Verdict::LinearlyUnstable) {
+            if let Some(criterion) = prove_unstable(charpoly.get_or_init(|| sym.characteristic_polynomial()), n, &b) {
+                leaves.push(Leaf { range: b, depth, outcome: LeafOutcome::LinearlyUnstable { criterion } });
+                continue;
+            }
         }
         // A sub-box unstable at its centre and every corner (each proved
         // pointwise by the exact Sturm test) is not split further: that
@@ -423,18 +508,33 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
             }
         }
     }
-    let stable = leaves.iter().filter(|l| matches!(l.outcome, LeafOutcome::Stable { .. })).count();
-    let (verdict, reason) = if stable == leaves.len() {
-        (BoxVerdict::Stable, "the second variation is definite and Sigma^2 <= S on every sub-box: stable in probability for every parameter in the box".to_string())
-    } else if stable > 0 {
-        (
-            BoxVerdict::PartlyStable,
-            format!("{stable} of {} sub-boxes are proved stable; the others are undecided", leaves.len()),
-        )
-    } else {
-        (BoxVerdict::Undecided, "no sub-box is proved stable".to_string())
-    };
+    let (verdict, reason) = verdict_of(&leaves);
     Ok(BoxReport { verdict, reason, leaves, witness: None, limit })
+}
+
+/// The whole box's verdict from its sub-boxes', and the sentence.
+pub fn verdict_of(leaves: &[Leaf]) -> (BoxVerdict, String) {
+    let total = leaves.len();
+    let stable = leaves.iter().filter(|l| matches!(l.outcome, LeafOutcome::Stable { .. })).count();
+    let unstable = leaves.iter().filter(|l| matches!(l.outcome, LeafOutcome::LinearlyUnstable { .. })).count();
+    let undecided = total - stable - unstable;
+    let counts =
+        format!("{stable} of {total} sub-boxes are proved stable, {unstable} linearly unstable, {undecided} undecided");
+    if total > 0 && stable == total {
+        (BoxVerdict::Stable, "the second variation is definite and Sigma^2 <= S on every sub-box: stable in probability for every parameter in the box".into())
+    } else if total > 0 && unstable == total {
+        (
+            BoxVerdict::LinearlyUnstable,
+            "A has an eigenvalue with positive real part for every parameter in the box (proved on every sub-box)"
+                .into(),
+        )
+    } else if stable > 0 {
+        (BoxVerdict::PartlyStable, counts)
+    } else if unstable > 0 {
+        (BoxVerdict::PartlyUnstable, counts)
+    } else {
+        (BoxVerdict::Undecided, "no sub-box is proved stable or unstable".into())
+    }
 }
 
 /// Why a sub-box unstable at its centre and corners is left whole.

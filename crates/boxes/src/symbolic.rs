@@ -544,6 +544,31 @@ impl Symbolic {
     }
 }
 
+impl Symbolic {
+    /// The characteristic polynomial `det(x I - A) = sum_i c_i x^i` of the
+    /// linearised drift, its coefficients as rational functions of the
+    /// parameters (Faddeev–LeVerrier: `M_k = A M_{k-1} + c_{n-k+1} I`,
+    /// `c_{n-k} = -tr(A M_k) / k`, exact over the rationals).
+    pub fn characteristic_polynomial(&self) -> Vec<Frac> {
+        let n = self.n;
+        let nv = n + self.np;
+        let mut c = vec![Frac::zero(nv); n + 1];
+        c[n] = Frac::constant(nv, Rational::one());
+        let mut m = zero_matrix(nv, n);
+        for k in 1..=n {
+            let mut next = mat_mul(&self.a, &m);
+            for (i, row) in next.iter_mut().enumerate() {
+                row[i] = row[i].add(&c[n - k + 1]);
+            }
+            m = next;
+            let am = mat_mul(&self.a, &m);
+            let trace = (0..n).fold(Frac::zero(nv), |acc, i| acc.add(&am[i][i]));
+            c[n - k] = trace.scale(&Rational::new((-1).into(), (k as i64).into()));
+        }
+        c
+    }
+}
+
 /// `V` and `Q` (and any other functions) at parameters `theta`, exactly;
 /// `None` where a denominator vanishes.
 pub fn matrix_at(m: &FracMatrix, n: usize, theta: &[Rational]) -> Option<Matrix> {

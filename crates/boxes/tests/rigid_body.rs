@@ -72,11 +72,32 @@ fn a_box_across_i2_equal_i1_is_not_stable_whole() {
     let report = certify_box(&rigid_body(), &range, &settings).unwrap();
     assert_eq!(report.verdict, BoxVerdict::PartlyStable, "{}", report.reason);
     for leaf in &report.leaves {
-        if matches!(leaf.outcome, LeafOutcome::Stable { .. }) {
-            assert!(leaf.range.hi[0] < q(3, 1), "a stable sub-box reaches I2 >= I1: {:?}", leaf.range);
+        match &leaf.outcome {
+            LeafOutcome::Stable { .. } => {
+                assert!(leaf.range.hi[0] < q(3, 1), "a stable sub-box reaches I2 >= I1: {:?}", leaf.range)
+            }
+            // I2 > I1 > I3: the intermediate axis, a real pair of
+            // eigenvalues; at I2 = I1 the spectrum is on the axis, so no
+            // sub-box proved unstable may touch it.
+            LeafOutcome::LinearlyUnstable { .. } => {
+                assert!(leaf.range.lo[0] > q(3, 1), "an unstable sub-box reaches I2 <= I1: {:?}", leaf.range)
+            }
+            LeafOutcome::Undecided { .. } => {}
         }
     }
-    // the undecided part is the half I2 >= 3 and a strip below it
-    let undecided = exact::rational_to_f64(&report.undecided_volume()) / exact::rational_to_f64(&range.volume());
-    assert!((0.5..0.6).contains(&undecided), "undecided fraction {undecided}");
+    // Depth 8 is 4 halvings of each side: the sub-boxes touching I2 = 3
+    // (a strip of width 2 * 2/16) stay undecided, 1/8 of the box, and the
+    // rest is proved on each side: 7/16 stable, 7/16 unstable.
+    let fraction = |v: exact::Rational| v / range.volume();
+    assert_eq!(fraction(report.undecided_volume()), q(1, 8));
+    assert_eq!(fraction(report.unstable_volume()), q(7, 16));
+}
+
+#[test]
+fn a_box_about_the_intermediate_axis_is_linearly_unstable_throughout() {
+    // I2 in [7/2, 4] > I1 = 3 > I3 in [4/5, 6/5]
+    let range = ParamBox { lo: vec![q(7, 2), q(4, 5)], hi: vec![q(4, 1), q(6, 5)] };
+    let report = certify_box(&rigid_body(), &range, &BoxSettings::default()).unwrap();
+    assert_eq!(report.verdict, BoxVerdict::LinearlyUnstable, "{}", report.reason);
+    assert!(report.sup_sigma2().is_none());
 }

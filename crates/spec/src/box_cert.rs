@@ -106,8 +106,10 @@ pub struct BoxCertificateDocument {
     pub name: String,
     /// `box`.
     pub kind: String,
-    /// `stable` (every sub-box), `partly_stable`, `undecided`,
-    /// `not_an_equilibrium` or `noise_incompatible` (at `witness`).
+    /// `stable` (every sub-box), `linearly_unstable` (every sub-box),
+    /// `partly_stable` (some stable), `partly_unstable` (none stable, some
+    /// unstable), `undecided`, `not_an_equilibrium` or `noise_incompatible`
+    /// (at `witness`).
     pub verdict: String,
     /// Why, in a sentence.
     pub reason: String,
@@ -126,6 +128,8 @@ pub struct BoxCertificateDocument {
     pub sampled_max: Option<SampleRecord>,
     /// The undecided sub-boxes' share of the box's volume.
     pub undecided_fraction: Float,
+    /// The share of the sub-boxes proved linearly unstable.
+    pub unstable_fraction: Float,
     /// Which bound stopped the bisection (`max_depth`, `max_boxes`), if one did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limit: Option<String>,
@@ -160,9 +164,9 @@ pub struct SubBoxRecord {
     pub hi: Vec<ExactRational>,
     /// Bisections from the box.
     pub depth: u64,
-    /// `stable` or `undecided`.
+    /// `stable`, `linearly_unstable` or `undecided`.
     pub verdict: String,
-    /// Why undecided.
+    /// Why undecided, or what proves linear instability.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     /// The pointwise verdict at the centre (undecided sub-boxes).
@@ -227,6 +231,10 @@ fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
             r.sigma2_upper = Some(ExactRational(sigma2_upper.clone()));
             r.sigma2_sampled = Some(Float(*sampled));
         }
+        LeafOutcome::LinearlyUnstable { criterion } => {
+            r.verdict = "linearly_unstable".into();
+            r.reason = Some(criterion.clone());
+        }
         LeafOutcome::Undecided { reason, centre } => {
             r.verdict = "undecided".into();
             r.reason = Some(reason.clone());
@@ -251,7 +259,7 @@ fn document(spec: &Spec, section: &BoxSection, report: &BoxReport) -> BoxCertifi
         .iter()
         .filter_map(|l| match &l.outcome {
             LeafOutcome::Stable { sampled, sampled_at, .. } => Some((*sampled, sampled_at.clone())),
-            LeafOutcome::Undecided { .. } => None,
+            _ => None,
         })
         .fold(None::<(f64, Vec<Rational>)>, |best, x| match best {
             Some(b) if b.0 >= x.0 => Some(b),
@@ -270,6 +278,7 @@ fn document(spec: &Spec, section: &BoxSection, report: &BoxReport) -> BoxCertifi
         sup_sigma2_exact: sup.map(ExactRational),
         sampled_max,
         undecided_fraction: Float(fraction(&report.undecided_volume(), &section.range.volume())),
+        unstable_fraction: Float(fraction(&report.unstable_volume(), &section.range.volume())),
         limit: report.limit.map(str::to_string),
         witness: report.witness.as_ref().map(|w| exact_vec(w)),
         sub_boxes: report.leaves.iter().map(leaf_record).collect(),
@@ -379,6 +388,9 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             }
             let mut sup: Option<Rational> = None;
             let mut undecided = Rational::zero();
+            let mut unstable_volume = Rational::zero();
+            let mut unstable = 0usize;
+            let charpoly = std::cell::OnceCell::new();
             let mut sampled_max: Option<(f64, Vec<Rational>)> = None;
             let mut stable = 0usize;
             for (i, r) in doc.sub_boxes.iter().enumerate() {
@@ -409,6 +421,21 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                         sup = Some(sup.map_or(s.clone(), |x: Rational| x.max(s)));
                         stable += 1;
                     }
+                    "linearly_unstable" => {
+                        let criterion = ::boxes::certify::prove_unstable(
+                            charpoly.get_or_init(|| sym.characteristic_polynomial()),
+                            n,
+                            &b,
+                        )
+                        .ok_or_else(|| {
+                            fail(&format!("{path}.verdict"), "linear instability is not proved on this sub-box".into())
+                        })?;
+                        if r.reason.as_deref() != Some(criterion.as_str()) {
+                            return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
+                        }
+                        unstable_volume += b.volume();
+                        unstable += 1;
+                    }
                     "undecided" => undecided += b.volume(),
                     other => {
                         return Err(fail(&format!("{path}.verdict"), format!("'{other}' is not a sub-box verdict")))
@@ -418,8 +445,12 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             let total = doc.sub_boxes.len();
             let expected = if total > 0 && stable == total {
                 "stable"
+            } else if total > 0 && unstable == total {
+                "linearly_unstable"
             } else if stable > 0 {
                 "partly_stable"
+            } else if unstable > 0 {
+                "partly_unstable"
             } else {
                 "undecided"
             };
@@ -437,6 +468,9 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             if !close(doc.undecided_fraction.0, fraction(&undecided, &range.volume())) {
                 return Err(fail("$.undecided_fraction", "is not the undecided sub-boxes' share".into()));
             }
+            if !close(doc.unstable_fraction.0, fraction(&unstable_volume, &range.volume())) {
+                return Err(fail("$.unstable_fraction", "is not the unstable sub-boxes' share".into()));
+            }
             match (&doc.sampled_max, &sampled_max) {
                 (None, None) => {}
                 (Some(stated), Some((v, at))) if close(stated.sigma2.0, *v) && &rationals(&stated.at) == at => {}
@@ -450,10 +484,10 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                     return Err(fail("$.limit", format!("'{l}' is not a limit")));
                 }
             }
-            if expected == "stable" {
-                Verdict::Stable
-            } else {
-                Verdict::Inconclusive
+            match expected {
+                "stable" => Verdict::Stable,
+                "linearly_unstable" => Verdict::LinearlyUnstable,
+                _ => Verdict::Inconclusive,
             }
         }
     };
