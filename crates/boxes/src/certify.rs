@@ -253,7 +253,13 @@ fn frac_sign(f: &Frac, n: usize, range: &ParamBox) -> Option<Sign> {
 /// `-sqrt(y)` has a positive real part:
 /// * a coefficient of `g` negative;
 /// * `g` of degree 2 with discriminant `g_1^2 - 4 g_0 < 0` (a complex pair).
-pub fn prove_unstable(c: &[Frac], n: usize, range: &ParamBox) -> Option<String> {
+pub fn prove_unstable(sym: &Symbolic, c: &[Frac], range: &ParamBox) -> Option<String> {
+    let n = sym.dim();
+    // The system is defined on the whole sub-box: every input's
+    // denominator keeps one sign (the coefficients' own are checked below).
+    for (f, _) in sym.input_denominators() {
+        sign_on_box(f, n, range)?;
+    }
     let deg = c.len().checked_sub(1)?;
     if (0..deg).any(|i| (deg - i) % 2 == 1 && !c[i].is_zero()) {
         return None;
@@ -467,7 +473,8 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
             continue;
         }
         if centre_verdict == Some(Verdict::LinearlyUnstable) {
-            if let Some(criterion) = prove_unstable(charpoly.get_or_init(|| sym.characteristic_polynomial()), n, &b) {
+            if let Some(criterion) = prove_unstable(&sym, charpoly.get_or_init(|| sym.characteristic_polynomial()), &b)
+            {
                 leaves.push(Leaf { range: b, depth, outcome: LeafOutcome::LinearlyUnstable { criterion } });
                 continue;
             }

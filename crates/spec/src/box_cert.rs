@@ -423,8 +423,8 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                     }
                     "linearly_unstable" => {
                         let criterion = ::boxes::certify::prove_unstable(
+                            &sym,
                             charpoly.get_or_init(|| sym.characteristic_polynomial()),
-                            n,
                             &b,
                         )
                         .ok_or_else(|| {
