@@ -153,6 +153,24 @@ fn the_heavy_top_map_resolves_the_stability_boundary_to_one_percent() {
     }
 }
 
+/// The fluctuating-gravity top with a corner near `p^2 = 4 mgl`: the
+/// closed form's sup at (mgl, p) = (1, 201/100) is `0.36 / 0.0401 =
+/// 8.9776`; with depth to spare, the bisection and the tightening bring
+/// the proved bound within the default 1% of it.
+#[test]
+fn the_sup_near_the_stability_boundary_is_tight() {
+    let mut v = fixture("lagrange-top-fluctuating-gravity.json");
+    v["box"] = json!({"parameters": {"p": ["201/100", "3"], "mgl": ["1/2", "1"]}, "max_depth": 24});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "stable", "{}", cert["reason"]);
+    let truth = 0.36 / (2.01f64 * 2.01 - 4.0);
+    assert!((truth - 8.977556).abs() < 1e-6);
+    let sup = cert["sup_sigma2"].as_f64().unwrap();
+    assert!(sup >= truth && sup <= truth * 1.01, "{sup} against {truth}");
+    assert_eq!(cert["sampled_max"]["at"], json!(["1", "201/100"]));
+    assert!(spec::check_certificate_value(&cert).is_ok());
+}
+
 /// `Sigma^2 <= S` fails when `S` is edited below the truth by 1e-7, and
 /// any change to the partition, a choice or a derived number fails too.
 #[test]
@@ -316,6 +334,9 @@ fn bad_box_input_names_the_field() {
     let mut v = fixture("rigid-body-major-axis.json");
     v["box"] = json!({"parameters": {"I2": ["1", "2"]}, "margin": "0"});
     assert_eq!(spec::spec_from_value(v).unwrap_err().path, "$.box.margin");
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["box"] = json!({"parameters": {"I2": ["1", "2"]}, "sup_tolerance": -1});
+    assert_eq!(spec::spec_from_value(v).unwrap_err().path, "$.box.sup_tolerance");
 }
 
 /// Boxes at the ends of the doubles. A noise amplitude from 1e-150 to

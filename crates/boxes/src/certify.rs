@@ -19,11 +19,20 @@ pub struct BoxSettings {
     /// The bound `S` per sub-box is the largest sampled `Sigma^2` times
     /// `1 + margin` (default `1/1000`).
     pub margin: Rational,
+    /// After the bisection, the stable sub-box with the largest bound is
+    /// split while its bound exceeds the pipeline's `Sigma^2` at its worst
+    /// sampled point by more than this factor minus 1 (default `1/100`).
+    pub sup_tolerance: Rational,
 }
 
 impl Default for BoxSettings {
     fn default() -> Self {
-        BoxSettings { max_depth: 12, max_boxes: 4096, margin: Rational::new(1.into(), 1000.into()) }
+        BoxSettings {
+            max_depth: 12,
+            max_boxes: 4096,
+            margin: Rational::new(1.into(), 1000.into()),
+            sup_tolerance: Rational::new(1.into(), 100.into()),
+        }
     }
 }
 
@@ -455,19 +464,7 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
         let centre = b.centre();
         let analysis = analyse_at(system, &centre);
         let centre_verdict = analysis.as_ref().map(|(_, a)| a.verdict);
-        let mut proved = None;
-        if let Some((_, a)) = &analysis {
-            for choice in centre_choices(a) {
-                let Ok(forms) = sym.forms(&choice) else { continue };
-                let Some((s, sampled, at)) = sampled_bound(&forms, n, &b, &settings.margin) else { continue };
-                // Q = 0 identically: Sigma^2 = 0 needs no margin.
-                let s = if forms.q_zero { Rational::zero() } else { s };
-                if prove_leaf(&sym, &b, &choice, &s).is_ok() {
-                    proved = Some(LeafOutcome::Stable { choice, sigma2_upper: s, sampled, sampled_at: at });
-                    break;
-                }
-            }
-        }
+        let proved = analysis.as_ref().and_then(|(_, a)| prove_stable(&sym, a, &b, &settings.margin));
         if let Some(outcome) = proved {
             leaves.push(Leaf { range: b, depth, outcome });
             continue;
@@ -515,8 +512,80 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
             }
         }
     }
+    tighten(system, &sym, range, &mut leaves, &mut analysed, settings);
     let (verdict, reason) = verdict_of(&leaves);
     Ok(BoxReport { verdict, reason, leaves, witness: None, limit })
+}
+
+/// The stable outcome on sub-box `b` from the pipeline's analysis at its
+/// centre: its choices in turn, each with the bound sampled on `b`, until
+/// one is proved.
+fn prove_stable(sym: &Symbolic, a: &generator::Analysis, b: &ParamBox, margin: &Rational) -> Option<LeafOutcome> {
+    let n = sym.dim();
+    for choice in centre_choices(a) {
+        let Ok(forms) = sym.forms(&choice) else { continue };
+        let Some((s, sampled, at)) = sampled_bound(&forms, n, b, margin) else { continue };
+        // Q = 0 identically: Sigma^2 = 0 needs no margin.
+        let s = if forms.q_zero { Rational::zero() } else { s };
+        if prove_leaf(sym, b, &choice, &s).is_ok() {
+            return Some(LeafOutcome::Stable { choice, sigma2_upper: s, sampled, sampled_at: at });
+        }
+    }
+    None
+}
+
+/// Bring the box's bound closer to the pointwise `Sigma^2`: while the
+/// stable sub-box with the largest bound `S` has `S` above `1 +
+/// sup_tolerance` times the pipeline's own `Sigma^2` at the point where its
+/// largest sample was taken, split it and prove both halves (each with the
+/// choice at its own centre, nearer the worst point). Stops at the depth
+/// or box limit, or when a half is not proved (the sub-box is then kept).
+fn tighten(
+    system: &BoxSystem,
+    sym: &Symbolic,
+    range: &ParamBox,
+    leaves: &mut Vec<Leaf>,
+    analysed: &mut usize,
+    settings: &BoxSettings,
+) {
+    let tolerance = exact::rational_to_f64(&settings.sup_tolerance);
+    loop {
+        let worst = leaves
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| match &l.outcome {
+                LeafOutcome::Stable { sigma2_upper, sampled_at, .. } => {
+                    Some((i, sigma2_upper.clone(), sampled_at.clone()))
+                }
+                _ => None,
+            })
+            .max_by(|x, y| x.1.cmp(&y.1));
+        let Some((i, s, at)) = worst else { return };
+        if s.is_zero() || leaves[i].depth >= settings.max_depth || *analysed + 2 > settings.max_boxes {
+            return;
+        }
+        let Some(reference) = analyse_at(system, &at).and_then(|(_, a)| a.sigma2()) else { return };
+        if exact::rational_to_f64(&s) <= reference * (1.0 + tolerance) {
+            return;
+        }
+        let leaf = &leaves[i];
+        // the side widest relative to the box's, as in the bisection
+        let relative = |k: usize| (&leaf.range.hi[k] - &leaf.range.lo[k]) / (&range.hi[k] - &range.lo[k]);
+        let d = (0..leaf.range.dim()).max_by(|&x, &y| relative(x).cmp(&relative(y)).then(y.cmp(&x))).unwrap_or(0);
+        let (lo, hi) = leaf.range.split(d);
+        let depth = leaf.depth + 1;
+        let mut halves = Vec::new();
+        for half in [lo, hi] {
+            *analysed += 1;
+            let outcome =
+                analyse_at(system, &half.centre()).and_then(|(_, a)| prove_stable(sym, &a, &half, &settings.margin));
+            match outcome {
+                Some(outcome) => halves.push(Leaf { range: half, depth, outcome }),
+                None => return,
+            }
+        }
+        leaves.splice(i..=i, halves);
+    }
 }
 
 /// The whole box's verdict from its sub-boxes', and the sentence.

@@ -90,6 +90,15 @@ pub(crate) fn read_box_section(
         }
         settings.margin = m.0.clone();
     }
+    if let Some(t) = &doc.sup_tolerance {
+        if !(t.0 > Rational::zero() && t.0 <= Rational::from(1000)) {
+            return Err(SpecError::new(
+                child(path, "sup_tolerance"),
+                format!("must be above 0 and at most 1000, got {}", t.0),
+            ));
+        }
+        settings.sup_tolerance = t.0.clone();
+    }
     Ok(BoxSection { names, range: ParamBox { lo, hi }, settings })
 }
 

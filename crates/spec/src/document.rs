@@ -343,6 +343,12 @@ pub struct BoxDoc {
     /// `1 + margin` (default 1/1000; above 0, at most 1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub margin: Option<Literal>,
+    /// After the bisection, the stable sub-box with the largest bound is
+    /// split (within `max_depth` and `max_boxes`) while its bound exceeds
+    /// the pointwise `Sigma^2` at its worst sampled point by more than this
+    /// relative amount (default 1/100; above 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sup_tolerance: Option<Literal>,
 }
 
 /// The algebra: a builtin name, or coordinates and structure constants.
