@@ -7,7 +7,16 @@
 //!
 //! Run by hand (release, `--features very-heavy-tests`, which CI does not
 //! run): `cargo test --release -p verify --features very-heavy-tests --test
-//! zeitlin_generic_n8`.
+//! zeitlin_generic_n8 -- --ignored`.
+//!
+//! **It does not fit this machine.** Measured on the 2-core, 24 GB machine
+//! (2026-11-26, `ulimit -v 22000000`, GNU time; another job was running
+//! beside it): the monotone state's test ran 1 h 04 min (2289 s of CPU)
+//! and stopped with "memory allocation of 128 bytes failed" at a peak of
+//! 20.3 GB resident. Memory grew through the polynomials `tr W^2` to
+//! `tr W^8` and `casimir::System::new`'s exact bracket checks on them (N =
+//! 7's largest, `tr W^7`, has 968160 terms). The test is `#[ignore]`d for
+//! that reason: it is kept for a larger machine, not claimed to pass.
 
 #[path = "common/su_n.rs"]
 mod su_n;
@@ -33,6 +42,7 @@ fn su8_laplacian_blocks_match_the_spin_matrix_definition() {
 
 #[cfg(feature = "very-heavy-tests")]
 #[test]
+#[ignore = "more than 24 GB: out of memory after 64 min on the 2-core 24 GB machine (module docs)"]
 fn su8_monotone_state_agrees_with_the_generic_engine() {
     let report = su_n::check_monotone(&monotone(), &degree_two_noise(N), 1e-9, Route::Library);
     println!("su(8) monotone: {report:#?}");
