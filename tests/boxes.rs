@@ -195,6 +195,9 @@ fn an_edited_box_certificate_fails_its_check() {
         ("the box widened", Box::new(|c| c["spec"]["box"]["parameters"]["I2"][1] = json!("3"))),
         ("an undecided remainder hidden", Box::new(|c| c["undecided_fraction"] = json!(0.5))),
         ("stable called unstable", Box::new(|c| c["sub_boxes"][0]["verdict"] = json!("linearly_unstable"))),
+        // a solved multiplier (-1/I1 = -1/3) is not an input of the proof,
+        // but a number the certificate states: found by the fuzzer
+        ("a solved multiplier by 1e-7", Box::new(|c| c["sub_boxes"][0]["multipliers"][0] = json!("-3333333/10000000"))),
     ];
     for (what, edit) in edits {
         let mut c = cert.clone();

@@ -536,8 +536,20 @@ fn run_cert(original: &Value, text: &str, mutation: &Mutation, counts: &Counts) 
                 let fluid_bound = original.get("kind").is_some_and(|k| k == "fluid")
                     && (pointer.ends_with("/sigma2_upper") || pointer == "/stopping/T")
                     && after < before;
+                // A box certificate's choices (M, the free multipliers, the
+                // rows) and bounds are the inputs of proofs that `check`
+                // redoes exactly from the embedded spec (the solved
+                // multipliers, the depth and the samples it re-derives and
+                // compares): an accepted change there is proved again.
+                let box_input = original.get("kind").is_some_and(|k| k == "box")
+                    && ["/M/", "/multipliers/", "/free/", "/pivot_rows/"].iter().any(|p| pointer.contains(p))
+                    || original.get("kind").is_some_and(|k| k == "box")
+                        && pointer.ends_with("/sigma2_upper")
+                        && after < before;
                 if change <= 1e-9 * scale {
                     bump(&counts.accepted_within_tolerance);
+                } else if box_input {
+                    bump(&counts.accepted_proved);
                 } else if pointer.starts_with("/growth/fastest_direction/") && direction_still_true(text) {
                     // a vector of a multiple eigenvalue's eigenspace stays one
                     bump(&counts.accepted_proved);
@@ -551,6 +563,13 @@ fn run_cert(original: &Value, text: &str, mutation: &Mutation, counts: &Counts) 
                         original["name"]
                     );
                 }
+            }
+            // a box certificate re-proves every sub-box from the edited
+            // embedded spec: accepted, its claims hold for that spec
+            Mutation::Other(what)
+                if original.get("kind").is_some_and(|k| k == "box") && what.starts_with("spec parameter") =>
+            {
+                bump(&counts.accepted_proved)
             }
             Mutation::Other(what) => {
                 bump(&counts.forgeries_accepted);

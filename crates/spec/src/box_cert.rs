@@ -415,6 +415,18 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                             .ok_or_else(|| fail(&path, "no sigma2_upper".into()))?;
                         let forms = ::boxes::prove_leaf(&sym, &b, &choice, &s)
                             .map_err(|e| fail(&format!("{path}.sigma2_upper"), format!("not proved: {e}")))?;
+                        // The recorded multipliers are the centre's: the free
+                        // ones are used as given, the solved ones must be the
+                        // solution there (nothing stated goes unchecked).
+                        let centre = b.centre();
+                        for (j, (l, stated)) in forms.multipliers.iter().zip(&choice.multipliers).enumerate() {
+                            if value_at(l, n, &centre).as_ref() != Some(stated) {
+                                return Err(fail(
+                                    &format!("{path}.multipliers[{j}]"),
+                                    "is not the multiplier at the sub-box's centre".into(),
+                                ));
+                            }
+                        }
                         let (_, sampled, at) = sampled_bound(&forms, n, &b, &section.settings.margin)
                             .ok_or_else(|| fail(&path, "the samples could not be re-derived".into()))?;
                         let stated = r.sigma2_sampled.map(|x| x.0).unwrap_or(f64::NAN);
@@ -445,7 +457,19 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                         unstable_volume += b.volume();
                         unstable += 1;
                     }
-                    "undecided" => undecided += b.volume(),
+                    "undecided" => {
+                        // the pointwise verdict stated at the centre, if the
+                        // sub-box was analysed (not one left by the budget), is
+                        // the pipeline's
+                        let derived = || ::boxes::certify::analyse_at(&system, &b.centre()).map(|(_, a)| a.verdict);
+                        if r.centre_verdict.is_some() && r.centre_verdict != derived() {
+                            return Err(fail(
+                                &format!("{path}.centre_verdict"),
+                                format!("is not the pipeline's verdict at the centre ({:?})", derived()),
+                            ));
+                        }
+                        undecided += b.volume()
+                    }
                     other => {
                         return Err(fail(&format!("{path}.verdict"), format!("'{other}' is not a sub-box verdict")))
                     }
@@ -514,6 +538,7 @@ fn check_partition(doc: &BoxCertificateDocument, range: &ParamBox, np: usize) ->
     let boxes: Vec<ParamBox> =
         doc.sub_boxes.iter().map(|r| ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) }).collect();
     let mut volume = Rational::zero();
+    let whole = range.volume();
     for (i, b) in boxes.iter().enumerate() {
         let path = format!("$.sub_boxes[{i}]");
         if b.lo.len() != np || b.hi.len() != np {
@@ -521,6 +546,14 @@ fn check_partition(doc: &BoxCertificateDocument, range: &ParamBox, np: usize) ->
         }
         if (0..np).any(|k| b.lo[k] >= b.hi[k]) || !range.contains_box(b) {
             return Err(fail(&path, "not a non-empty sub-box of the box".into()));
+        }
+        // `depth` bisections halve the volume `depth` times
+        let depth = doc.sub_boxes[i].depth;
+        if depth > MAX_BOX_DEPTH || b.volume() * Rational::from_integer(exact::BigInt::from(1u64 << depth)) != whole {
+            return Err(fail(
+                &format!("{path}.depth"),
+                "is not the number of bisections that gives this sub-box".into(),
+            ));
         }
         volume += b.volume();
     }
