@@ -342,6 +342,79 @@ fn bad_box_input_names_the_field() {
     assert_eq!(spec::spec_from_value(v).unwrap_err().path, "$.box.sup_tolerance");
 }
 
+/// The review's cases: the spec's own value must lie in its box (the CLI
+/// moves it to the centre); a divisor that cancels (`q/q`) still makes the
+/// system undefined where it vanishes; a witness is never where the system
+/// is undefined; a refused system's `undecided` certificate checks; at most
+/// 8 box parameters.
+#[test]
+fn a_box_is_about_its_spec_and_never_where_it_is_undefined() {
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["I2"] = json!(4);
+    v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    let err = spec::spec_from_value(v).unwrap_err();
+    assert_eq!(err.path, "$.box.parameters.I2");
+    assert!(err.message.contains("outside"), "{err}");
+    let dir = std::env::temp_dir().join(format!("boxes-own-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("rb.json");
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["I2"] = json!(4);
+    std::fs::write(&path, v.to_string()).unwrap();
+    let out = verify(&["certify-box", path.to_str().unwrap(), "--param", "I2=3/2:5/2"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let cert: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(cert["spec"]["parameters"]["I2"], "2");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("note: I2 = 4 lies outside"));
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    // sigma*q/q is sigma except at q = 0, where the spec divides by zero
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["q"] = json!("1/2");
+    v["noise"] = json!([["sigma*q/q", 0, 0]]);
+    v["box"] = json!({"parameters": {"q": ["-1", "1"]}, "max_depth": 6});
+    let cert = certify(v);
+    assert_ne!(cert["verdict"], "stable");
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        if sub["verdict"] == "stable" {
+            let (lo, hi) = (q(sub["lo"][0].as_str().unwrap()), q(sub["hi"][0].as_str().unwrap()));
+            assert!(lo > 0.0 || hi < 0.0, "a stable sub-box contains q = 0: {sub}");
+        }
+    }
+    // not an equilibrium (mu_e = (1, 1, 0)); the noise is undefined at I2 = 2
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["equilibrium"] = json!([1, 1, 0]);
+    v["noise"] = json!([["sigma/(I2 - 2)", 0, 0]]);
+    v["parameters"]["I2"] = json!("9/4");
+    v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "not_an_equilibrium");
+    assert_ne!(cert["witness"], json!(["2"]));
+    let mut forged = cert.clone();
+    forged["witness"] = json!(["2"]);
+    assert!(spec::check_certificate_value(&forged).is_err());
+
+    // a refused system: undecided, and that certificate checks
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["casimirs"] = json!(["(Pi1^2 + Pi2^2 + Pi3^2)/2 + (I2 - 2)*Pi1"]);
+    v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    let cert = certify(v);
+    assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Inconclusive);
+    let mut forged = cert.clone();
+    forged["verdict"] = json!("stable");
+    assert!(spec::check_certificate_value(&forged).is_err());
+
+    // nine box parameters
+    let mut v = fixture("rigid-body-major-axis.json");
+    let mut sides = serde_json::Map::new();
+    for k in 0..9 {
+        v["parameters"][format!("d{k}")] = json!(0);
+        sides.insert(format!("d{k}"), json!(["-1", "1"]));
+    }
+    v["box"] = json!({ "parameters": sides });
+    assert_eq!(spec::spec_from_value(v).unwrap_err().path, "$.box.parameters");
+}
+
 /// Boxes at the ends of the doubles. A noise amplitude from 1e-150 to
 /// 2e-150 gives `Sigma^2` about 1e-300, certified with a positive bound;
 /// from 1e-308 to 2e-308 `Sigma^2` (about 1e-616) has no double, the
@@ -352,6 +425,7 @@ fn bad_box_input_names_the_field() {
 #[test]
 fn extreme_boxes_stay_exact() {
     let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["sigma"] = json!("1.5e-150");
     v["box"] = json!({"parameters": {"sigma": ["1e-150", "2e-150"]}});
     let cert = certify(v);
     assert_eq!(cert["verdict"], "stable", "{}", cert["reason"]);
@@ -360,6 +434,7 @@ fn extreme_boxes_stay_exact() {
     assert!((1.2e-299..1.3e-299).contains(&sup), "{sup}");
     assert!(spec::check_certificate_value(&cert).is_ok());
     let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["sigma"] = json!("1.5e-308");
     v["box"] = json!({"parameters": {"sigma": ["1e-308", "2e-308"]}, "max_depth": 2});
     let cert = certify(v);
     assert_eq!(cert["verdict"], "undecided", "{}", cert["reason"]);

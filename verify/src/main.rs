@@ -228,6 +228,21 @@ fn certify_box_command(
         if sides.insert(name.to_string(), serde_json::json!([lo, hi])).is_some() {
             return Err(Failure::BadInput(format!("--param {}: given twice", messages::excerpt(name))));
         }
+        // The box is about the spec: a value of the spec outside the box is
+        // moved to the box's centre (the certificate embeds the spec so).
+        let (Ok(a), Ok(b)) = (exact::parse_number(lo), exact::parse_number(hi)) else { continue };
+        let own = value.pointer(&format!("/parameters/{name}")).and_then(|v| match v {
+            Value::String(t) => exact::parse_number(t).ok(),
+            Value::Number(n) => exact::parse_number(&n.to_string()).ok(),
+            _ => None,
+        });
+        if let Some(own) = own {
+            if a < b && (own < a || own > b) {
+                let centre = (&a + &b) / exact::Rational::from(2);
+                eprintln!("note: {name} = {own} lies outside [{a}, {b}]: the certificate's spec has {name} = {centre}");
+                value["parameters"][name] = Value::String(centre.to_string());
+            }
+        }
     }
     let mut section = serde_json::json!({"parameters": sides});
     if let Some(d) = max_depth {

@@ -385,7 +385,8 @@ pub fn sampled_bound(
 
 /// Look for a point where `residual` is defined and not zero: the
 /// centre, the corners, then a 5-point grid per parameter.
-fn witness(residual: &[Frac], n: usize, range: &ParamBox) -> Option<Vec<Rational>> {
+fn witness(sym: &Symbolic, residual: &[Frac], range: &ParamBox) -> Option<Vec<Rational>> {
+    let n = sym.dim();
     let mut points = vec![range.centre()];
     points.extend(range.corners());
     let p = range.dim();
@@ -403,7 +404,18 @@ fn witness(residual: &[Frac], n: usize, range: &ParamBox) -> Option<Vec<Rational
             .collect();
         points.push(point);
     }
-    points.into_iter().find(|x| residual.iter().any(|r| value_at(r, n, x).is_some_and(|v| !v.is_zero())))
+    points
+        .into_iter()
+        .find(|x| defined_at(sym, x) && residual.iter().any(|r| value_at(r, n, x).is_some_and(|v| !v.is_zero())))
+}
+
+/// Whether the system is defined at `x`: no input denominator or divisor
+/// vanishes there.
+pub fn defined_at(sym: &Symbolic, x: &[Rational]) -> bool {
+    let n = sym.dim();
+    let mut point = vec![Rational::zero(); n];
+    point.extend_from_slice(x);
+    sym.input_denominators().iter().all(|(f, _)| !f.eval(&point).is_zero())
 }
 
 /// Certify the box: the equilibrium and the noise for every parameter,
@@ -411,9 +423,8 @@ fn witness(residual: &[Frac], n: usize, range: &ParamBox) -> Option<Vec<Rational
 /// depth or box limit.
 pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings) -> Result<BoxReport, BoxSystemError> {
     let sym = system.symbolic()?;
-    let n = system.dim();
     if !sym.equilibrium_holds() {
-        let w = witness(&sym.equilibrium_residual, n, range);
+        let w = witness(&sym, &sym.equilibrium_residual, range);
         return Ok(match w {
             Some(w) => BoxReport {
                 verdict: BoxVerdict::NotAnEquilibrium,
@@ -434,7 +445,7 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
     }
     let bad = sym.incompatible_noise();
     if let Some(&i) = bad.first() {
-        if let Some(w) = witness(&sym.noise_residuals[i], n, range) {
+        if let Some(w) = witness(&sym, &sym.noise_residuals[i], range) {
             return Ok(BoxReport {
                 verdict: BoxVerdict::NoiseIncompatible,
                 reason: format!("ad*_sigma mu_e is not zero for noise field {i} at the witness point"),

@@ -28,5 +28,5 @@ pub mod symbolic;
 pub use bernstein::ParamBox;
 pub use certify::{certify_box, prove_leaf, BoxReport, BoxSettings, BoxVerdict, Leaf, LeafOutcome};
 pub use frac::Frac;
-pub use parse::{parse_box_expression, BoxSymbols};
+pub use parse::{parse_box_expression, parse_box_expression_with_divisors, BoxSymbols};
 pub use symbolic::{BoxChoice, BoxSystem, BoxSystemError, Symbolic};

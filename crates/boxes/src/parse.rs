@@ -56,6 +56,9 @@ pub fn has_coordinates(p: &Poly, n: usize) -> bool {
 
 struct Fractions<'a> {
     symbols: &'a BoxSymbols,
+    /// Every divisor's numerator (a polynomial in the parameters), before
+    /// any cancellation: where one vanishes the expression is undefined.
+    divisors: Vec<Poly>,
 }
 
 fn fail<T>(kind: ParseErrorKind, position: usize) -> Result<T, ParseError> {
@@ -147,6 +150,8 @@ impl Semantics for Fractions<'_> {
                 if has_coordinates(b.num(), self.symbols.ncoordinates()) {
                     return fail(ParseErrorKind::DivisionByPolynomial, rhs_at);
                 }
+                self.divisors.push(b.num().clone());
+                self.divisors.extend(b.den().iter().map(|(f, _)| f.clone()));
                 match a.div(&b) {
                     Some(f) => self.check(f, at),
                     None => fail(ParseErrorKind::DivisionByZero, rhs_at),
@@ -186,6 +191,8 @@ impl Semantics for Fractions<'_> {
             if has_coordinates(base.num(), self.symbols.ncoordinates()) {
                 return fail(ParseErrorKind::NegativePowerOfPolynomial, at);
             }
+            self.divisors.push(base.num().clone());
+            self.divisors.extend(base.den().iter().map(|(f, _)| f.clone()));
             let one = Frac::constant(self.symbols.nvars(), Rational::from(1));
             return match one.div(&base) {
                 Some(r) => self.check(r.pow(m), at),
@@ -212,6 +219,14 @@ impl Semantics for Fractions<'_> {
 /// assert!(parse_box_expression("1/Pi1", &s).is_err());
 /// ```
 pub fn parse_box_expression(text: &str, symbols: &BoxSymbols) -> Result<Frac, ParseError> {
+    parse_box_expression_with_divisors(text, symbols).map(|(f, _)| f)
+}
+
+/// [`parse_box_expression`], with the numerators of every divisor met on
+/// the way (before any cancellation: `q/q` is 1 but undefined at `q = 0`).
+pub fn parse_box_expression_with_divisors(text: &str, symbols: &BoxSymbols) -> Result<(Frac, Vec<Poly>), ParseError> {
     let l = &symbols.limits;
-    exact::syntax::parse(text, &mut Fractions { symbols }, l.max_depth, l.max_length)
+    let mut semantics = Fractions { symbols, divisors: vec![] };
+    let f = exact::syntax::parse(text, &mut semantics, l.max_depth, l.max_length)?;
+    Ok((f, semantics.divisors))
 }

@@ -37,6 +37,10 @@ pub struct BoxSystem {
     pub equilibrium: Vec<Frac>,
     /// The noise fields (functions of the parameters).
     pub noise: Vec<Vec<Frac>>,
+    /// The divisors met when parsing, before any cancellation
+    /// ([`crate::parse::parse_box_expression_with_divisors`]): each must
+    /// keep one sign on a sub-box, like the functions' denominators.
+    pub divisors: Vec<Poly>,
 }
 
 /// Why a box system is refused.
@@ -359,7 +363,12 @@ impl BoxSystem {
             .chain(&self.first_integrals)
             .chain(&self.equilibrium)
             .chain(self.noise.iter().flatten());
-        let input_denominators = common_denominator(inputs);
+        let mut input_denominators = common_denominator(inputs);
+        for d in &self.divisors {
+            if d.constant_value().is_none() && !input_denominators.iter().any(|(f, _)| f == d) {
+                input_denominators.push((d.clone(), 1));
+            }
+        }
         Ok(Symbolic {
             n,
             np,

@@ -28,6 +28,7 @@ fn top() -> BoxSystem {
         casimirs: built.casimirs.iter().map(|t| e(t)).collect(),
         first_integrals: vec![e("Pi3")],
         equilibrium: ["0", "0", "p", "0", "0", "1"].iter().map(|t| e(t)).collect(),
+        divisors: vec![],
         noise: vec![["0", "0", "0", "0", "0", "sigma"].iter().map(|t| e(t)).collect()],
     }
 }

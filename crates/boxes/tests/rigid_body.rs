@@ -27,6 +27,7 @@ fn rigid_body() -> BoxSystem {
         casimirs: vec![e("(Pi1^2 + Pi2^2 + Pi3^2)/2")],
         first_integrals: vec![],
         equilibrium: vec![e("1"), e("0"), e("0")],
+        divisors: vec![],
         noise: vec![vec![e("sigma"), e("0"), e("0")]],
     }
 }

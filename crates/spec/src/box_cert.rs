@@ -33,6 +33,11 @@ use std::collections::BTreeMap;
 pub const MAX_BOX_DEPTH: u64 = 40;
 /// Largest `max_boxes` accepted.
 pub const MAX_BOX_COUNT: u64 = 1_000_000;
+/// The start of the reason of a box whose system is refused.
+const REFUSED: &str = "the system is not the same for every parameter in the box";
+
+/// Largest number of box parameters.
+pub const MAX_BOX_PARAMETERS: usize = 8;
 
 /// A spec's `box` section, validated.
 #[derive(Clone, Debug, PartialEq)]
@@ -55,17 +60,46 @@ pub(crate) fn read_box_section(
     if doc.parameters.is_empty() {
         return Err(SpecError::new(&ppath, "name at least one parameter"));
     }
+    if doc.parameters.len() > MAX_BOX_PARAMETERS {
+        return Err(SpecError::new(
+            &ppath,
+            format!(
+                "at most {MAX_BOX_PARAMETERS} box parameters (2^p corners are sampled per sub-box), got {}",
+                doc.parameters.len()
+            ),
+        ));
+    }
     let mut names = Vec::new();
     let mut lo = Vec::new();
     let mut hi = Vec::new();
     for (name, [a, b]) in &doc.parameters {
         let p = child(&ppath, name);
-        if !parameters.contains_key(name) {
+        let Some(value) = parameters.get(name) else {
             let known: Vec<String> = parameters.keys().cloned().collect();
             return Err(SpecError::new(&p, crate::sweep::unknown_parameter(name, &known)));
-        }
+        };
         if a.0 >= b.0 {
-            return Err(SpecError::new(&p, format!("the interval [{}, {}] is empty: LO must be below HI", a.0, b.0)));
+            return Err(SpecError::new(
+                &p,
+                format!(
+                    "the interval [{}, {}] is empty: LO must be below HI",
+                    exact::cut(&a.0.to_string(), 40),
+                    exact::cut(&b.0.to_string(), 40)
+                ),
+            ));
+        }
+        // The box is about the spec: its own values lie inside, so what
+        // `check` reports under the spec's name holds for the spec itself.
+        if *value < a.0 || *value > b.0 {
+            return Err(SpecError::new(
+                &p,
+                format!(
+                    "the spec's own value {name} = {} lies outside the interval [{}, {}]",
+                    exact::cut(&value.to_string(), 40),
+                    exact::cut(&a.0.to_string(), 40),
+                    exact::cut(&b.0.to_string(), 40)
+                ),
+            ));
         }
         names.push(name.clone());
         lo.push(a.0.clone());
@@ -311,7 +345,7 @@ pub fn certify_box_spec(spec: &Spec) -> Value {
             Ok(r) => r,
             Err(why) => BoxReport {
                 verdict: BoxVerdict::Undecided,
-                reason: format!("the system is not the same for every parameter in the box: {why}"),
+                reason: format!("{REFUSED}: {why}"),
                 leaves: vec![],
                 witness: None,
                 limit: None,
@@ -353,8 +387,29 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     if doc.parameters != section.names {
         return Err(fail("$.parameters", "differs from the spec's box section".into()));
     }
-    let system = spec.box_system(&section.names).map_err(|e| fail("$.spec", e.to_string()))?;
-    let sym = system.symbolic().map_err(|e| fail("$.spec", e.to_string()))?;
+    // A system that is not the same for every parameter (certify's
+    // `undecided` with no sub-boxes, and that reason) claims nothing.
+    let refused = |why: String| -> std::result::Result<CheckReport, CheckError> {
+        let reason = format!("{REFUSED}: {why}");
+        if doc.verdict == "undecided" && doc.sub_boxes.is_empty() && doc.witness.is_none() && doc.reason == reason {
+            Ok(CheckReport { name: spec.name.clone(), verdict: Verdict::Inconclusive, level: None, sigma2: None })
+        } else {
+            Err(fail(
+                "$.spec",
+                format!(
+                    "the box refuses the system ({why}), so the certificate can only be undecided with that reason"
+                ),
+            ))
+        }
+    };
+    let system = match spec.box_system(&section.names) {
+        Ok(s) => s,
+        Err(e) => return refused(e.to_string()),
+    };
+    let sym = match system.symbolic() {
+        Ok(s) => s,
+        Err(e) => return refused(e.to_string()),
+    };
     let n = system.dim();
     let np = section.names.len();
     let range = &section.range;
@@ -366,6 +421,9 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             let w = rationals(w);
             if w.len() != np || !range.contains(&w) {
                 return Err(fail("$.witness", "not a point of the box".into()));
+            }
+            if !::boxes::certify::defined_at(&sym, &w) {
+                return Err(fail("$.witness", "the system is undefined there (a denominator vanishes)".into()));
             }
             let residuals: Vec<&::boxes::Frac> = if doc.verdict == "not_an_equilibrium" {
                 sym.equilibrium_residual.iter().collect()
@@ -388,6 +446,17 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             }
         }
         _ => {
+            // An equilibrium or noise that fails for some parameter but at no
+            // sampled point: undecided, with nothing to partition.
+            let unresolved = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
+            if doc.sub_boxes.is_empty() && unresolved && doc.verdict == "undecided" && doc.witness.is_none() {
+                return Ok(CheckReport {
+                    name: spec.name.clone(),
+                    verdict: Verdict::Inconclusive,
+                    level: None,
+                    sigma2: None,
+                });
+            }
             check_partition(&doc, range, np)?;
             if !sym.equilibrium_holds() {
                 return Err(fail("$.verdict", "mu_e is not an equilibrium for every parameter in the box".into()));

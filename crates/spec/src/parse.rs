@@ -437,9 +437,12 @@ impl Spec {
             self.parameters.iter().filter(|(k, _)| !names.contains(k)).map(|(k, v)| (k.clone(), v.clone())).collect();
         let symbols = boxes::BoxSymbols::new(&coordinates, names, &fixed);
         let nv = symbols.nvars();
+        let divisors = std::cell::RefCell::new(Vec::new());
         let read = |e: &Expr, path: &str| -> Result<boxes::Frac> {
-            boxes::parse_box_expression(&e.text, &symbols)
-                .map_err(|err| SpecError::new(path, format!("in '{}' (box parameters symbolic): {err}", e.text)))
+            let (f, d) = boxes::parse_box_expression_with_divisors(&e.text, &symbols)
+                .map_err(|err| SpecError::new(path, format!("in '{}' (box parameters symbolic): {err}", e.text)))?;
+            divisors.borrow_mut().extend(d);
+            Ok(f)
         };
         let constant = |e: &Expr, path: &str| -> Result<boxes::Frac> {
             let f = read(e, path)?;
@@ -483,6 +486,7 @@ impl Spec {
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(boxes::BoxSystem {
+            divisors: divisors.into_inner(),
             algebra: shape.algebra.clone(),
             parameters: names.to_vec(),
             hamiltonian,
