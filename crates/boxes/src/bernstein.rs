@@ -179,6 +179,15 @@ pub fn bernstein_coefficients(p: &Poly, offset: usize, b: &ParamBox, deg: &[u32]
     a
 }
 
+/// Largest number of Bernstein coefficients expanded for one polynomial:
+/// beyond it nothing is proved (a bound on the work, not a claim).
+pub const MAX_COEFFICIENTS: usize = 1 << 20;
+
+/// `prod (d_i + 1)`, if at most [`MAX_COEFFICIENTS`].
+fn coefficient_count(deg: &[u32]) -> Option<usize> {
+    deg.iter().try_fold(1usize, |acc, d| acc.checked_mul(*d as usize + 1)).filter(|n| *n <= MAX_COEFFICIENTS)
+}
+
 /// The strict sign of `p` on the whole box, if its Bernstein coefficients
 /// prove one (all positive or all negative).
 ///
@@ -193,6 +202,7 @@ pub fn bernstein_coefficients(p: &Poly, offset: usize, b: &ParamBox, deg: &[u32]
 /// ```
 pub fn sign_on_box(p: &Poly, offset: usize, b: &ParamBox) -> Option<Sign> {
     let deg = degrees(p, offset, b.dim());
+    coefficient_count(&deg)?;
     let c = bernstein_coefficients(p, offset, b, &deg);
     if c.iter().all(|x| x > &Rational::zero()) {
         Some(Sign::Positive)
@@ -216,6 +226,9 @@ pub fn matrix_positive_on_box(m: &[Vec<Poly>], offset: usize, b: &ParamBox) -> b
                 *d = (*d).max(x);
             }
         }
+    }
+    if coefficient_count(&deg).is_none() {
+        return false;
     }
     let coefficients: Vec<Vec<Vec<Rational>>> =
         m.iter().map(|row| row.iter().map(|e| bernstein_coefficients(e, offset, b, &deg)).collect()).collect();
