@@ -244,6 +244,21 @@ fn a_box_about_the_intermediate_axis_is_linearly_unstable() {
     }
 }
 
+/// `partly_unstable`: the rigid body (I = (3, I2, 1)) for I2 in [3, 4],
+/// from the degenerate I2 = I1 (no sub-box touching it is proved) to the
+/// intermediate axis (proved unstable); nothing is stable.
+#[test]
+fn a_box_from_i2_equal_i1_upwards_is_partly_unstable() {
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["parameters"]["I2"] = json!(4);
+    v["box"] = json!({"parameters": {"I2": ["3", "4"]}, "max_depth": 6});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "partly_unstable", "{}", cert["reason"]);
+    // depth 6 halves the side 6 times: the sub-box [3, 3 + 1/64] stays undecided
+    assert_eq!(cert["undecided_fraction"], 1.0 / 64.0);
+    assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Inconclusive);
+}
+
 /// An equilibrium that holds only at one parameter value: the box is
 /// `not_an_equilibrium` with a witness where the residual is not zero;
 /// noise that moves it: `noise_incompatible`.
@@ -302,6 +317,13 @@ fn rescaled_casimirs_give_the_same_box_and_runs_repeat() {
         let c = certify(v);
         assert_eq!(c["verdict"], base["verdict"], "k = {k}/{d}");
         assert_eq!(c["sup_sigma2_exact"], base["sup_sigma2_exact"], "k = {k}/{d}");
+    }
+    // and by 1e6 and 1e-6 exactly
+    for k in ["1000000", "1/1000000"] {
+        let mut v = rigid_body_box(["3/2", "5/2"], ["4/5", "6/5"]);
+        v["casimirs"] = json!([format!("{k}*(Pi1^2 + Pi2^2 + Pi3^2)")]);
+        let c = certify(v);
+        assert_eq!(c["sup_sigma2_exact"], base["sup_sigma2_exact"], "k = {k}");
     }
     let again = certify(rigid_body_box(["3/2", "5/2"], ["4/5", "6/5"]));
     assert_eq!(spec::to_pretty_json(&again), spec::to_pretty_json(&base));

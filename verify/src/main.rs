@@ -188,14 +188,19 @@ fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failur
     let spec = parse_any_spec_in(&text, spec_path.parent())
         .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
     let cert = certify_showing_progress(&spec, &spec_path.display().to_string(), None);
-    let pretty = spec::to_pretty_json(&cert);
+    emit(&cert, output)
+}
+
+/// The certificate to `output` (or stdout), its summary to stderr.
+fn emit(cert: &Value, output: Option<&Path>) -> Result<(), Failure> {
+    let pretty = spec::to_pretty_json(cert);
     match output {
         // Atomic: a failed write (a full disk) leaves no partial certificate
         // and keeps an existing one.
         Some(path) => paths::write_atomic(path, pretty.as_bytes()).map_err(|e| paths::write_failure(path, &e))?,
         None => print!("{pretty}"),
     }
-    eprintln!("{}", summary(&cert));
+    eprintln!("{}", summary(cert));
     Ok(())
 }
 
@@ -253,14 +258,7 @@ fn certify_box_command(
     }
     value["box"] = section;
     let spec = spec::spec_from_value(value).map_err(|e| bad(e.to_string()))?;
-    let cert = spec::box_cert::certify_box_spec(&spec);
-    let pretty = spec::to_pretty_json(&cert);
-    match output {
-        Some(path) => paths::write_atomic(path, pretty.as_bytes()).map_err(|e| paths::write_failure(path, &e))?,
-        None => print!("{pretty}"),
-    }
-    eprintln!("{}", summary(&cert));
-    Ok(())
+    emit(&spec::box_cert::certify_box_spec(&spec), output)
 }
 
 /// One or two lines for a human.

@@ -12,6 +12,7 @@
 
 use crate::frac::{common_denominator, times_denominator, Frac};
 use algebra::LieAlgebra;
+use casimir::lie_poisson_bracket;
 use exact::{Matrix, Monomial, Poly, Rational};
 use num_traits::{One, Zero};
 use outcome::Sign;
@@ -202,34 +203,6 @@ pub fn value_at(f: &Frac, n: usize, theta: &[Rational]) -> Option<Rational> {
     f.eval(&x)
 }
 
-/// The Poisson bracket `{F, G} = DF^T Lambda(mu) DG` of polynomials in
-/// `n` coordinates (and any parameters).
-fn bracket(algebra: &LieAlgebra, f: &Poly, g: &Poly) -> Poly {
-    let n = algebra.dim();
-    let nv = f.nvars();
-    let df: Vec<Poly> = (0..n).map(|a| f.derivative(a)).collect();
-    let dg: Vec<Poly> = (0..n).map(|b| g.derivative(b)).collect();
-    let mut out = Poly::zero(nv);
-    for a in 0..n {
-        if df[a].is_zero() {
-            continue;
-        }
-        for b in 0..n {
-            if dg[b].is_zero() {
-                continue;
-            }
-            let mut lam = Poly::zero(nv);
-            for (k, c) in algebra.bracket_of_basis(a, b) {
-                lam = lam.add(&Poly::var(nv, *k).scale(c));
-            }
-            if !lam.is_zero() {
-                out = out.add(&df[a].mul(&dg[b]).mul(&lam));
-            }
-        }
-    }
-    out
-}
-
 /// Evaluates polynomials at `mu = mu_e(theta)` with `mu_e = e / L`
 /// (common denominator `L`).
 struct AtEquilibrium {
@@ -316,7 +289,7 @@ impl BoxSystem {
         }
         for (index, c) in self.casimirs.iter().enumerate() {
             for a in 0..n {
-                if !bracket(&self.algebra, c.num(), &Poly::var(nv, a)).is_zero() {
+                if !lie_poisson_bracket(&self.algebra, c.num(), &Poly::var(nv, a)).is_zero() {
                     return Err(BoxSystemError::NotACasimir {
                         index,
                         coordinate: self.algebra.coordinates()[a].clone(),
@@ -325,7 +298,7 @@ impl BoxSystem {
             }
         }
         for (index, f) in self.first_integrals.iter().enumerate() {
-            if !bracket(&self.algebra, f.num(), self.hamiltonian.num()).is_zero() {
+            if !lie_poisson_bracket(&self.algebra, f.num(), self.hamiltonian.num()).is_zero() {
                 return Err(BoxSystemError::NotConserved { index });
             }
         }

@@ -20,12 +20,20 @@ use exact::Poly;
 /// // {Pi1, Pi2} = <mu, [e1, e2]> = Pi3
 /// assert_eq!(lie_poisson_bracket(&so3, &p1, &p2), parse_expression("Pi3", &s).unwrap());
 /// ```
+///
+/// The polynomials may have further variables after the coordinates (the
+/// parameters of a box certificate): they are constants here, and the
+/// bracket is in the same variables.
 pub fn lie_poisson_bracket(algebra: &LieAlgebra, f: &Poly, g: &Poly) -> Poly {
     let n = algebra.dim();
-    assert!(f.nvars() == n && g.nvars() == n, "polynomials must be in the algebra's coordinates");
-    let df = f.gradient();
-    let dg = g.gradient();
-    let mut out = Poly::zero(n);
+    let nv = f.nvars();
+    assert!(
+        nv >= n && g.nvars() == nv,
+        "polynomials must be in the algebra's coordinates (and the same further variables)"
+    );
+    let df: Vec<Poly> = (0..n).map(|a| f.derivative(a)).collect();
+    let dg: Vec<Poly> = (0..n).map(|b| g.derivative(b)).collect();
+    let mut out = Poly::zero(nv);
     for a in 0..n {
         if df[a].is_zero() {
             continue;
@@ -34,7 +42,7 @@ pub fn lie_poisson_bracket(algebra: &LieAlgebra, f: &Poly, g: &Poly) -> Poly {
             if dg[b].is_zero() {
                 continue;
             }
-            if let Some(lambda_ab) = poisson_tensor_entry(algebra, a, b) {
+            if let Some(lambda_ab) = poisson_tensor_entry(algebra, a, b, nv) {
                 out = out.add(&df[a].mul(&dg[b]).mul(&lambda_ab));
             }
         }
@@ -43,13 +51,13 @@ pub fn lie_poisson_bracket(algebra: &LieAlgebra, f: &Poly, g: &Poly) -> Poly {
 }
 
 /// The linear polynomial `Lambda_ab(mu) = c^k_ab mu_k`, or `None` when
-/// `[e_a, e_b] = 0`.
-pub(crate) fn poisson_tensor_entry(algebra: &LieAlgebra, a: usize, b: usize) -> Option<Poly> {
+/// `[e_a, e_b] = 0`, in `nv >= n` variables.
+pub(crate) fn poisson_tensor_entry(algebra: &LieAlgebra, a: usize, b: usize, nv: usize) -> Option<Poly> {
     let bracket = algebra.bracket_of_basis(a, b);
     if bracket.is_empty() {
         return None;
     }
-    let mut coefficients = vec![exact::Rational::from(0); algebra.dim()];
+    let mut coefficients = vec![exact::Rational::from(0); nv];
     for (k, c) in bracket {
         coefficients[*k] = c.clone();
     }

@@ -37,14 +37,15 @@ pub struct System {
 /// gradient computed once.
 fn brackets_with_coordinates<'a>(algebra: &'a LieAlgebra, k: &Poly) -> impl Iterator<Item = (usize, Poly)> + 'a {
     let n = algebra.dim();
-    let grad = k.gradient();
+    let nv = k.nvars();
+    let grad: Vec<Poly> = (0..n).map(|a| k.derivative(a)).collect();
     (0..n).map(move |j| {
-        let mut out = Poly::zero(n);
+        let mut out = Poly::zero(nv);
         for (a, ga) in grad.iter().enumerate() {
             if ga.is_zero() {
                 continue;
             }
-            if let Some(lambda_aj) = poisson_tensor_entry(algebra, a, j) {
+            if let Some(lambda_aj) = poisson_tensor_entry(algebra, a, j, nv) {
                 out = out.add(&ga.mul(&lambda_aj));
             }
         }

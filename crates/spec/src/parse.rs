@@ -375,20 +375,58 @@ fn build_system(shape: &Shape, parameters: &BTreeMap<String, Rational>) -> Resul
         p.constant_value()
             .ok_or_else(|| SpecError::new(path, "must be a constant (it may use parameters but not coordinates)"))
     };
-    let hamiltonian = poly(&shape.hamiltonian, &child(root, "hamiltonian"))?;
+    let Functions { hamiltonian, casimirs, first_integrals, equilibrium, noise } =
+        read_functions(shape, poly, constant, Poly::clone)?;
+    let (cpath, fpath) = (child(root, "casimirs"), child(root, "first_integrals"));
+    let casimir_path = |i: usize| match shape.casimirs {
+        Casimirs::Given(_) => index(&cpath, i),
+        Casimirs::Fixed(_) if shape.casimir_source == CasimirSource::Builtin => child(root, "algebra"),
+        Casimirs::Fixed(_) => cpath.clone(),
+    };
+    System::new(shape.algebra.clone(), hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| match &e
+    {
+        SystemError::NotACasimir { index, .. } => SpecError::new(casimir_path(*index), e.to_string()),
+        SystemError::ConstantQuantity { what: "casimir", index } => SpecError::new(casimir_path(*index), e.to_string()),
+        SystemError::NotConserved { index: i, .. } | SystemError::ConstantQuantity { index: i, .. } => {
+            SpecError::new(index(&fpath, *i), e.to_string())
+        }
+        _ => SpecError::new(root, e.to_string()),
+    })
+}
+
+/// The spec's functions, each read at its JSON path: `h`, the Casimirs,
+/// the first integrals (by `expr`), the equilibrium and the noise (by
+/// `constant`); Casimirs fixed by the algebra (builtin or discovered) go
+/// through `fixed`. One walk for the pointwise system and the box's.
+struct Functions<P, C> {
+    hamiltonian: P,
+    casimirs: Vec<P>,
+    first_integrals: Vec<P>,
+    equilibrium: Vec<C>,
+    noise: Vec<Vec<C>>,
+}
+
+fn read_functions<P, C>(
+    shape: &Shape,
+    expr: impl Fn(&Expr, &str) -> Result<P>,
+    constant: impl Fn(&Expr, &str) -> Result<C>,
+    fixed: impl Fn(&Poly) -> P,
+) -> Result<Functions<P, C>> {
+    let root = "$";
+    let hamiltonian = expr(&shape.hamiltonian, &child(root, "hamiltonian"))?;
     let cpath = child(root, "casimirs");
     let casimirs = match &shape.casimirs {
         Casimirs::Given(texts) => {
-            texts.iter().enumerate().map(|(i, t)| poly(t, &index(&cpath, i))).collect::<Result<Vec<_>>>()?
+            texts.iter().enumerate().map(|(i, t)| expr(t, &index(&cpath, i))).collect::<Result<Vec<_>>>()?
         }
-        Casimirs::Fixed(polys) => polys.clone(),
+        Casimirs::Fixed(polys) => polys.iter().map(fixed).collect(),
     };
     let fpath = child(root, "first_integrals");
     let first_integrals = shape
         .first_integrals
         .iter()
         .enumerate()
-        .map(|(i, t)| poly(t, &index(&fpath, i)))
+        .map(|(i, t)| expr(t, &index(&fpath, i)))
         .collect::<Result<Vec<_>>>()?;
     let epath = child(root, "equilibrium");
     let equilibrium = shape
@@ -407,21 +445,7 @@ fn build_system(shape: &Shape, parameters: &BTreeMap<String, Rational>) -> Resul
             field.iter().enumerate().map(|(j, t)| constant(t, &index(&p, j))).collect::<Result<Vec<_>>>()
         })
         .collect::<Result<Vec<_>>>()?;
-
-    let casimir_path = |i: usize| match shape.casimirs {
-        Casimirs::Given(_) => index(&cpath, i),
-        Casimirs::Fixed(_) if shape.casimir_source == CasimirSource::Builtin => child(root, "algebra"),
-        Casimirs::Fixed(_) => cpath.clone(),
-    };
-    System::new(shape.algebra.clone(), hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| match &e
-    {
-        SystemError::NotACasimir { index, .. } => SpecError::new(casimir_path(*index), e.to_string()),
-        SystemError::ConstantQuantity { what: "casimir", index } => SpecError::new(casimir_path(*index), e.to_string()),
-        SystemError::NotConserved { index: i, .. } | SystemError::ConstantQuantity { index: i, .. } => {
-            SpecError::new(index(&fpath, *i), e.to_string())
-        }
-        _ => SpecError::new(root, e.to_string()),
-    })
+    Ok(Functions { hamiltonian, casimirs, first_integrals, equilibrium, noise })
 }
 
 impl Spec {
@@ -430,7 +454,6 @@ impl Spec {
     /// as rational functions of those parameters. Errors name the JSON path.
     pub fn box_system(&self, names: &[String]) -> Result<boxes::BoxSystem> {
         let shape = &self.shape;
-        let root = "$";
         let coordinates: Vec<String> = shape.algebra.coordinates().to_vec();
         let n = coordinates.len();
         let fixed: BTreeMap<String, Rational> =
@@ -451,40 +474,9 @@ impl Spec {
             }
             Ok(f)
         };
-        let hamiltonian = read(&shape.hamiltonian, &child(root, "hamiltonian"))?;
-        let cpath = child(root, "casimirs");
-        let casimirs = match &shape.casimirs {
-            Casimirs::Given(texts) => {
-                texts.iter().enumerate().map(|(i, t)| read(t, &index(&cpath, i))).collect::<Result<Vec<_>>>()?
-            }
-            Casimirs::Fixed(polys) => {
-                polys.iter().map(|p| boxes::Frac::from_poly(boxes::symbolic::extend(p, nv))).collect()
-            }
-        };
-        let fpath = child(root, "first_integrals");
-        let first_integrals = shape
-            .first_integrals
-            .iter()
-            .enumerate()
-            .map(|(i, t)| read(t, &index(&fpath, i)))
-            .collect::<Result<Vec<_>>>()?;
-        let epath = child(root, "equilibrium");
-        let equilibrium = shape
-            .equilibrium
-            .iter()
-            .enumerate()
-            .map(|(i, t)| constant(t, &index(&epath, i)))
-            .collect::<Result<Vec<_>>>()?;
-        let npath = child(root, "noise");
-        let noise = shape
-            .noise
-            .iter()
-            .enumerate()
-            .map(|(i, field)| {
-                let p = index(&npath, i);
-                field.iter().enumerate().map(|(j, t)| constant(t, &index(&p, j))).collect::<Result<Vec<_>>>()
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let extend = |p: &Poly| boxes::Frac::from_poly(boxes::symbolic::extend(p, nv));
+        let Functions { hamiltonian, casimirs, first_integrals, equilibrium, noise } =
+            read_functions(shape, read, constant, extend)?;
         Ok(boxes::BoxSystem {
             divisors: divisors.into_inner(),
             algebra: shape.algebra.clone(),
