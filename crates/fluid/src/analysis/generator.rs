@@ -208,7 +208,10 @@ pub(super) fn analyse_generator(
             ..base
         };
     }
-    let modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
+    let mut modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
+    prove_remaining_at_overall_bound(&mut modes, progress, |k, bar| {
+        BarotropicMode::new(&fine, &coef, k, sound_speed, c).verify(bar).1
+    });
     // The discretised SDE's own growth constant per mode, lambda_max(Q_B, K):
     // Q_B differs from Q by the Casimir defect, which grows with k (about
     // k^3 h^2 here), so short waves on a given grid can outgrow Sigma^2.

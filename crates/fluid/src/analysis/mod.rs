@@ -299,6 +299,38 @@ pub(super) fn verified_upper(
     (None, form_verified)
 }
 
+/// The modes whose own ladder ([`verified_upper`]) proved no bound, tried
+/// once more at the largest bound the other modes proved: `prove(k, bar)`
+/// is the verified check of `bar V - Q ≻ 0` for the mode of wavenumber `k`.
+///
+/// The certificate's claim is about `Sigma^2 = max_k Sigma^2_k`, so a mode
+/// needs only a proved bound no larger than the overall one, not a sharp
+/// one. On walls grids above the dense fallback's size the banded check
+/// cannot prove narrow margins for some modes of `s = -1` forms (the
+/// unpivoted factorisation's growth; `walls_check` docs), and the ladder's
+/// widest rung, `8.1e-3`, is not enough there: measured for
+/// `fluid-channel-sin-walls` at ny = 4096 (`examples/walls_margins.rs` of
+/// `verify`), modes 20 to 32 prove nothing up to twice their `Sigma^2_k`
+/// but prove ten times it, while the overall bound is 50 to 124 times it. Such a mode's `sigma2_upper` is then the
+/// overall bound (valid, loose); if its check fails there too it keeps
+/// `None` and the level stays `float`. Nothing is tried when no mode has a
+/// bound, and a mode whose `sigma2` is not below the overall bound is left
+/// alone (it would have to set that bound itself).
+pub(super) fn prove_remaining_at_overall_bound(
+    modes: &mut [ModeResult],
+    progress: &Progress,
+    prove: impl Fn(f64, f64) -> bool + Sync,
+) {
+    let Some(overall) = modes.iter().filter_map(|r| r.sigma2_upper).reduce(f64::max) else { return };
+    modes.par_iter_mut().filter(|r| r.sigma2_upper.is_none() && r.form_verified && r.sigma2 < overall).for_each(|r| {
+        // no progress steps (the phase's count was fixed before): a
+        // cancelled run only stops trying
+        if !progress.is_cancelled() && prove(r.k, overall) {
+            r.sigma2_upper = Some(overall);
+        }
+    });
+}
+
 /// The first rung of the margin ladder of `verified_upper` on a walls
 /// grid with `unknowns` interior unknowns. Up to
 /// [`crate::modes::DENSE_FALLBACK_UNKNOWNS`] the dense fallback can prove
@@ -430,4 +462,45 @@ fn mode_step<T>(progress: &Progress, work: impl FnOnce() -> Option<T>) -> Option
     let out = work();
     progress.step(1);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mode(m: usize, sigma2: f64, upper: Option<f64>, form_verified: bool) -> ModeResult {
+        ModeResult { m, k: m as f64, sigma2, sigma2_upper: upper, form_verified, iterations: 1 }
+    }
+
+    #[test]
+    fn a_mode_without_a_bound_is_proved_only_at_the_overall_bound_and_only_if_the_check_passes() {
+        let mut modes = vec![
+            mode(1, 1.0, Some(1.01), true),
+            mode(2, 0.5, Some(0.6), true),
+            mode(3, 0.1, None, true),  // proved at 1.01
+            mode(4, 0.1, None, true),  // its check fails
+            mode(5, 0.1, None, false), // V not definite: never tried
+            mode(6, 1.02, None, true), // above the overall bound: never tried
+        ];
+        let tried = std::sync::Mutex::new(vec![]);
+        prove_remaining_at_overall_bound(&mut modes, &Progress::new(), |k, bar| {
+            tried.lock().unwrap().push((k as usize, bar));
+            k != 4.0
+        });
+        let mut tried = tried.into_inner().unwrap();
+        tried.sort_by_key(|t| t.0);
+        assert_eq!(tried, vec![(3, 1.01), (4, 1.01)]);
+        let uppers: Vec<Option<f64>> = modes.iter().map(|r| r.sigma2_upper).collect();
+        assert_eq!(uppers, vec![Some(1.01), Some(0.6), Some(1.01), None, None, None]);
+        // no mode with a bound: nothing is tried
+        let mut none = vec![mode(1, 1.0, None, true)];
+        prove_remaining_at_overall_bound(&mut none, &Progress::new(), |_, _| panic!("tried"));
+        assert_eq!(none[0].sigma2_upper, None);
+        // a cancelled run stops trying
+        let p = Progress::new();
+        p.cancel();
+        let mut left = vec![mode(1, 1.0, Some(1.0), true), mode(2, 0.1, None, true)];
+        prove_remaining_at_overall_bound(&mut left, &p, |_, _| true);
+        assert_eq!(left[1].sigma2_upper, None);
+    }
 }
