@@ -138,7 +138,7 @@ impl UPoly {
     /// Monic greatest common divisor.
     ///
     /// By the primitive remainder sequence over the integers
-    /// ([`positive_remainder`]): Euclid's sequence over the rationals
+    /// (`positive_remainder` below): Euclid's sequence over the rationals
     /// reduces every product to lowest terms, and on a characteristic
     /// polynomial of dimension 63 with 50-bit entries (the su(8) model of
     /// `tests/zeitlin_generic_n8.rs`) it ran for over 15 minutes inside one
