@@ -10,8 +10,8 @@
 //! rate. The spec carries the structure constants, the energy, the
 //! Casimirs `tr W^2` and `Im tr W^3` (not all seven: below) and the
 //! momentum `J`. Measured in release on the 2-core machine (2026-11-27):
-//! the exact level 27 s and 33 s, the whole file 64 s with both cores,
-//! 0.6 GB at most. Before the integer remainder sequence in
+//! the exact level 13 s and 7 s, the whole file 14 s with both cores,
+//! under 0.1 GB. Before the integer remainder sequence in
 //! `exact::UPoly::gcd`, the first of them ran over 15 minutes inside one
 //! gcd of the exact spectral test without finishing.
 //!

@@ -220,15 +220,14 @@ impl UPoly {
             }
             ints.push(r.into_iter().map(|c| -c).collect());
         }
-        let seq: Vec<UPoly> = ints.into_iter().map(UPoly::from_integers).collect();
         // Sign of each member at a point (or at -inf / +inf).
         let sign_at = |x: Option<&Rational>, plus_infinity: bool| -> Vec<Ordering> {
-            seq.iter()
+            ints.iter()
                 .map(|s| match x {
-                    Some(x) => s.eval(x).cmp(&Rational::zero()),
+                    Some(x) => integer_sign_at(s, x),
                     None => {
-                        let lead = s.leading().cmp(&Rational::zero());
-                        let odd = s.degree().unwrap_or(0) % 2 == 1;
+                        let lead = s.last().map_or(Ordering::Equal, |c| c.sign().cmp(&num_bigint::Sign::NoSign));
+                        let odd = s.len().saturating_sub(1) % 2 == 1;
                         if !plus_infinity && odd {
                             lead.reverse()
                         } else {
@@ -247,7 +246,7 @@ impl UPoly {
         let va = changes(sign_at(a, false));
         let vb = changes(sign_at(b, true));
         let total = va.saturating_sub(vb);
-        let b_is_root = b.is_some_and(|b| p.eval(b).is_zero());
+        let b_is_root = b.is_some_and(|b| integer_sign_at(&ints[0], b) == Ordering::Equal);
         total - usize::from(b_is_root && total > 0)
     }
 }
@@ -259,12 +258,42 @@ fn primitive_integer(c: &[Rational]) -> Vec<BigInt> {
     primitive(c.iter().map(|x| x.numer() * (&l / x.denom())).collect())
 }
 
+/// The sign of the integer polynomial `c` (low degree first) at `x = n/d`,
+/// `d > 0`: the sign of the homogeneous `sum_k c_k n^k d^(D - k)` (`D` the
+/// degree), by Horner's rule in integers (no gcd per step as in
+/// [`UPoly::eval`]).
+fn integer_sign_at(c: &[BigInt], x: &Rational) -> Ordering {
+    let (n, d) = (x.numer(), x.denom());
+    let mut acc = BigInt::zero();
+    let mut dpow = BigInt::one();
+    for (i, ck) in c.iter().rev().enumerate() {
+        if i == 0 {
+            acc = ck.clone();
+        } else {
+            dpow *= &d;
+            acc = acc * &n + ck * &dpow;
+        }
+    }
+    acc.sign().cmp(&num_bigint::Sign::NoSign)
+}
+
 /// `v` divided by the (positive) gcd of its entries, trailing zeros removed.
 fn primitive(mut v: Vec<BigInt>) -> Vec<BigInt> {
     while v.last().is_some_and(Zero::is_zero) {
         v.pop();
     }
-    let g = v.iter().fold(BigInt::zero(), |g, x| g.gcd(x));
+    // the gcd from the smallest entry down, each entry reduced modulo it
+    // first: num-bigint's binary gcd is slow on numbers of thousands of
+    // bits, a division is not
+    let Some(mut g) = v.iter().filter(|x| !x.is_zero()).min_by_key(|x| x.bits()).map(|x| x.abs()) else {
+        return v;
+    };
+    for x in &v {
+        if g.is_one() {
+            return v;
+        }
+        g = g.gcd(&(x % &g));
+    }
     if !g.is_zero() && !g.is_one() {
         for x in &mut v {
             *x /= &g;
@@ -298,8 +327,6 @@ fn positive_remainder(a: &[BigInt], b: &[BigInt]) -> Vec<BigInt> {
             r.pop();
         }
         negative ^= lb.is_negative();
-        // the content grows by |lc(b)| per step: divide it out as it comes
-        r = primitive(r);
     }
     if negative {
         for x in &mut r {
