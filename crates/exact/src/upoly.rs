@@ -294,7 +294,8 @@ fn primitive(mut v: Vec<BigInt>) -> Vec<BigInt> {
         }
         g = g.gcd(&(x % &g));
     }
-    if !g.is_zero() && !g.is_one() {
+    // g > 0: it started as the smallest nonzero entry's magnitude
+    if !g.is_one() {
         for x in &mut v {
             *x /= &g;
         }
