@@ -8,14 +8,18 @@
 //! `S2 = sum_j E_j^2`, `rho = bar / k^2` and any scalar `t > 0`,
 //!
 //! ```text
-//! (bar V - Q) / k^2 = s (rho M diag(w) + rho K + (1/2) sum_j [E_j, [E_j, K]])
+//! (bar V - Q) / k^2 = s (rho M diag(w) + rho K + (1/2)(S2 K + K S2) - sum_j E_j K E_j)
 //!   = D + sum_i g_i U_i^T L^-1 U_i,   D = s rho M diag(w),
-//! (g_i, U_i) = (s rho, M), (s/(4t), M (S2 + t)), (-s/(4t), M (S2 - t)), (-s, M E_j)   (j = 1..J),
+//! (g_i, U_i) = (s/(4t), M (S2 + t + rho)), (-s/(4t), M (S2 - t + rho)), (-s, M E_j)   (j = 1..J),
 //! ```
 //!
-//! using `(1/2)(S2 K + K S2) = ((S2 + t) K (S2 + t) - (S2 - t) K (S2 - t)) / (4t)`
-//! (`t` a power of two near `max S2`, so no term is much larger than the
-//! sum). That is the Schur complement of the lower block in the banded
+//! using `rho K + (1/2)(S2 K + K S2) = ((S2 + a) K (S2 + a) - (S2 - b) K (S2 - b)) / (4t)`
+//! with `a + b = 2t` and `a - b = 2 rho` (expand: the `S2 K S2` cancel, the
+//! cross terms give `(a + b)/(4t) = 1/2`, the `K` terms `(a^2 - b^2)/(4t) =
+//! rho`), i.e. `a = t + rho`, `b = t - rho`; `t` is a power of two near the
+//! larger of `max S2` and `rho`, so no term is much larger than the sum.
+//! (Without noise the single Gram `(s rho, M)` is used.) That is the Schur
+//! complement of the lower block in the banded
 //!
 //! ```text
 //! B = [[D, U_1^T, U_2^T, ...], [U_1, -L/g_1, 0, ...], [U_2, 0, -L/g_2, ...], ...],
@@ -29,10 +33,20 @@
 //! [`crate::banded::SymBanded::verified_inertia_within`]. In the same way `V ≻ 0` iff
 //! `[[s M diag(w), M], [M, -s L]]` has inertia `(n + n [s < 0], n [s > 0])`.
 //! Interleaving the unknowns per node (the lifted ones first, then
-//! `omega_a`) gives `B` the bandwidth `(J + 4)(p + 1) - 1`: the work is
+//! `omega_a`) gives `B` the bandwidth `(J + 3)(p + 1) - 1`: the work is
 //! `O(n J^3 p^2)`, linear in `ny`.
 //!
-//! **Why this lifting.** Two others were tried and measured against the
+//! **Why this lifting.** `J + 2` Grams are the fewest for this form: in the
+//! basis `(1, E_1, .., E_J, S2)` its coefficient matrix has the block
+//! `[[rho, 1/2], [1/2, 0]]` on `(1, S2)` and `-1` on each `E_j`, rank
+//! `J + 2`. Until 2026-11-27 `rho K` had a Gram of its own (`(s rho, M)`,
+//! and the squares `M (S2 +- t)`): one more unknown per node. Dropping it
+//! made each check 1.5 to 1.9 times faster (at ny = 1024 to 4096, `J = 1`,
+//! both versions timed in turn on the same modes) and proved the same
+//! margins or tighter ones, never looser (`walls_margins` on
+//! `bench/cubic-walls.json` and `channel-sin-walls` at ny = 1024, 2048 and
+//! 4096; e.g. mode 1 of the cubic profile at ny = 1024: `3e-7` instead of
+//! `9e-6`). Two other liftings were tried and measured against the
 //! dense eigenvalue (docs/fluids.md §6). The congruence to stream-function
 //! coordinates (`psi = L^-1 M omega`), which leaves a single dense term and
 //! a positive definite Schur form, squares the condition of `L`: it failed
@@ -132,43 +146,49 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
         // bar V - Q ≻ 0 at bar = 0 is not attempted (the lifting divides by rho)
         return (true, false);
     }
-    // t: a power of two near the largest S2 (exact, so 4t is too).
+    // t: a power of two near the larger of max S2 and rho (exact, so 4t is
+    // too): the two squares are then of the size of their difference.
     let s2max = s2.iter().fold(0.0f64, |a, x| a.max(*x));
-    let t = if s2max > 0.0 { crate::banded::pow2(s2max.log2().round() as i32) } else { 1.0 };
-    // unknowns per node: omega, y0, y+, y-, y1..yJ (y+ and y- only with noise)
-    let pm = if nj > 0 { 2 } else { 0 };
-    let stride = 2 + pm + nj;
+    let t = crate::banded::pow2(s2max.max(rho).log2().round() as i32);
+    // unknowns per node: with noise omega, y+, y-, y1..yJ; without, omega, y0
+    let stride = if nj > 0 { 3 + nj } else { 2 };
     // omega last within each node: the lifted unknowns are eliminated first
     // (with omega first, s = -1 showed the same growth; module docs)
     let idx = |a: usize, c: usize| a * stride + if c == 0 { stride - 1 } else { c - 1 };
     let mut big = Bounded::new(n * stride, stride * (p + 1) - 1);
     for a in 0..n {
         big.set(idx(a, 0), idx(a, 0), s * rho * m[a] * form.w[a], 2);
-        big.set(idx(a, 1), idx(a, 0), m[a], 0);
         if nj > 0 {
-            big.set(idx(a, 2), idx(a, 0), m[a] * (s2[a] + t), nj + 4);
-            // s2 - t cancels: its error is relative to s2 + t, not to the difference
-            big.set_with_error(idx(a, 3), idx(a, 0), m[a] * (s2[a] - t), m[a] * (s2[a] + t), nj + 4);
+            // S2 + t + rho: S2 of the rounded centred fields carries nj + 2
+            // roundings, then two sums and the product
+            let plus = m[a] * ((s2[a] + t) + rho);
+            big.set(idx(a, 1), idx(a, 0), plus, nj + 5);
+            // S2 - t + rho cancels: its error is relative to S2 + t + rho
+            big.set_with_error(idx(a, 2), idx(a, 0), m[a] * ((s2[a] - t) + rho), plus, nj + 5);
+        } else {
+            big.set(idx(a, 1), idx(a, 0), m[a], 0);
         }
         for (c, e) in eta.iter().enumerate() {
-            big.set(idx(a, 2 + pm + c), idx(a, 0), e[a] * m[a], 2);
+            big.set(idx(a, 3 + c), idx(a, 0), e[a] * m[a], 2);
         }
         // the lower block -s L / gamma for a Gram of coefficient gamma:
-        // rho -> -s L / rho; 1/(4t) -> -4 t s L; -1/(4t) -> 4 t s L; -1 -> s L
+        // 1/(4t) -> -4 t s L; -1/(4t) -> 4 t s L; -1 -> s L; rho -> -s L / rho
         for b in a.saturating_sub(p)..=a {
             let lab = l.get(a, b);
-            big.set(idx(a, 1), idx(b, 1), -s * lab / rho, 1);
             if nj > 0 {
-                big.set(idx(a, 2), idx(b, 2), -4.0 * t * s * lab, 0);
-                big.set(idx(a, 3), idx(b, 3), 4.0 * t * s * lab, 0);
+                big.set(idx(a, 1), idx(b, 1), -4.0 * t * s * lab, 0);
+                big.set(idx(a, 2), idx(b, 2), 4.0 * t * s * lab, 0);
+            } else {
+                big.set(idx(a, 1), idx(b, 1), -s * lab / rho, 1);
             }
             for c in 0..nj {
-                big.set(idx(a, 2 + pm + c), idx(b, 2 + pm + c), s * lab, 0);
+                big.set(idx(a, 3 + c), idx(b, 3 + c), s * lab, 0);
             }
         }
     }
-    // the lower block's inertia plus (n, 0) for bar V - Q ≻ 0
-    let (neg_grams, pos_grams) = (if nj > 0 { 2 } else { 1 }, if nj > 0 { 1 + nj } else { 0 });
+    // the lower block's inertia plus (n, 0) for bar V - Q ≻ 0: one Gram
+    // with s g > 0 (y+, or y0 without noise), 1 + J with s g < 0
+    let (neg_grams, pos_grams) = (1, if nj > 0 { 1 + nj } else { 0 });
     let target = if s > 0.0 { (n + n * pos_grams, n * neg_grams) } else { (n + n * neg_grams, n * pos_grams) };
     (true, big.inertia() == Some(target))
 }

@@ -322,9 +322,10 @@ impl Block {
     /// Haynsworth `s P - Q ≻ 0` iff `B` has `n + n #{g < 0}` positive and
     /// `n #{g > 0}` negative eigenvalues (`-L/g` has the sign of `-g`). The
     /// unknowns are interleaved per entry (the lifted ones first), so `B` is
-    /// banded. This is the lifting `fluid::walls_check` uses, chosen there
-    /// over the congruence by `Delta` (which squares `L`'s condition) after
-    /// measurement. The claim is about the exact `B` built from the stored
+    /// banded. This is the lifting `fluid::walls_check` used until
+    /// 2026-11-27 (it now folds the `eps` Gram into the two squares, one
+    /// unknown per entry fewer), chosen there over the congruence by `Delta`
+    /// (which squares `L`'s condition) after measurement. The claim is about the exact `B` built from the stored
     /// `c`, `Delta` and noise values: each entry's rounding is bounded.
     fn lifted(&self, c: &[f64], eps: f64, s: f64, tracked: bool) -> Option<(Bounded, (usize, usize))> {
         let n = self.len();
