@@ -41,8 +41,9 @@
 //! `[[rho, 1/2], [1/2, 0]]` on `(1, S2)` and `-1` on each `E_j`, rank
 //! `J + 2`. Until 2026-11-27 `rho K` had a Gram of its own (`(s rho, M)`,
 //! and the squares `M (S2 +- t)`): one more unknown per node. Dropping it
-//! made each check 1.5 to 1.9 times faster (at ny = 1024 to 4096, `J = 1`,
-//! both versions timed in turn on the same modes) and proved the same
+//! made the checks about 1.5 times faster (1.1 to 2.1 over the modes at
+//! ny = 1024 to 4096, `J = 2`, both versions timed in turn on the same
+//! modes with another job running; the flops fall by `(5/6)^3`) and proved the same
 //! margins or tighter ones, never looser (`walls_margins` on
 //! `bench/cubic-walls.json` and `channel-sin-walls` at ny = 1024, 2048 and
 //! 4096; e.g. mode 1 of the cubic profile at ny = 1024: `3e-7` instead of
