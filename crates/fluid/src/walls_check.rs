@@ -177,8 +177,12 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
         for b in a.saturating_sub(p)..=a {
             let lab = l.get(a, b);
             if nj > 0 {
-                big.set(idx(a, 1), idx(b, 1), -4.0 * t * s * lab, 0);
-                big.set(idx(a, 2), idx(b, 2), 4.0 * t * s * lab, 0);
+                // a power of two times lab: exact unless it lands below the
+                // normal range (a tiny t), where one rounding is counted
+                let v = 4.0 * t * s * lab;
+                let r = usize::from(lab != 0.0 && v.abs() < f64::MIN_POSITIVE);
+                big.set(idx(a, 1), idx(b, 1), -v, r);
+                big.set(idx(a, 2), idx(b, 2), v, r);
             } else {
                 big.set(idx(a, 1), idx(b, 1), -s * lab / rho, 1);
             }
@@ -308,6 +312,33 @@ mod tests {
         }
         // and it is useful: most bounds 1e-4 above are proved
         assert!(proved_above >= 20, "{proved_above} of 24");
+    }
+
+    #[test]
+    fn noise_scaled_towards_underflow_is_never_proved_below_its_eigenvalue() {
+        // Noise times 2^-e multiplies Q, so the eigenvalue, by exactly
+        // 2^-2e. Near the bottom of the double range t and the lifted
+        // entries 4 t L get tiny (their underflow is counted): a bound just
+        // below the scaled eigenvalue must still fail, one above it may
+        // pass or fail, and where the bound itself leaves the normal range
+        // nothing is claimed.
+        let (g, coef, form) = channel(32, 2.0, Sign::Positive);
+        let mode = Mode::new(&g, 1.5);
+        let lam = dense_lambda(&mode, &form, &coef);
+        for e in [400, 480, 500, 505, 508, 510, 511, 515] {
+            let f = crate::banded::pow2(-e);
+            let small = Coefficients {
+                eta: coef.eta.iter().map(|x| x.iter().map(|v| v * f).collect()).collect(),
+                ..coef.clone()
+            };
+            let scaled = lam * f * f;
+            let below = verify_walls(&g, 1.5, &form, &small, scaled * (1.0 - 1e-6));
+            assert!(!below.1, "2^-{e}: proved below the eigenvalue");
+            let above = verify_walls(&g, 1.5, &form, &small, scaled * (1.0 + 1e-4));
+            if e <= 480 {
+                assert_eq!(above, (true, true), "2^-{e}");
+            }
+        }
     }
 
     #[test]
