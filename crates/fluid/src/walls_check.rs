@@ -317,11 +317,11 @@ mod tests {
     #[test]
     fn noise_scaled_towards_underflow_is_never_proved_below_its_eigenvalue() {
         // Noise times 2^-e multiplies Q, so the eigenvalue, by exactly
-        // 2^-2e. Near the bottom of the double range t and the lifted
-        // entries 4 t L get tiny (their underflow is counted): a bound just
-        // below the scaled eigenvalue must still fail, one above it may
-        // pass or fail, and where the bound itself leaves the normal range
-        // nothing is claimed.
+        // 2^-2e: towards the bottom of the double range a bound just below
+        // the scaled eigenvalue must still fail (one above may pass or
+        // fail). This does not reach the subnormal lifted entries 4 t L
+        // (counted as one rounding): instrumented for e = 500 to 515, rho
+        // leaves the normal range (no claim) before any 4 t L_ab does.
         let (g, coef, form) = channel(32, 2.0, Sign::Positive);
         let mode = Mode::new(&g, 1.5);
         let lam = dense_lambda(&mode, &form, &coef);

@@ -325,8 +325,9 @@ impl Block {
     /// banded. This is the lifting `fluid::walls_check` used until
     /// 2026-11-27 (it now folds the `eps` Gram into the two squares, one
     /// unknown per entry fewer), chosen there over the congruence by `Delta`
-    /// (which squares `L`'s condition) after measurement. The claim is about the exact `B` built from the stored
-    /// `c`, `Delta` and noise values: each entry's rounding is bounded.
+    /// (which squares `L`'s condition) after measurement. The claim is about
+    /// the exact `B` built from the stored `c`, `Delta` and noise values:
+    /// each entry's rounding is bounded.
     fn lifted(&self, c: &[f64], eps: f64, s: f64, tracked: bool) -> Option<(Bounded, (usize, usize))> {
         let n = self.len();
         if !(s.is_finite() && s > 0.0) || c.iter().any(|x| !x.is_finite()) {

@@ -313,9 +313,10 @@ pub(super) fn verified_upper(
 /// `verify`), modes 20 to 32 prove nothing up to twice their `Sigma^2_k`
 /// but prove ten times it, while the overall bound is 50 to 124 times it.
 /// Such a mode's `sigma2_upper` is then the overall bound (valid, loose); if
-/// its check fails there too it keeps `None` and the level stays `float`. Nothing is tried when no mode has a
-/// bound, and a mode whose `sigma2` is not below the overall bound is left
-/// alone (it would have to set that bound itself).
+/// its check fails there too it keeps `None` and the level stays `float`.
+/// Nothing is tried when no mode has a bound, and a mode whose `sigma2` is
+/// not below the overall bound is left alone (it would have to set that
+/// bound itself).
 pub(super) fn prove_remaining_at_overall_bound(
     modes: &mut [ModeResult],
     progress: &Progress,
