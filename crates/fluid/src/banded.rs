@@ -342,32 +342,39 @@ impl SymBanded {
         let (n, b) = (self.n, self.b);
         let b1 = b + 1;
         let u = f64::EPSILON / 2.0;
-        // c[i * b1 + d] = L[i][i - d], L = R^T
-        let mut c = vec![0.0; n * b1];
+        // c[i * b1 + d]: a[i][i - d] (the diagonal shifted) until pivot
+        // i - d is taken, then L[i][i - d], L = R^T. Right-looking, as in
+        // `ldl` (each entry's inner product in one order, its bound the same).
+        let mut c = self.band.clone();
         let mut diag_err = 0.0f64;
         for i in 0..n {
-            for j in i.saturating_sub(b)..=i {
-                let mut s = if i == j {
-                    let d = self.band[i * b1] - shift;
-                    diag_err = diag_err.max(d.abs() * u / (1.0 - u));
-                    d
-                } else {
-                    self.band[i * b1 + (i - j)]
-                };
-                // sum_{k = lo}^{j - 1} C[i][k] C[j][k], lo = i - b
-                let lo = i.saturating_sub(b);
-                s -= dot(&c[i * b1 + (i - j + 1)..=i * b1 + (i - lo)], &c[j * b1 + 1..=j * b1 + (j - lo)]);
-                if i == j {
-                    if !(s.is_finite() && s > 0.0) {
-                        return None;
-                    }
-                    c[i * b1] = s.sqrt();
-                } else {
-                    let v = s / c[j * b1];
-                    if !v.is_finite() {
-                        return None;
-                    }
-                    c[i * b1 + (i - j)] = v;
+            let d = c[i * b1] - shift;
+            diag_err = diag_err.max(d.abs() * u / (1.0 - u));
+            c[i * b1] = d;
+        }
+        // t[b - m] = L[k + m][k], m = 1..=b (reversed: forward slices below)
+        let mut t = vec![0.0; b];
+        for k in 0..n {
+            let s = c[k * b1];
+            if !(s.is_finite() && s > 0.0) {
+                return None;
+            }
+            let r = s.sqrt();
+            c[k * b1] = r;
+            let reach = b.min(n - 1 - k);
+            for m in 1..=reach {
+                let v = c[(k + m) * b1 + m] / r;
+                if !v.is_finite() {
+                    return None;
+                }
+                c[(k + m) * b1 + m] = v;
+                t[b - m] = v;
+            }
+            for m in 1..=reach {
+                let i = k + m;
+                let lik = c[i * b1 + m];
+                for (x, y) in c[i * b1..i * b1 + m].iter_mut().zip(&t[b - m..]) {
+                    *x -= lik * y;
                 }
             }
         }
@@ -461,15 +468,30 @@ impl SymBanded {
     ///
     /// Written here: no crate offers a verified inertia, and the argument is
     /// short. `L` (unit lower triangular, bandwidth `b`) and `D` (diagonal,
-    /// no zero) are the computed factors, exact real numbers. The residual
-    /// `X = A - L D L^T` is computed with its rounding bounded, so
-    /// `||A + E - L D L^T||_2 <= eps`, `eps` the largest row sum of
-    /// `|X| + gamma_{2b+4} (|A| + |L| |D| |L^T|)` plus `radius`. With
-    /// `G = L |D|^{1/2}` and `J = sign(D)`, `A + E = G (J + F) G^T` where
-    /// `||F||_2 <= eps / lambda_min(G G^T)`. If the banded matrix
-    /// `G G^T = L |D| L^T` is proved to have `lambda_min > eps` (the verified
-    /// Cholesky test of [`SymBanded::verified_positive_definite_within`], its
-    /// own rounding added to the radius), `||F||_2 < 1`, the eigenvalues of
+    /// no zero) are the computed factors, exact real numbers.
+    ///
+    /// **The backward error, a priori.** Each entry of [`SymBanded::ldl`]
+    /// is one inner product `fl((a_ij - sum_k t_k l_jk) / d_j)` of at most
+    /// `b` terms, `t_k = fl(l_ik d_k)`, so by Higham's Lemma 8.4 (any order
+    /// of summation) and one more rounding for `t_k`,
+    /// `|A - L D L^T| <= gamma_{b+2} |L| |D| |L^T|` entrywise, plus
+    /// underflow: with gradual underflow every product and quotient may add
+    /// an absolute `2^-1075` (sums add none), which multiplied through is at
+    /// most `2 * 2^-1075 (b + 1 + sum_k |l_jk| + |d_j|)` per entry. So
+    /// `||A + E - L D L^T||_2 <= eps`, `eps` the largest row sum of those
+    /// bounds plus `radius`. The row sums of `|L| |D| |L^T|` cost `O(n b)`:
+    /// `sum_k |l_ik| |d_k| c_k`, `c_k` the column sums of `|L|`. (Until
+    /// 2026-11-27 the residual `A - L D L^T` was computed entry by entry,
+    /// one more `O(n b^2)` pass, and its bound carried `gamma_{2b+4}
+    /// (|A| + |L||D||L^T|)` for its own rounding besides: never tighter.)
+    ///
+    /// **The inertia.** With `G = L |D|^{1/2}` and `J = sign(D)`,
+    /// `A + E = G (J + F) G^T` where `||F||_2 <= eps / lambda_min(G G^T)`.
+    /// If the banded matrix `P = G G^T = L |D| L^T`, formed in floating
+    /// point within `gamma_{b+2} |L| |D| |L^T|` (plus underflow, as above),
+    /// is proved to have `lambda_min > eps` (the verified Cholesky test of
+    /// [`SymBanded::verified_positive_definite_within`] with the formation
+    /// error added to the radius), `||F||_2 < 1`, the eigenvalues of
     /// `J + F` keep the signs of `J`'s (Weyl), and by Sylvester's law of
     /// inertia `A + E` has the inertia of `D`. Unlike a bound through
     /// `||L^-1||^2`, this one is as sharp as the definite test: for a
@@ -491,48 +513,51 @@ impl SymBanded {
         }
         let b1 = b + 1;
         let (l, dg) = self.ldl()?;
-        let labs: Vec<f64> = l.iter().map(|x| x.abs()).collect();
-        // The residual and L |D| L^T, entry by entry of the band (k <= j <= i).
         let u = f64::EPSILON / 2.0;
-        let m = (2 * b + 4) as f64;
-        let gamma = gamma(2 * b + 4);
-        let mut p = SymBanded::zeros(n, b);
-        let mut rows = vec![0.0f64; n];
-        let mut prow = vec![0.0f64; n];
-        let (mut ti, mut ta, mut taa) = (vec![0.0; b1], vec![0.0; b1], vec![0.0; b1]);
+        // Column sums of |L| (unit diagonal included) and the row sums of
+        // |L| |D| |L^T|; row sums of |L| and max |D| for the underflow term.
+        let mut colsum = vec![0.0f64; n];
+        let mut max_lrow = 0.0f64;
         for i in 0..n {
-            let lo = i.saturating_sub(b);
-            // row i times D and |D|: ti[d] = L[i][i - d] D[i - d]
-            for d in 0..=i - lo {
-                let li = l[i * b1 + d];
-                ti[d] = li * dg[i - d];
-                ta[d] = li * dg[i - d].abs();
-                taa[d] = ta[d].abs();
+            let mut r = 0.0;
+            for d in 0..=b.min(i) {
+                let a = l[i * b1 + d].abs();
+                colsum[i - d] += a;
+                r += a;
             }
-            for j in lo..=i {
-                // k from lo to j: row-i offsets i - j ..= i - lo, row-j offsets 0 ..= j - lo
-                let (ri, rj) = (i - j..=i - lo, j * b1..=j * b1 + (j - lo));
-                let prod = dot(&ti[ri.clone()], &l[rj.clone()]);
-                let pij = dot(&ta[ri.clone()], &l[rj.clone()]);
-                let abs = dot(&taa[ri], &labs[rj]);
-                let a = self.band[i * b1 + (i - j)];
-                let e = (a - prod).abs() + gamma * (a.abs() + abs) + 5e-324 * m;
-                p.band[i * b1 + (i - j)] = pij;
-                // |L| |D| |L^T| bounds the rounding of P's entries too
-                let ep = gamma * abs + 5e-324 * m;
-                rows[i] += e;
-                prow[i] += ep;
-                if j != i {
-                    rows[j] += e;
-                    prow[j] += ep;
-                }
-            }
+            max_lrow = max_lrow.max(r);
         }
+        let max_d = dg.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        let mut max_ldl = 0.0f64;
+        for i in 0..n {
+            let mut r = 0.0;
+            for d in 0..=b.min(i) {
+                r += l[i * b1 + d].abs() * (dg[i - d].abs() * colsum[i - d]);
+            }
+            max_ldl = max_ldl.max(r);
+        }
+        // The sums above: at most b + 1 terms each, nested, with two
+        // products, so a relative error below gamma_{2b+2}, inflated for by
+        // the factor below; underflow in the products adds at most
+        // 2^-1074 * 2 (b + 1 + max_lrow) to a row's sum (counted below).
         let inflate = 1.0 + 4.0 * (2 * b + 3) as f64 * u;
-        let eps = rows.iter().fold(0.0f64, |a, r| a.max(*r)) * inflate + radius;
-        let formation = prow.iter().fold(0.0f64, |a, r| a.max(*r)) * inflate;
-        let total = (eps + formation) * (1.0 + 4.0 * u);
-        if !total.is_finite() || !p.verified_positive_definite_within(total) {
+        let max_ldl = max_ldl * inflate;
+        // Underflow (the docs above): per entry at most 2^-1074 (b + 1 +
+        // max_lrow + max_d) for the factorisation and as much for P's
+        // formation, 2b + 1 entries a row; one more such row covers
+        // max_ldl's underflow (times gamma < 1/2), and one subnormal step
+        // this product's own rounding.
+        let underflow = 5e-324 * (2 * b + 2) as f64 * ((b + 1) as f64 + max_lrow + max_d) * inflate + 5e-324;
+        // The a-priori bound of the backward error, and as much for P's
+        // formation; each rounded upwards (a relative u, or one subnormal
+        // step).
+        let per = (gamma(b + 2) * max_ldl + underflow) * (1.0 + 4.0 * u) + 5e-324;
+        let total = ((per + radius) + per) * (1.0 + 4.0 * u);
+        if !total.is_finite() {
+            return None;
+        }
+        let p = Self::abs_ldl(&l, &dg, b);
+        if !p.verified_positive_definite_within(total) {
             return None;
         }
         let pos = dg.iter().filter(|d| **d > 0.0).count();
@@ -542,36 +567,80 @@ impl SymBanded {
     /// The unpivoted `L D L^T` factors in floating point, `l[i * (b + 1) + d]
     /// = L[i][i - d]` (the unit diagonal stored at `d = 0`) and `D`; `None`
     /// at a zero or non-finite pivot.
+    ///
+    /// Right-looking: pivot `k` divides its column by `d_k` and subtracts
+    /// `l_ik fl(l_jk d_k)` from the trailing triangle, row by row (each an
+    /// `axpy` the compiler vectorises, independent of the others). Every
+    /// entry is still `a_ij` minus its products in turn, then divided by the
+    /// pivot: one order of the inner product of Higham's Lemma 8.4, whose
+    /// bound holds for any order. (The inner-product form used until
+    /// 2026-11-27 chained each entry's sum to the next and ran at about a
+    /// third of the speed.)
     fn ldl(&self) -> Option<(Vec<f64>, Vec<f64>)> {
         let (n, b) = (self.n, self.b);
         let b1 = b + 1;
-        // l[i * b1 + d] = L[i][i - d] for d >= 1 (L[i][i] = 1), d[i] = D[i]
-        let mut l = vec![0.0; n * b1];
+        // l[i * b1 + d]: a[i][i - d] until pivot i - d is taken, then L[i][i - d]
+        let mut l = self.band.clone();
         let mut dg = vec![0.0; n];
-        let mut t = vec![0.0; b1]; // t[i - k] = L[i][k] D[k] for the current row
-        for i in 0..n {
-            let lo = i.saturating_sub(b);
-            for j in lo..i {
-                // sum_{k = lo}^{j - 1} L[i][k] D[k] L[j][k]
-                let s = self.band[i * b1 + (i - j)] - dot(&t[i - j + 1..=i - lo], &l[j * b1 + 1..=j * b1 + (j - lo)]);
-                let v = s / dg[j];
+        // t[b - m] = fl(L[k + m][k] D[k]), m = 1..=b: reversed, so that row
+        // k + m's update reads a forward slice
+        let mut t = vec![0.0; b];
+        for k in 0..n {
+            let dk = l[k * b1];
+            if !(dk.is_finite() && dk != 0.0) {
+                return None;
+            }
+            dg[k] = dk;
+            let reach = b.min(n - 1 - k);
+            for m in 1..=reach {
+                let v = l[(k + m) * b1 + m] / dk;
                 if !v.is_finite() {
                     return None;
                 }
-                l[i * b1 + (i - j)] = v;
-                t[i - j] = v * dg[j];
+                l[(k + m) * b1 + m] = v;
+                t[b - m] = v * dk;
             }
-            let s = self.band[i * b1] - dot(&t[1..=i - lo], &l[i * b1 + 1..=i * b1 + (i - lo)]);
-            if !(s.is_finite() && s != 0.0) {
-                return None;
+            for m in 1..=reach {
+                // row i = k + m, columns j = i - d for d = 0..m (j > k)
+                let i = k + m;
+                let lik = l[i * b1 + m];
+                let (row, tj) = (&mut l[i * b1..i * b1 + m], &t[b - m..]);
+                for (r, x) in row.iter_mut().zip(tj) {
+                    *r -= lik * x;
+                }
             }
-            dg[i] = s;
         }
         // the unit diagonal stored, so every row is one slice
         for i in 0..n {
             l[i * b1] = 1.0;
         }
         Some((l, dg))
+    }
+
+    /// `L |D| L^T` in floating point from the factors of [`SymBanded::ldl`]:
+    /// `sum_k |d_k| l_k l_k^T` on the band, right-looking (each entry's sum
+    /// in one order, of at most `b + 1` products of two roundings each).
+    fn abs_ldl(l: &[f64], dg: &[f64], b: usize) -> SymBanded {
+        let (n, b1) = (dg.len(), b + 1);
+        let mut p = SymBanded::zeros(n, b);
+        // t[b - m] = fl(L[k + m][k] |D[k]|), m = 0..=b
+        let mut t = vec![0.0; b1];
+        for k in 0..n {
+            let reach = b.min(n - 1 - k);
+            let ad = dg[k].abs();
+            for m in 0..=reach {
+                t[b - m] = l[(k + m) * b1 + m] * ad;
+            }
+            // rows i = k + m, columns j = i - d for d = 0..=m
+            for m in 0..=reach {
+                let i = k + m;
+                let lik = l[i * b1 + m];
+                for (x, y) in p.band[i * b1..=i * b1 + m].iter_mut().zip(&t[b - m..]) {
+                    *x += lik * y;
+                }
+            }
+        }
+        p
     }
 
     /// The inertia `(positive, negative)` of this matrix as an unpivoted
@@ -763,5 +832,104 @@ mod tests {
         let mut a = example(10, 2);
         a.add(3, 3, f64::NAN);
         assert!(!a.verified_positive_definite_within(0.0));
+    }
+
+    /// A random symmetric matrix of bandwidth `b`, indefinite (diagonal of
+    /// random sign, magnitude 2 to 4; off-diagonal within `0.5/b`), every
+    /// entry multiplied by `2^e`.
+    fn random_indefinite(rng: &mut impl rand::Rng, n: usize, b: usize, e: i32) -> SymBanded {
+        let mut a = SymBanded::zeros(n, b);
+        let f = 2f64.powi(e / 2) * 2f64.powi(e - e / 2); // 2^e, exact also when subnormal
+        for i in 0..n {
+            let d = if rng.random::<bool>() { 1.0 } else { -1.0 } * rng.random_range(2.0..4.0);
+            a.add(i, i, d * f);
+            for j in i.saturating_sub(b)..i {
+                a.add(i, j, rng.random_range(-0.5..0.5) / b as f64 * f);
+            }
+        }
+        a
+    }
+
+    #[test]
+    fn the_factors_are_within_the_a_priori_bounds_exactly() {
+        // The bounds `verified_inertia_within` assumes, checked in exact
+        // rational arithmetic (the `exact` crate): entrywise on the band,
+        // |A - L D L^T| and |fl(L |D| L^T) - L |D| L^T| are at most
+        // gamma_{b+2} |L| |D| |L^T| plus 2^-1074 (b + 1 + max row sum of |L|
+        // + max |D|), gamma_m = m u / (1 - m u) exactly. Scales: ordinary,
+        // large (2^900), and subnormal (2^-1066: the pivots and the products
+        // `l d` underflow, so the underflow term is what is tested).
+        use exact::Rational;
+        use rand::SeedableRng;
+        let mut rng = rand::rngs::StdRng::seed_from_u64(27);
+        let q = |x: f64| Rational::from_float(x).unwrap();
+        let mut underflowed = false;
+        for (n, b, e) in [(12, 1, 0), (15, 3, 0), (14, 5, 0), (12, 3, 900), (12, 2, -1066), (14, 4, -1066)] {
+            for _ in 0..4 {
+                let a = random_indefinite(&mut rng, n, b, e);
+                let (l, dg) = a.ldl().unwrap_or_else(|| panic!("nonzero pivots: n {n} b {b} e {e}"));
+                let p = SymBanded::abs_ldl(&l, &dg, b);
+                let b1 = b + 1;
+                let lq = |i: usize, k: usize| if i - k <= b { q(l[i * b1 + (i - k)]) } else { Rational::from(0) };
+                let max_lrow =
+                    (0..n).map(|i| (0..=b.min(i)).map(|d| l[i * b1 + d].abs()).sum::<f64>()).fold(0.0, f64::max);
+                let max_d = dg.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+                // the exact slack, from the computed (upward-rounded) sums
+                let slack = q(5e-324) * q(((b + 1) as f64 + max_lrow + max_d) * 1.01);
+                let m = (b + 2) as i64;
+                let gamma = Rational::new(m.into(), ((1i64 << 53) - m).into());
+                underflowed |= dg.iter().any(|d| d.abs() < f64::MIN_POSITIVE);
+                for i in 0..n {
+                    for j in i.saturating_sub(b)..=i {
+                        let (mut ldl, mut labs, mut pabs) = (Rational::from(0), Rational::from(0), Rational::from(0));
+                        for k in i.saturating_sub(b)..=j {
+                            let t = lq(i, k) * q(dg[k]) * lq(j, k);
+                            labs += t.abs();
+                            ldl += &t;
+                            pabs += lq(i, k) * q(dg[k].abs()) * lq(j, k);
+                        }
+                        let bound = &gamma * &labs + &slack;
+                        let x = (q(a.get(i, j)) - &ldl).abs();
+                        assert!(x <= bound, "A - LDL^T: n {n} b {b} e {e} ({i}, {j})");
+                        let y = (q(p.get(i, j)) - &pabs).abs();
+                        assert!(y <= bound, "L|D|L^T: n {n} b {b} e {e} ({i}, {j})");
+                    }
+                }
+            }
+        }
+        assert!(underflowed, "the subnormal cases reach subnormal pivots");
+    }
+
+    #[test]
+    fn verified_inertia_is_sound_and_sharp_against_dense_eigenvalues() {
+        // nalgebra's dense eigenvalues (independent of the factorisation):
+        // with mu the smallest |eigenvalue|, a radius mu/2 proves the true
+        // inertia, and a radius just above mu proves nothing (some A + E
+        // with ||E|| = mu is singular). Also rows and columns scaled by
+        // random powers of two (a congruence: same inertia; soundness only,
+        // against the scaled matrix's own eigenvalues).
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        for (n, b) in [(10, 1), (60, 4), (300, 12), (500, 30)] {
+            for scaled in [false, true] {
+                let mut a = random_indefinite(&mut rng, n, b, 0);
+                if scaled {
+                    let f: Vec<f64> = (0..n).map(|_| 2f64.powi(rng.random_range(-20..=20))).collect();
+                    for i in 0..n {
+                        for j in i.saturating_sub(b)..=i {
+                            let v = a.get(i, j) * (f[i] * f[j] - 1.0);
+                            a.add(i, j, v);
+                        }
+                    }
+                }
+                let eig = a.to_dense().symmetric_eigenvalues();
+                let mu = eig.iter().fold(f64::INFINITY, |m, x| m.min(x.abs()));
+                let pos = eig.iter().filter(|x| **x > 0.0).count();
+                assert_eq!(a.verified_inertia_within(mu * (1.0 + 1e-6) + 1e-300), None, "n {n} b {b} scaled {scaled}");
+                if !scaled {
+                    assert_eq!(a.verified_inertia_within(0.5 * mu), Some((pos, n - pos)), "n {n} b {b}");
+                }
+            }
+        }
     }
 }
