@@ -470,7 +470,7 @@ impl SymBanded {
     /// short. `L` (unit lower triangular, bandwidth `b`) and `D` (diagonal,
     /// no zero) are the computed factors, exact real numbers.
     ///
-    /// **The backward error, a priori.** Each entry of [`SymBanded::ldl`]
+    /// **The backward error, a priori.** Each entry of the factorisation
     /// is one inner product `fl((a_ij - sum_k t_k l_jk) / d_j)` of at most
     /// `b` terms, `t_k = fl(l_ik d_k)`, so by Higham's Lemma 8.4 (any order
     /// of summation) and one more rounding for `t_k`,
