@@ -12,12 +12,17 @@
 # PYTHON_TESTS=0 skips the Python part.
 set -euo pipefail
 cd "$(dirname "$0")"
+# Each part's end is stamped with the seconds since the start (stderr), so a
+# log shows where the time goes.
+part() { echo "-- test.sh: $* [${SECONDS} s]" >&2; }
 cargo test --workspace "$@"
+part "cargo test --workspace done"
 # `verify report` in headless Chromium (installed from Debian's packages
 # when missing): no console error, no fetch, every section rendered.
 # BROWSER_TESTS=0 skips it.
 if [ "${BROWSER_TESTS:-1}" != "0" ]; then
   tests/browser/report.sh
+  part "browser test done"
 fi
 if [ "${PYTHON_TESTS:-1}" = "0" ]; then
   exit 0
@@ -32,5 +37,8 @@ fi
 # One target folder for both workspaces: the engine's crates built in
 # release for `verify` are reused by the extension.
 export CARGO_TARGET_DIR="$PWD/target"
+part "Python environment ready"
 VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --release --quiet -m python/Cargo.toml
+part "extension built (maturin, release)"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests --doctest-modules --pyargs energy_casimir
+part "pytest done"

@@ -1,0 +1,6 @@
+//! Empty. A build script is what makes Cargo build this package's
+//! `[build-dependencies]`, and those exist only for feature unification
+//! (python/Cargo.toml): the proc-macros' `syn` gets the same features here as
+//! in the `verify` binary's build, so the engine's crates built in release
+//! for one are the ones the other uses.
+fn main() {}
