@@ -38,6 +38,37 @@ pub fn gamma(m: usize) -> f64 {
     m * u / (1.0 - m * u)
 }
 
+/// The product of `factors` from left to right, for an entry of a
+/// [`Bounded`] matrix: `None` if a partial product before the last one
+/// underflows (nonzero and below the normal range, or zero while no factor
+/// is). [`Bounded::set`] allows for underflow in an entry's last operation
+/// only: an earlier subnormal partial product can carry a relative error up
+/// to 100%, which the later factors would carry into a normal-sized entry.
+///
+/// ```
+/// use fluid::banded::product_without_early_underflow as product;
+/// assert_eq!(product(&[3.0, 0.5, 2.0]), Some(3.0));
+/// // 2^-600 * 2^-600 is below the normal range before the last factor
+/// let tiny = 2f64.powi(-600);
+/// assert_eq!(product(&[tiny, tiny, 2f64.powi(1000)]), None);
+/// // the last operation may underflow: Bounded::set allows for it
+/// assert_eq!(product(&[tiny, tiny]), Some(tiny * tiny));
+/// // a zero factor makes the product exactly zero
+/// assert_eq!(product(&[tiny, 0.0, tiny]), Some(0.0));
+/// ```
+pub fn product_without_early_underflow(factors: &[f64]) -> Option<f64> {
+    let (&last, first) = factors.split_last()?;
+    let mut p = 1.0;
+    for (i, &f) in first.iter().enumerate() {
+        p *= f;
+        let exact_zero = first[..=i].contains(&0.0);
+        if i > 0 && ((p != 0.0 && p.abs() < f64::MIN_POSITIVE) || (p == 0.0 && !exact_zero)) {
+            return None;
+        }
+    }
+    Some(p * last)
+}
+
 /// `2^e` for `-1022 <= e <= 1023` (clamped), exactly.
 pub fn pow2(e: i32) -> f64 {
     f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
@@ -95,7 +126,9 @@ impl Bounded {
 
     /// Entry `(i, j)` is `v`, computed with at most `rounds` roundings of
     /// nonnegative-magnitude factors (a product of such factors is within
-    /// `gamma_rounds |v|` of the exact one), plus underflow.
+    /// `gamma_rounds |v|` of the exact one), plus underflow in the last
+    /// operation only: form a product of several factors with
+    /// [`product_without_early_underflow`].
     pub fn set(&mut self, i: usize, j: usize, v: f64, rounds: usize) {
         self.set_with_error(i, j, v, v, rounds);
     }

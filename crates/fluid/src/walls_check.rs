@@ -27,7 +27,8 @@
 //!
 //! and by Haynsworth's inertia additivity `inertia(B) = inertia(lower) +
 //! inertia(bar V - Q)`, with `inertia(-L/g_i)` all positive for `g_i < 0` and
-//! all negative for `g_i > 0` (`L ≻ 0`). So `bar V - Q ≻ 0` iff `B` has
+//! all negative for `g_i > 0` (`L ≻ 0`, proved by a verified banded Cholesky
+//! of the stored `L`). So `bar V - Q ≻ 0` iff `B` has
 //! exactly `n + n #{g_i < 0}` positive and `n #{g_i > 0}` negative
 //! eigenvalues, proved by the verified inertia test
 //! [`crate::banded::SymBanded::verified_inertia_within`]. In the same way `V ≻ 0` iff
@@ -104,9 +105,19 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
         let definite = (0..n).all(|a| s * form.w[a] * m[a] > 0.0);
         return (definite, definite);
     }
+    // The liftings below are for V = s (M diag(w) + K): energy 1 (the
+    // pipeline builds 0 or 1).
+    if form.energy != 1.0 {
+        return (false, false);
+    }
     let Some(l) = grid.helmholtz(k) else { return (false, false) };
     let p = l.bandwidth();
     if form.w.iter().chain(m).any(|x| !x.is_finite()) || (0..n).any(|i| !l.get(i, i).is_finite()) {
+        return (false, false);
+    }
+    // Haynsworth's count needs the stored L ≻ 0 (module docs): proved, not
+    // assumed (a banded Cholesky of bandwidth p, cheap beside the rest).
+    if !l.verified_positive_definite_within(0.0) {
         return (false, false);
     }
 
@@ -172,14 +183,25 @@ fn below_bar(grid: &YGrid, l: &crate::banded::SymBanded, k: f64, form: &Form, co
     let idx = |a: usize, c: usize| a * stride + if c == 0 { stride - 1 } else { c - 1 };
     let mut big = Bounded::new(n * stride, stride * (p + 1) - 1);
     for a in 0..n {
-        big.set(idx(a, 0), idx(a, 0), s * rho * m[a] * form.w[a], 2);
+        // s rho m w: `rho m` below the normal range would carry its
+        // underflow, up to 100%, into the entry (found by review: a false
+        // proof with w near 1e277 on an interval of 1e-14); nothing is
+        // proved then
+        let Some(d) = crate::banded::product_without_early_underflow(&[s * rho, m[a], form.w[a]]) else {
+            return false;
+        };
+        big.set(idx(a, 0), idx(a, 0), d, 2);
         if nj > 0 {
             // S2 + t + rho: S2 of the rounded centred fields carries nj + 2
-            // roundings, then two sums and the product
+            // roundings, then two sums and the product. A square below the
+            // normal range is off by at most 2^-1075, and t >= 2^-1022
+            // (`pow2` clamps), so the nj squares add at most nj u relative
+            // to S2 + t + rho: nj more roundings. Sums do not underflow
+            // (a sum below the normal range is exact).
             let plus = m[a] * ((s2[a] + t) + rho);
-            big.set(idx(a, 1), idx(a, 0), plus, nj + 5);
+            big.set(idx(a, 1), idx(a, 0), plus, 2 * nj + 5);
             // S2 - t + rho cancels: its error is relative to S2 + t + rho
-            big.set_with_error(idx(a, 2), idx(a, 0), m[a] * ((s2[a] - t) + rho), plus, nj + 5);
+            big.set_with_error(idx(a, 2), idx(a, 0), m[a] * ((s2[a] - t) + rho), plus, 2 * nj + 5);
         } else {
             big.set(idx(a, 1), idx(a, 0), m[a], 0);
         }
@@ -353,6 +375,55 @@ mod tests {
                 assert_eq!(above, (true, true), "2^-{e}");
             }
         }
+    }
+
+    #[test]
+    fn an_entry_whose_product_underflows_midway_proves_nothing_false() {
+        // Found in review (2026-11-27): on an interval of length 1e-14
+        // (weights m near 1e-15) with w near 1e277 and Sigma^2 near 3e-307,
+        // rho m fell below the normal range and rounded by up to 4.6%, which
+        // the factor w carried into the entry `s rho m w`; bounds 0.3% below
+        // the eigenvalue were proved. The truth is decided here in exact
+        // rationals on the stored L, m, w and eta (k = 1, energy 1, s = +1).
+        let lg = 1e-14;
+        let g = YGrid::new(Boundary::Walls, 0.0, lg, 16);
+        let y = g.nodes().to_vec();
+        let n = g.n();
+        let eta: Vec<f64> = y.iter().map(|v| (2.0 * std::f64::consts::PI * v / lg).sin() + 0.3 * (v / lg)).collect();
+        let w: Vec<f64> = y.iter().map(|v| 1e277 * (1.0 + 0.5 * (3.0 * v / lg).cos())).collect();
+        let coef = Coefficients { u: vec![0.0; n], upp: vec![1.0; n], eta: vec![eta.clone()] };
+        let form = Form { energy: 1.0, w: w.clone(), sign: Sign::Positive };
+        let q = |x: f64| exact::Rational::from_float(x).unwrap();
+        let l = g.helmholtz(1.0).unwrap();
+        let p = l.bandwidth();
+        let l_exact = exact::Matrix::from_fn(n, n, |a, b| if a.abs_diff(b) <= p { q(l.get(a, b)) } else { q(0.0) });
+        let diag = |d: &[f64]| exact::Matrix::from_fn(n, n, |a, b| if a == b { q(d[a]) } else { q(0.0) });
+        let (mm, ww, ee) = (diag(g.weights()), diag(&w), diag(&eta));
+        let kk = mm.mul(&l_exact.inverse().unwrap()).mul(&mm);
+        let v = mm.mul(&ww).add(&kk);
+        // Q = -(k^2/2) [E, [E, K]] = -(1/2)(E^2 K - 2 E K E + K E^2)
+        let ek = ee.mul(&kk);
+        let comm2 = ee.mul(&ek).sub(&ek.mul(&ee).scale(&q(2.0))).add(&kk.mul(&ee).mul(&ee));
+        let qq = comm2.scale(&q(-0.5));
+        let definite = |bar: f64| v.scale(&q(bar)).sub(&qq).inertia().positive == n;
+        // lambda_max(Q, V) by mpmath (60 digits) on the same stored data,
+        // 3.0692868451655490e-307; the exact inertias pin it within 0.3%.
+        let lam = 3.069286845165549e-307;
+        assert!(definite(lam * 1.001));
+        // 0.3% below: not definite, and not proved
+        assert!(!definite(lam * 0.997));
+        assert!(!verify_walls(&g, 1.0, &form, &coef, lam * 0.997).1, "proved a bound below the eigenvalue");
+    }
+
+    #[test]
+    fn a_form_with_an_energy_other_than_one_is_not_claimed() {
+        // The liftings are for V = s (M diag(w) + K): another energy
+        // coefficient proves nothing (the pipeline builds 0 or 1).
+        let (g, coef, mut form) = channel(32, 2.0, Sign::Positive);
+        let lam = dense_lambda(&Mode::new(&g, 1.0), &form, &coef);
+        assert_eq!(verify_walls(&g, 1.0, &form, &coef, lam * 2.0), (true, true));
+        form.energy = 2.0;
+        assert_eq!(verify_walls(&g, 1.0, &form, &coef, lam * 2.0), (false, false));
     }
 
     #[test]

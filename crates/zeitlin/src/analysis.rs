@@ -360,14 +360,19 @@ impl Block {
             g.push(-k2 / (2.0 * t));
             g.extend(std::iter::repeat_n(-2.0 * k2, k));
         }
-        if g.iter().any(|x| !(x.is_finite() && *x != 0.0)) {
+        // Each g must be exact (k2 is, t is a power of two): a quotient
+        // below the normal range is rounded, so nothing is claimed then.
+        if g.iter().any(|x| !(x.is_finite() && x.abs() >= f64::MIN_POSITIVE)) {
             return None;
         }
         let lifted = g.len();
         let stride = lifted + 1;
         let idx = |j: usize, v: usize| j * stride + v; // v = lifted: the unknown x_j itself
         let mut b = if tracked { Bounded::new(n * stride, stride) } else { Bounded::untracked(n * stride, stride) };
-        let sum_rounds = k + 4;
+        // S2 +- t: k squares, their sum and t; a square below the normal
+        // range is off by at most 2^-1075 while t >= 2^-1022 (`pow2`
+        // clamps), so underflow adds at most k u relative: k more roundings.
+        let sum_rounds = 2 * k + 4;
         for j in 0..n {
             b.set(idx(j, lifted), idx(j, lifted), s * c[j], 1);
             b.set(idx(j, 0), idx(j, lifted), 1.0, 0);
