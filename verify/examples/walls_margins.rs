@@ -5,7 +5,7 @@
 //! (`fluid::constants`: `1e-8` to `8.1e-3`; on walls grids above ny = 1024
 //! the analysis starts at `fluid::analysis::first_rung`) and then `1, 9, 29,
 //! 99` (2, 10, 30 and 100 times `Sigma^2_k`). The measurements behind
-//! `fluid::analysis::prove_remaining_at_overall_bound` and docs/fluids.md §2
+//! `fluid::analysis::prove_remaining_modes` and docs/fluids.md §2
 //! came from it.
 //!
 //! `cargo run --release -p verify --example walls_margins -- SPEC [NY] [FIRST_MODE]`

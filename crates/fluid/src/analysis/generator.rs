@@ -209,7 +209,7 @@ pub(super) fn analyse_generator(
         };
     }
     let mut modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
-    prove_remaining_at_overall_bound(&mut modes, progress, |k, bar| {
+    prove_remaining_modes(&mut modes, progress, |k, bar| {
         BarotropicMode::new(&fine, &coef, k, sound_speed, c).verify(bar).1
     });
     // The discretised SDE's own growth constant per mode, lambda_max(Q_B, K):

@@ -157,7 +157,7 @@ pub(super) fn analyse_normalised(
         );
     }
     let mut modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
-    prove_remaining_at_overall_bound(&mut modes, progress, |k, bar| Mode::new(&fine, k).verify(&form, &coef, bar).1);
+    prove_remaining_modes(&mut modes, progress, |k, bar| Mode::new(&fine, k).verify(&form, &coef, bar).1);
     let sigma2 = modes.iter().map(|r| r.sigma2).fold(0.0, f64::max);
     let sigma2_upper = modes.iter().try_fold(0.0f64, |acc, r| r.sigma2_upper.map(|u| acc.max(u)));
     let verification = Some(if form.energy == 0.0 {

@@ -300,24 +300,32 @@ pub(super) fn verified_upper(
 }
 
 /// The modes whose own ladder ([`verified_upper`]) proved no bound, tried
-/// once more at the largest bound the other modes proved: `prove(k, bar)`
-/// is the verified check of `bar V - Q ≻ 0` for the mode of wavenumber `k`.
+/// again with wider bounds: the ladder continued (`Sigma^2_k (1 + m)`, the
+/// margin `m` growing by [`VERIFY_MARGIN_GROWTH`] past the widest rung,
+/// `0.243` then `7.29`) while the bound stays below the overall one, then
+/// the overall bound itself (the largest bound the other modes proved).
+/// `prove(k, bar)` is the verified check of `bar V - Q ≻ 0` for the mode
+/// of wavenumber `k`.
 ///
 /// The certificate's claim is about `Sigma^2 = max_k Sigma^2_k`, so a mode
 /// needs only a proved bound no larger than the overall one, not a sharp
-/// one. On walls grids above the dense fallback's size the banded check
-/// cannot prove narrow margins for some modes of `s = -1` forms (the
-/// unpivoted factorisation's growth; `walls_check` docs), and the ladder's
-/// widest rung, `8.1e-3`, is not enough there: measured for
+/// one; the continued ladder gives it its own bound where it can, a few
+/// times `Sigma^2_k` rather than the overall bound's tens or hundreds. On
+/// walls grids above the dense fallback's size the banded check cannot
+/// prove narrow margins for some modes of `s = -1` forms (the unpivoted
+/// factorisation's growth; `walls_check` docs), and the ladder's widest
+/// rung, `8.1e-3`, is not enough there: measured for
 /// `fluid-channel-sin-walls` at ny = 4096 (`examples/walls_margins.rs` of
-/// `verify`), modes 20 to 32 prove nothing up to twice their `Sigma^2_k`
-/// but prove ten times it, while the overall bound is 50 to 124 times it.
-/// Such a mode's `sigma2_upper` is then the overall bound (valid, loose); if
-/// its check fails there too it keeps `None` and the level stays `float`.
-/// Nothing is tried when no mode has a bound, and a mode whose `sigma2` is
-/// not below the overall bound is left alone (it would have to set that
-/// bound itself).
-pub(super) fn prove_remaining_at_overall_bound(
+/// `verify`), modes 16 to 19 prove `2 Sigma^2_k` and 20 to 32 prove nothing
+/// up to twice their `Sigma^2_k` but prove ten times it, while the overall
+/// bound is 35 to 124 times it. A mode whose checks all fail keeps `None`
+/// and the level stays `float`. Nothing is tried when no mode has a bound,
+/// and a mode whose `sigma2` is not below the overall bound is left alone
+/// (it would have to set that bound itself).
+/// How many rungs [`prove_remaining_modes`] continues the ladder by.
+const CONTINUED_RUNGS: usize = 2;
+
+pub(super) fn prove_remaining_modes(
     modes: &mut [ModeResult],
     progress: &Progress,
     prove: impl Fn(f64, f64) -> bool + Sync,
@@ -326,6 +334,23 @@ pub(super) fn prove_remaining_at_overall_bound(
     modes.par_iter_mut().filter(|r| r.sigma2_upper.is_none() && r.form_verified && r.sigma2 < overall).for_each(|r| {
         // no progress steps (the phase's count was fixed before): a
         // cancelled run only stops trying
+        let mut margin = VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH.powi(VERIFY_ATTEMPTS as i32);
+        for _ in 0..CONTINUED_RUNGS {
+            let bar = r.sigma2 * (1.0 + margin);
+            if progress.is_cancelled() {
+                return;
+            }
+            // (a bound not above Sigma^2_k, or at the overall one, is left
+            // to the overall bound's try)
+            if !(bar > r.sigma2 && bar < overall) {
+                break;
+            }
+            if prove(r.k, bar) {
+                r.sigma2_upper = Some(bar);
+                return;
+            }
+            margin *= VERIFY_MARGIN_GROWTH;
+        }
         if !progress.is_cancelled() && prove(r.k, overall) {
             r.sigma2_upper = Some(overall);
         }
@@ -493,34 +518,42 @@ mod tests {
     }
 
     #[test]
-    fn a_mode_without_a_bound_is_proved_only_at_the_overall_bound_and_only_if_the_check_passes() {
+    fn a_mode_without_a_bound_is_tried_on_the_continued_ladder_then_at_the_overall_bound() {
         let mut modes = vec![
             mode(1, 1.0, Some(1.01), true),
             mode(2, 0.5, Some(0.6), true),
-            mode(3, 0.1, None, true),  // proved at 1.01
-            mode(4, 0.1, None, true),  // its check fails
+            mode(3, 0.1, None, true),  // proved on the second continued rung
+            mode(4, 0.1, None, true),  // its check fails everywhere
             mode(5, 0.1, None, false), // V not definite: never tried
             mode(6, 1.02, None, true), // above the overall bound: never tried
+            mode(7, 0.9, None, true),  // its first continued rung is above 1.01
+            mode(8, 0.0, None, true),  // Sigma^2_k = 0: no rung above it
         ];
         let tried = std::sync::Mutex::new(vec![]);
-        prove_remaining_at_overall_bound(&mut modes, &Progress::new(), |k, bar| {
+        // the check proves bounds from 0.5 up, except for mode 4
+        prove_remaining_modes(&mut modes, &Progress::new(), |k, bar| {
             tried.lock().unwrap().push((k as usize, bar));
-            k != 4.0
+            k != 4.0 && bar >= 0.5
         });
         let mut tried = tried.into_inner().unwrap();
-        tried.sort_by_key(|t| t.0);
-        assert_eq!(tried, vec![(3, 1.01), (4, 1.01)]);
+        tried.sort_by_key(|t| t.0); // stable: each mode's tries in order
+                                    // the continued margins: past the widest rung 8.1e-3, 0.243 and 7.29
+        let m5 = VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH.powi(VERIFY_ATTEMPTS as i32);
+        let m6 = m5 * VERIFY_MARGIN_GROWTH;
+        assert!((m5 - 0.243).abs() < 1e-12 && (m6 - 7.29).abs() < 1e-12);
+        let (r1, r2) = (0.1 * (1.0 + m5), 0.1 * (1.0 + m6));
+        assert_eq!(tried, vec![(3, r1), (3, r2), (4, r1), (4, r2), (4, 1.01), (7, 1.01), (8, 1.01)]);
         let uppers: Vec<Option<f64>> = modes.iter().map(|r| r.sigma2_upper).collect();
-        assert_eq!(uppers, vec![Some(1.01), Some(0.6), Some(1.01), None, None, None]);
+        assert_eq!(uppers, vec![Some(1.01), Some(0.6), Some(r2), None, None, None, Some(1.01), Some(1.01)]);
         // no mode with a bound: nothing is tried
         let mut none = vec![mode(1, 1.0, None, true)];
-        prove_remaining_at_overall_bound(&mut none, &Progress::new(), |_, _| panic!("tried"));
+        prove_remaining_modes(&mut none, &Progress::new(), |_, _| panic!("tried"));
         assert_eq!(none[0].sigma2_upper, None);
         // a cancelled run stops trying
         let p = Progress::new();
         p.cancel();
         let mut left = vec![mode(1, 1.0, Some(1.0), true), mode(2, 0.1, None, true)];
-        prove_remaining_at_overall_bound(&mut left, &p, |_, _| true);
+        prove_remaining_modes(&mut left, &p, |_, _| true);
         assert_eq!(left[1].sigma2_upper, None);
     }
 }
