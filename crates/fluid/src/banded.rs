@@ -150,8 +150,8 @@ impl Bounded {
     /// ([`SymBanded::power_of_two_scaled`], then
     /// [`SymBanded::verified_inertia_within`]).
     pub fn inertia(&self) -> Option<(usize, usize)> {
-        let (s, r) = self.a.power_of_two_scaled(self.err.as_ref()?);
-        s.verified_inertia_within(r)
+        let (s, r) = self.a.power_of_two_scaled_rows(self.err.as_ref()?);
+        s.verified_inertia_within_rows(&r)
     }
 
     /// The inertia of the computed matrix, unproved ([`SymBanded::inertia`]):
@@ -399,10 +399,82 @@ impl SymBanded {
         false
     }
 
-    /// Factor `fl(A - shift I)` (inner-product Cholesky on the band); if it
-    /// completes, `gamma * max_i sum_j (|R^T| |R|)_ij + max |F_jj|` rounded
-    /// upwards (see [`SymBanded::verified_positive_definite_within`]).
+    /// `A ≻ diag(f)`, `A` this matrix and `f >= 0`, proved by a
+    /// floating-point Cholesky factorisation of `fl(A - diag(s))` with the
+    /// rounding bounded row by row: the argument of
+    /// [`SymBanded::verified_positive_definite_within`] with
+    /// `R^T R = A' + Delta`, `|Delta| <= gamma_{b+2} |R^T| |R|`, and
+    /// `|x^T Delta x| <= sum_i (sum_j |Delta_ij|) x_i^2`, so
+    /// `x^T (A - diag(f)) x >= x^T R^T R x + sum_i (s_i - f_i - |F_ii| - gamma
+    /// (|R^T| |R| 1)_i) x_i^2 > 0` when every row's shift covers its own
+    /// rounding. The shifts start at twice `gamma_{b+2}` times the row sums
+    /// of `|A|` and are raised once from the first factor's bounds if needed.
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// let mut a = SymBanded::zeros(2, 1); // diag(1, 1e-6)
+    /// a.add(0, 0, 1.0);
+    /// a.add(1, 1, 1e-6);
+    /// assert!(a.verified_positive_definite_above(&[0.5, 5e-7]));
+    /// assert!(!a.verified_positive_definite_above(&[0.5, 2e-6]));
+    /// assert!(!a.verified_positive_definite_within(5e-6)); // one shift for both rows
+    /// ```
+    pub fn verified_positive_definite_above(&self, f: &[f64]) -> bool {
+        let (n, b) = (self.n, self.b);
+        if n == 0
+            || f.len() != n
+            || f.iter().any(|x| !(x.is_finite() && *x >= 0.0))
+            || self.band.iter().any(|x| !x.is_finite())
+        {
+            return false;
+        }
+        let b1 = b + 1;
+        if (0..n).any(|i| self.band[i * b1] <= 0.0) {
+            return false;
+        }
+        let u = f64::EPSILON / 2.0;
+        let gamma = gamma(b + 2);
+        let underflow = 4.0 * ((b + 2) as f64).powi(3) * f64::MIN_POSITIVE;
+        let mut rounding: Vec<f64> = (0..n)
+            .map(|i| {
+                let row = (i.saturating_sub(b)..n.min(i + b + 1)).map(|j| self.get(i, j).abs()).sum::<f64>();
+                2.0 * gamma * row
+            })
+            .collect();
+        for _ in 0..2 {
+            let shift: Vec<f64> = (0..n).map(|i| ((rounding[i] + f[i]) + underflow) * (1.0 + 16.0 * u)).collect();
+            if shift.iter().any(|x| !x.is_finite()) {
+                return false;
+            }
+            let Some(error) = self.shifted_cholesky_rows(&shift, gamma) else { return false };
+            let mut enough = true;
+            for i in 0..n {
+                let needed = ((error[i] + f[i]) + underflow) * (1.0 + 16.0 * u);
+                if !needed.is_finite() {
+                    return false;
+                }
+                enough &= shift[i] > needed;
+            }
+            if enough {
+                return true;
+            }
+            rounding = error.iter().map(|e| 2.0 * e).collect();
+        }
+        false
+    }
+
+    /// Factor `fl(A - shift I)` (Cholesky on the band); if it completes,
+    /// the bound `gamma max_i (|R^T| |R| 1)_i + max |F_jj|` of
+    /// [`SymBanded::verified_positive_definite_within`], rounded upwards.
     fn shifted_cholesky_bound(&self, shift: f64, gamma: f64) -> Option<f64> {
+        let error = self.shifted_cholesky_rows(&vec![shift; self.n], gamma)?;
+        Some(error.iter().fold(0.0f64, |m, e| m.max(*e)))
+    }
+
+    /// Factor `fl(A - diag(shift))` (Cholesky on the band); if it
+    /// completes, each row's `gamma (|R^T| |R| 1)_i + |F_ii|` rounded
+    /// upwards, `F` the rounding of the shifted diagonal.
+    fn shifted_cholesky_rows(&self, shift: &[f64], gamma: f64) -> Option<Vec<f64>> {
         let (n, b) = (self.n, self.b);
         let b1 = b + 1;
         let u = f64::EPSILON / 2.0;
@@ -410,10 +482,10 @@ impl SymBanded {
         // i - d is taken, then L[i][i - d], L = R^T. Right-looking
         // (`eliminate`), like `ldl`.
         let mut c = self.band.clone();
-        let mut diag_err = 0.0f64;
+        let mut diag_err = vec![0.0f64; n];
         for i in 0..n {
-            let d = c[i * b1] - shift;
-            diag_err = diag_err.max(d.abs() * u / (1.0 - u));
+            let d = c[i * b1] - shift[i];
+            diag_err[i] = d.abs() * u / (1.0 - u);
             c[i * b1] = d;
         }
         let mut t = vec![0.0; b];
@@ -436,17 +508,20 @@ impl SymBanded {
                 colsum[i - d] += c[i * b1 + d].abs();
             }
         }
-        let mut worst = 0.0f64;
-        for i in 0..n {
-            let mut s = 0.0;
-            for d in 0..=b.min(i) {
-                s += c[i * b1 + d].abs() * colsum[i - d];
-            }
-            worst = worst.max(s);
-        }
-        // Both sums have at most 2b + 1 terms: inflate for their rounding.
-        let worst = worst * (1.0 + 4.0 * (2 * b + 3) as f64 * u);
-        Some(gamma * worst + diag_err)
+        // Both sums have at most 2b + 1 terms: inflate for their rounding,
+        // and the sum with the diagonal's error (a relative u).
+        let inflate = 1.0 + 4.0 * (2 * b + 3) as f64 * u;
+        Some(
+            (0..n)
+                .map(|i| {
+                    let mut s = 0.0;
+                    for d in 0..=b.min(i) {
+                        s += c[i * b1 + d].abs() * colsum[i - d];
+                    }
+                    (gamma * (s * inflate) + diag_err[i]) * (1.0 + 2.0 * u)
+                })
+                .collect(),
+        )
     }
 
     /// This matrix scaled by powers of two, `D A D` with `D = diag(2^-e_i)`
@@ -474,6 +549,14 @@ impl SymBanded {
     /// assert!(r >= 1e-10 && r < 1.01e-10);
     /// ```
     pub fn power_of_two_scaled(&self, err: &SymBanded) -> (SymBanded, f64) {
+        let (out, rows) = self.power_of_two_scaled_rows(err);
+        (out, rows.iter().fold(0.0f64, |m, r| m.max(*r)))
+    }
+
+    /// [`SymBanded::power_of_two_scaled`] with the row sums of `D err D`
+    /// (each inflated for its own rounding) in place of their largest: for
+    /// [`SymBanded::verified_inertia_within_rows`].
+    pub fn power_of_two_scaled_rows(&self, err: &SymBanded) -> (SymBanded, Vec<f64>) {
         assert_eq!((self.n, self.b), (err.n, err.b), "the error bound must have the matrix's pattern");
         let (n, b1) = (self.n, self.b + 1);
         let d: Vec<f64> = (0..n)
@@ -509,8 +592,9 @@ impl SymBanded {
             }
         }
         let u = f64::EPSILON / 2.0;
-        let radius = rows.iter().fold(0.0f64, |m, r| m.max(*r)) * (1.0 + 4.0 * (2 * self.b + 3) as f64 * u);
-        (out, radius)
+        let inflate = 1.0 + 4.0 * (2 * self.b + 3) as f64 * u;
+        rows.iter_mut().for_each(|r| *r *= inflate);
+        (out, rows)
     }
 
     /// The inertia `(positive, negative)` of every symmetric `A + E` with
@@ -558,8 +642,46 @@ impl SymBanded {
     /// assert_eq!(a.verified_inertia_within(0.6), None); // 0.5 could be 0
     /// ```
     pub fn verified_inertia_within(&self, radius: f64) -> Option<(usize, usize)> {
+        if !(radius.is_finite() && radius >= 0.0) {
+            return None;
+        }
+        self.verified_inertia_within_rows(&vec![radius; self.n])
+    }
+
+    /// The inertia of every symmetric `A + E` with `|x^T E x| <= sum_i
+    /// r_i x_i^2` for all `x` (`r` = `radii`; an entrywise bound on `E`
+    /// whose row sums are at most `r_i` gives this, because `|x_i x_j| <=
+    /// (x_i^2 + x_j^2)/2`), when a floating-point `L D L^T` proves it;
+    /// `None` otherwise. [`SymBanded::verified_inertia_within`] is the case
+    /// `r_i = radius`.
+    ///
+    /// The argument of [`SymBanded::verified_inertia_within`] with every
+    /// bound kept row by row: the backward error and the formation error of
+    /// `P = L |D| L^T` are entrywise `gamma_{b+2} |L| |D| |L^T|`, so
+    /// `|x^T F x| <= sum_i f_i x_i^2` with `f_i` the row sums of those
+    /// bounds plus `r_i` (and underflow), and `P ≻ diag(f)`
+    /// ([`SymBanded::verified_positive_definite_above`]) gives
+    /// `|x^T F x| < x^T G G^T x`, i.e. `||G^-1 F G^-T||_2 < 1`. Where the
+    /// growth of the factorisation sits in a few rows, this is sharper than
+    /// one shift by the largest row sum for all of them.
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// // diag(1, -1e-6): a uniform radius of 1e-5 proves nothing, but
+    /// // row radii (1e-5, 1e-7) prove the inertia (1, 1)
+    /// let mut a = SymBanded::zeros(2, 1);
+    /// a.add(0, 0, 1.0);
+    /// a.add(1, 1, -1e-6);
+    /// assert_eq!(a.verified_inertia_within(1e-5), None);
+    /// assert_eq!(a.verified_inertia_within_rows(&[1e-5, 1e-7]), Some((1, 1)));
+    /// ```
+    pub fn verified_inertia_within_rows(&self, radii: &[f64]) -> Option<(usize, usize)> {
         let (n, b) = (self.n, self.b);
-        if n == 0 || !(radius.is_finite() && radius >= 0.0) || self.band.iter().any(|x| !x.is_finite()) {
+        if n == 0
+            || radii.len() != n
+            || radii.iter().any(|r| !(r.is_finite() && *r >= 0.0))
+            || self.band.iter().any(|x| !x.is_finite())
+        {
             return None;
         }
         let b1 = b + 1;
@@ -579,36 +701,35 @@ impl SymBanded {
             max_lrow = max_lrow.max(r);
         }
         let max_d = dg.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-        let mut max_ldl = 0.0f64;
+        // The sums below: at most b + 1 terms each, nested, with two
+        // products, so a relative error below gamma_{2b+2}, inflated for by
+        // this factor; underflow in the products adds at most 2^-1074 * 2
+        // (b + 1 + max_lrow) to a row's sum (counted below).
+        let inflate = 1.0 + 4.0 * (2 * b + 3) as f64 * u;
+        // Underflow (the docs of `verified_inertia_within`): per entry at
+        // most 2^-1074 (b + 1 + max_lrow + max_d) for the factorisation and
+        // as much for P's formation, 2b + 1 entries a row; one more such row
+        // covers the row sum's own underflow (times gamma < 1/2), and one
+        // subnormal step this product's own rounding.
+        let underflow = 5e-324 * (2 * b + 2) as f64 * ((b + 1) as f64 + max_lrow + max_d) * inflate + 5e-324;
+        let mut shift = Vec::with_capacity(n);
         for i in 0..n {
             let mut r = 0.0;
             for d in 0..=b.min(i) {
                 r += l[i * b1 + d].abs() * (dg[i - d].abs() * colsum[i - d]);
             }
-            max_ldl = max_ldl.max(r);
-        }
-        // The sums above: at most b + 1 terms each, nested, with two
-        // products, so a relative error below gamma_{2b+2}, inflated for by
-        // the factor below; underflow in the products adds at most
-        // 2^-1074 * 2 (b + 1 + max_lrow) to a row's sum (counted below).
-        let inflate = 1.0 + 4.0 * (2 * b + 3) as f64 * u;
-        let max_ldl = max_ldl * inflate;
-        // Underflow (the docs above): per entry at most 2^-1074 (b + 1 +
-        // max_lrow + max_d) for the factorisation and as much for P's
-        // formation, 2b + 1 entries a row; one more such row covers
-        // max_ldl's underflow (times gamma < 1/2), and one subnormal step
-        // this product's own rounding.
-        let underflow = 5e-324 * (2 * b + 2) as f64 * ((b + 1) as f64 + max_lrow + max_d) * inflate + 5e-324;
-        // The a-priori bound of the backward error, and as much for P's
-        // formation; each rounded upwards (a relative u, or one subnormal
-        // step).
-        let per = (gamma(b + 2) * max_ldl + underflow) * (1.0 + 4.0 * u) + 5e-324;
-        let total = ((per + radius) + per) * (1.0 + 4.0 * u);
-        if !total.is_finite() {
-            return None;
+            // The a-priori bound of the backward error in this row, and as
+            // much for P's formation, plus the row's radius; each rounded
+            // upwards (a relative u, or one subnormal step).
+            let per = (gamma(b + 2) * (r * inflate) + underflow) * (1.0 + 4.0 * u) + 5e-324;
+            let f = ((per + radii[i]) + per) * (1.0 + 4.0 * u);
+            if !f.is_finite() {
+                return None;
+            }
+            shift.push(f);
         }
         let p = Self::abs_ldl(&l, &dg, b);
-        if !p.verified_positive_definite_within(total) {
+        if !p.verified_positive_definite_above(&shift) {
             return None;
         }
         let pos = dg.iter().filter(|d| **d > 0.0).count();
@@ -960,6 +1081,48 @@ mod tests {
                     assert_eq!(a.verified_inertia_within(0.5 * mu), Some((pos, n - pos)), "n {n} b {b}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn row_by_row_bounds_are_sound_and_sharp_against_dense_eigenvalues() {
+        // Row weights w_i > 0 (spread over 2^-20..2^20) and t* the smallest
+        // |eigenvalue| of W^-1/2 A W^-1/2 (nalgebra, dense): every A + E with
+        // |x^T E x| <= t sum w_i x_i^2 keeps A's inertia for t < t*, and
+        // A ± t diag(w) is singular for some t <= t* (the eigenvalue of the
+        // scaled matrix nearest 0 moves to 0 along ±diag(w)). So radii
+        // t* w / 2 prove the inertia, and radii t* w (1 + 1e-6) prove
+        // nothing. The same for the definite test: A ≻ t diag(w) iff t <
+        // lambda_min(W^-1/2 A W^-1/2).
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(12);
+        for (n, b) in [(10, 1), (60, 4), (300, 12)] {
+            let w: Vec<f64> = (0..n).map(|_| 2f64.powf(rng.random_range(-20.0..20.0))).collect();
+            let scaled = |a: &SymBanded| {
+                let d = a.to_dense();
+                nalgebra::DMatrix::from_fn(n, n, |i, j| d[(i, j)] / (w[i] * w[j]).sqrt())
+            };
+            let a = random_indefinite(&mut rng, n, b, 0);
+            let eig = scaled(&a).symmetric_eigenvalues();
+            let t = eig.iter().fold(f64::INFINITY, |m, x| m.min(x.abs()));
+            let pos = eig.iter().filter(|x| **x > 0.0).count();
+            let radii = |f: f64| w.iter().map(|wi| wi * t * f).collect::<Vec<f64>>();
+            assert_eq!(a.verified_inertia_within_rows(&radii(0.5)), Some((pos, n - pos)), "n {n} b {b}");
+            assert_eq!(a.verified_inertia_within_rows(&radii(1.0 + 1e-6)), None, "n {n} b {b}");
+            // definite: A = B B^T-like, its lambda_min in the w metric
+            let mut spd = SymBanded::zeros(n, b);
+            for i in 0..n {
+                for j in i.saturating_sub(b)..=i {
+                    let v = if i == j { 2.0 * b as f64 + 1.0 } else { rng.random_range(-1.0..1.0) };
+                    spd.add(i, j, v * (w[i] * w[j]).sqrt());
+                }
+            }
+            let lmin = scaled(&spd).symmetric_eigenvalues().min();
+            assert!(lmin > 0.0);
+            let f = |x: f64| w.iter().map(|wi| wi * lmin * x).collect::<Vec<f64>>();
+            assert!(spd.verified_positive_definite_above(&f(0.5)), "n {n} b {b}");
+            assert!(spd.verified_positive_definite_above(&f(1.0 - 1e-6)), "n {n} b {b}");
+            assert!(!spd.verified_positive_definite_above(&f(1.0 + 1e-6)), "n {n} b {b}");
         }
     }
 }

@@ -330,9 +330,14 @@ impl VerifiedPencil {
             mirror(&mut p);
             // |G* K' G*^T - fl(G_f K' G_f^T)|: the rounding of G, then the two
             // products (inner dimension r each), then the sum with s S_f.
-            // (plus, per entry, 2r + 4 operations' worth of underflow)
+            // Plus, per entry, 2r + 4 operations' worth of underflow, the
+            // inner product's carried through the outer one: an underflowed
+            // (K' G^T)_aj is multiplied by g_ia, and sum_a |g_ia| <= sum_j
+            // d_j (found in review, 2026-11-27: the underflow was charged
+            // unamplified).
+            let amplify = (1.0 + d.iter().sum::<f64>()) * (1.0 + 4.0 * (r as f64 + 1.0) * U);
             let t_error = k_hat * (2.0 * g_hat * e_hat + e_hat * e_hat + gamma(2 * r + 2) * g_hat * g_hat)
-                + ((2 * r + 4) * n) as f64 * f64::MIN_POSITIVE;
+                + ((2 * r + 4) * n) as f64 * f64::MIN_POSITIVE * amplify;
             let p_norm = frobenius_up(&p);
             let p_radius = (s_error + t_error + U * p_norm) * (1.0 + 1e-6);
             return Self::finish(system, p, p_radius, p_norm, multipliers);

@@ -212,11 +212,9 @@ impl Block {
         out
     }
 
-    /// Whether `P` is positive definite (proved for the floating-point
-    /// pentadiagonal congruent matrix; false when unsure).
+    /// Whether `P` is positive definite ([`congruent_form_is_definite`]).
     fn definite(&self, choice: &Choice) -> bool {
-        let c = self.c(choice);
-        self.congruent_p(&c, choice.energy).verified_positive_definite_within(0.0)
+        congruent_form_is_definite(&self.lap, &self.c(choice), choice.energy)
     }
 
     /// `lambda_min(P)`, from below, to about 1e-10 of the bracket: by
@@ -363,6 +361,18 @@ impl Block {
         // Each g must be exact (k2 is, t is a power of two): a quotient
         // below the normal range is rounded, so nothing is claimed then.
         if g.iter().any(|x| !(x.is_finite() && x.abs() >= f64::MIN_POSITIVE)) {
+            return None;
+        }
+        // Haynsworth's count needs the stored L = -Delta ≻ 0: proved (a
+        // tridiagonal verified Cholesky), not assumed.
+        let mut minus_delta = SymBanded::zeros(n, 1);
+        for j in 0..n {
+            minus_delta.add(j, j, -self.lap.diag[j]);
+            if j > 0 {
+                minus_delta.add(j, j - 1, -self.lap.off[j - 1]);
+            }
+        }
+        if !minus_delta.verified_positive_definite_within(0.0) {
             return None;
         }
         let lifted = g.len();
@@ -995,8 +1005,62 @@ fn analyse_normalised(
     Ok(analysis)
 }
 
+/// Whether `P = -eps Delta^-1 + D_c` (`eps` 0 or ±1) is positive
+/// definite, proved for the exact congruent `Delta P Delta = -eps Delta +
+/// Delta D_c Delta` (pentadiagonal, the inertia of `P`) of the stored `c`
+/// and `Delta`: each entry's rounding is bounded (three products of three
+/// factors and a sum of four terms: `gamma_5` of the terms' magnitudes; a
+/// product whose partial product underflows before its last factor proves
+/// nothing), and the verified inertia test of `fluid::banded::Bounded`
+/// decides. False when unsure. Until 2026-11-27 the test was run on the
+/// matrix as computed, with no radius, which is not the stated claim:
+/// review found a 2 x 2 case that it proved and exact arithmetic refutes
+/// (the test below).
+fn congruent_form_is_definite(t: &Tridiagonal, c: &[f64], eps: f64) -> bool {
+    let n = t.len();
+    if n == 0 || c.len() != n || !(eps == 0.0 || eps.abs() == 1.0) {
+        return false;
+    }
+    let mut b = Bounded::new(n, 2);
+    for i in 0..n {
+        for j in i.saturating_sub(2)..=i {
+            let first = -eps * t.get(i, j); // eps is 0 or ±1: exact
+            let (mut v, mut scale) = (first, first.abs());
+            for k in j.saturating_sub(1)..=(i + 1).min(n - 1) {
+                let Some(p) = fluid::banded::product_without_early_underflow(&[t.get(i, k), c[k], t.get(k, j)]) else {
+                    return false;
+                };
+                v += p;
+                scale += p.abs();
+            }
+            if !(v.is_finite() && scale.is_finite()) {
+                return false;
+            }
+            b.set_with_error(i, j, v, scale, 5);
+        }
+    }
+    b.inertia() == Some((n, 0))
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_definiteness_of_p_is_proved_for_the_exact_congruent_matrix() {
+        // Found in review (2026-11-27): the float test of the computed
+        // Delta P Delta said definite; exact arithmetic says indefinite.
+        let t = Tridiagonal { diag: vec![-34.106100004537396, -2.1503007814110386], off: vec![0.5492700821132699] };
+        let c = [-0.029321712938786146, 0.005637516160197854];
+        let q = |x: f64| exact::Rational::from_float(x).unwrap();
+        let delta = exact::Matrix::from_fn(2, 2, |i, j| q(t.get(i, j)));
+        let dc = exact::Matrix::from_fn(2, 2, |i, j| if i == j { q(c[i]) } else { q(0.0) });
+        let exact_p = delta.mul(&dc).mul(&delta).sub(&delta);
+        let inertia = exact_p.inertia();
+        assert_eq!((inertia.positive, inertia.negative), (1, 1));
+        assert!(!congruent_form_is_definite(&t, &c, 1.0));
+        // and a clearly definite one is proved: c = 1, eps = 0 gives Delta^2
+        assert!(congruent_form_is_definite(&t, &[1.0, 1.0], 0.0));
+    }
+
     use super::*;
     use nalgebra::DMatrix;
 

@@ -363,21 +363,22 @@ pub(super) fn prove_remaining_modes(
 /// the narrowest margin, so the ladder starts at its bottom. Above, only the
 /// banded check runs, and the margin it can prove grows like `h^-2`
 /// (`walls_check` docs), so rungs that cannot succeed are skipped: the
-/// ladder starts at `9e-6` up to 4095 unknowns and one rung higher per
+/// ladder starts at `3e-7` up to 2047 unknowns and one rung higher per
 /// doubling beyond. Measured for `U = y^3 + y/2` (`s = +1`) and the
 /// `channel-sin-walls` fixture (`s = -1`), 32 modes each, with
-/// `walls_margins`: at ny = 2048 and 4096 the rungs `1e-8` and `3e-7` never
-/// succeed (2026-11-27, the lifting of that day; before it, at 4096 modes 2
-/// to 32 of the cubic profile needed `2.7e-4` or `8.1e-3`). The claim is
-/// the same kind either way (a verified bound, or none); only its width can
-/// differ, and the widest rung tried does not change.
+/// `walls_margins` and the row-by-row bounds of the inertia test
+/// (2026-11-27, second session): at ny = 2048, 10 and 5 of the 32 modes
+/// prove `3e-7` and none `1e-8`; at ny = 4096 none proves `3e-7`, 9 and 3
+/// prove `9e-6`. The claim is the same kind either way (a verified bound,
+/// or none); only its width can differ, and the widest rung tried does not
+/// change.
 pub fn first_rung(unknowns: usize) -> usize {
     let small = crate::modes::DENSE_FALLBACK_UNKNOWNS;
     if unknowns <= small {
         return 0;
     }
-    let mut rung = 2;
-    let mut size = 4 * small + 3;
+    let mut rung = 1;
+    let mut size = 2 * small + 1;
     while unknowns > size && rung + 1 < VERIFY_ATTEMPTS {
         rung += 1;
         size = 2 * size + 1;
@@ -508,9 +509,9 @@ mod tests {
     #[test]
     fn the_ladder_skips_the_rungs_the_banded_check_never_proves_on_large_grids() {
         // first_rung's rule: the bottom up to the dense fallback's 1023
-        // unknowns, `9e-6` (rung 2) up to 4 * 1023 + 3 = 4095, then one rung
-        // per doubling (8191, 16383), never past the widest rung (4).
-        let cases = [(1, 0), (1023, 0), (1024, 2), (2047, 2), (4095, 2), (4096, 3), (8191, 3), (8192, 4)];
+        // unknowns, `3e-7` (rung 1) up to 2 * 1023 + 1 = 2047, then one rung
+        // per doubling (4095, 8191), never past the widest rung (4).
+        let cases = [(1, 0), (1023, 0), (1024, 1), (2047, 1), (2048, 2), (4095, 2), (4096, 3), (8191, 3), (8192, 4)];
         for (unknowns, rung) in cases {
             assert_eq!(first_rung(unknowns), rung, "{unknowns} unknowns");
         }
