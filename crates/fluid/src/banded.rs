@@ -147,8 +147,9 @@ impl Bounded {
     }
 
     /// The inertia proved for every matrix within the entrywise bound
-    /// ([`SymBanded::power_of_two_scaled`], then
-    /// [`SymBanded::verified_inertia_within`]).
+    /// ([`SymBanded::power_of_two_scaled_rows`], then
+    /// [`SymBanded::verified_inertia_within_rows`]: the bound's row sums,
+    /// row by row).
     pub fn inertia(&self) -> Option<(usize, usize)> {
         let (s, r) = self.a.power_of_two_scaled_rows(self.err.as_ref()?);
         s.verified_inertia_within_rows(&r)
@@ -508,8 +509,17 @@ impl SymBanded {
                 colsum[i - d] += c[i * b1 + d].abs();
             }
         }
+        // A quotient l_ij = fl(s / r_jj) that underflows is off by up to
+        // 2^-1075, which the entry (i, j) of R^T R carries times r_jj: at
+        // most (b + 1) 2^-1074 max r_jj in a row, counting the entries in
+        // both rows they touch (found in review, 2026-11-27: harmless,
+        // because row j's own shift covers it many times over, but not
+        // written down before).
+        let max_r = (0..n).fold(0.0f64, |m, k| m.max(c[k * b1]));
+        let quotient_underflow = (b + 1) as f64 * 5e-324 * max_r * (1.0 + 2.0 * u) + 5e-324;
         // Both sums have at most 2b + 1 terms: inflate for their rounding,
-        // and the sum with the diagonal's error (a relative u).
+        // and the sums with the diagonal's error and the underflow (a
+        // relative u each).
         let inflate = 1.0 + 4.0 * (2 * b + 3) as f64 * u;
         Some(
             (0..n)
@@ -518,7 +528,7 @@ impl SymBanded {
                     for d in 0..=b.min(i) {
                         s += c[i * b1 + d].abs() * colsum[i - d];
                     }
-                    (gamma * (s * inflate) + diag_err[i]) * (1.0 + 2.0 * u)
+                    ((gamma * (s * inflate) + diag_err[i]) + quotient_underflow) * (1.0 + 4.0 * u)
                 })
                 .collect(),
         )
@@ -556,6 +566,19 @@ impl SymBanded {
     /// [`SymBanded::power_of_two_scaled`] with the row sums of `D err D`
     /// (each inflated for its own rounding) in place of their largest: for
     /// [`SymBanded::verified_inertia_within_rows`].
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// let mut a = SymBanded::zeros(2, 1); // diag(4, 1/4)
+    /// a.add(0, 0, 4.0); a.add(1, 1, 0.25);
+    /// let mut err = SymBanded::zeros(2, 1);
+    /// err.add(0, 0, 1e-10); err.add(1, 1, 1e-10);
+    /// let (s, rows) = a.power_of_two_scaled_rows(&err);
+    /// // scaled by 1/2 and 2: diag(1, 1), the errors by 1/4 and 4
+    /// assert_eq!((s.get(0, 0), s.get(1, 1)), (1.0, 1.0));
+    /// assert!(rows[0] >= 0.25e-10 && rows[0] < 0.2501e-10);
+    /// assert!(rows[1] >= 4e-10 && rows[1] < 4.001e-10);
+    /// ```
     pub fn power_of_two_scaled_rows(&self, err: &SymBanded) -> (SymBanded, Vec<f64>) {
         assert_eq!((self.n, self.b), (err.n, err.b), "the error bound must have the matrix's pattern");
         let (n, b1) = (self.n, self.b + 1);
