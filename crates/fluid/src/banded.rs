@@ -400,6 +400,16 @@ impl SymBanded {
         false
     }
 
+    /// Whether this matrix is nonempty and finite and `rows` holds one
+    /// finite nonnegative bound per row: the inputs the row-by-row tests
+    /// accept.
+    fn finite_with_row_bounds(&self, rows: &[f64]) -> bool {
+        self.n > 0
+            && rows.len() == self.n
+            && rows.iter().all(|r| r.is_finite() && *r >= 0.0)
+            && self.band.iter().all(|x| x.is_finite())
+    }
+
     /// `A ≻ diag(f)`, `A` this matrix and `f >= 0`, proved by a
     /// floating-point Cholesky factorisation of `fl(A - diag(s))` with the
     /// rounding bounded row by row: the argument of
@@ -422,11 +432,7 @@ impl SymBanded {
     /// ```
     pub fn verified_positive_definite_above(&self, f: &[f64]) -> bool {
         let (n, b) = (self.n, self.b);
-        if n == 0
-            || f.len() != n
-            || f.iter().any(|x| !(x.is_finite() && *x >= 0.0))
-            || self.band.iter().any(|x| !x.is_finite())
-        {
+        if !self.finite_with_row_bounds(f) {
             return false;
         }
         let b1 = b + 1;
@@ -700,11 +706,7 @@ impl SymBanded {
     /// ```
     pub fn verified_inertia_within_rows(&self, radii: &[f64]) -> Option<(usize, usize)> {
         let (n, b) = (self.n, self.b);
-        if n == 0
-            || radii.len() != n
-            || radii.iter().any(|r| !(r.is_finite() && *r >= 0.0))
-            || self.band.iter().any(|x| !x.is_finite())
-        {
+        if !self.finite_with_row_bounds(radii) {
             return None;
         }
         let b1 = b + 1;

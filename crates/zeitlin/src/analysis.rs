@@ -166,6 +166,9 @@ struct Block {
     d_xi: Vec<Vec<f64>>,
     /// Entries whose two eigenvalues coincide (`d omega = 0`).
     degenerate: Vec<bool>,
+    /// `-Delta ≻ 0` proved (a tridiagonal verified Cholesky), once per
+    /// block: Haynsworth's count in [`Block::lifted`] needs it.
+    laplacian_definite: bool,
 }
 
 impl Block {
@@ -363,16 +366,9 @@ impl Block {
         if g.iter().any(|x| !(x.is_finite() && x.abs() >= f64::MIN_POSITIVE)) {
             return None;
         }
-        // Haynsworth's count needs the stored L = -Delta ≻ 0: proved (a
-        // tridiagonal verified Cholesky), not assumed.
-        let mut minus_delta = SymBanded::zeros(n, 1);
-        for j in 0..n {
-            minus_delta.add(j, j, -self.lap.diag[j]);
-            if j > 0 {
-                minus_delta.add(j, j - 1, -self.lap.off[j - 1]);
-            }
-        }
-        if !minus_delta.verified_positive_definite_within(0.0) {
+        // Haynsworth's count needs the stored L = -Delta ≻ 0: proved once
+        // per block, not assumed.
+        if !self.laplacian_definite {
             return None;
         }
         let lifted = g.len();
@@ -698,12 +694,13 @@ fn analyse_normalised(
             let degenerate = d_omega.iter().map(|x| x.abs() <= 1e-12 * scale_omega).collect();
             Ok(Block {
                 m,
-                lap,
                 factor,
                 d_pi: d(&pi),
                 d_omega,
                 d_xi: problem.noise.iter().map(|x| d(x)).collect(),
                 degenerate,
+                laplacian_definite: minus_laplacian_is_definite(&lap),
+                lap,
             })
         })
         .collect::<Result<_, ZeitlinError>>()?;
@@ -1005,6 +1002,20 @@ fn analyse_normalised(
     Ok(analysis)
 }
 
+/// Whether `-Delta ≻ 0` is proved for the stored `Delta` (a tridiagonal
+/// verified Cholesky).
+fn minus_laplacian_is_definite(t: &Tridiagonal) -> bool {
+    let n = t.len();
+    let mut minus = SymBanded::zeros(n, 1);
+    for j in 0..n {
+        minus.add(j, j, -t.diag[j]);
+        if j > 0 {
+            minus.add(j, j - 1, -t.off[j - 1]);
+        }
+    }
+    minus.verified_positive_definite_within(0.0)
+}
+
 /// Whether `P = -eps Delta^-1 + D_c` (`eps` 0 or ±1) is positive
 /// definite, proved for the exact congruent `Delta P Delta = -eps Delta +
 /// Delta D_c Delta` (pentadiagonal, the inertia of `P`) of the stored `c`
@@ -1072,11 +1083,12 @@ mod tests {
         Block {
             m,
             factor: lap.factor().unwrap(),
-            lap,
             d_pi: vec![0.0; len],
             d_omega: vec![1.0; len],
             d_xi: d,
             degenerate: vec![false; len],
+            laplacian_definite: minus_laplacian_is_definite(&lap),
+            lap,
         }
     }
 

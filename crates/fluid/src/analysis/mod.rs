@@ -537,8 +537,9 @@ mod tests {
             k != 4.0 && bar >= 0.5
         });
         let mut tried = tried.into_inner().unwrap();
-        tried.sort_by_key(|t| t.0); // stable: each mode's tries in order
-                                    // the continued margins: past the widest rung 8.1e-3, 0.243 and 7.29
+        // stable: each mode's tries stay in order
+        tried.sort_by_key(|t| t.0);
+        // the continued margins: past the widest rung 8.1e-3, 0.243 and 7.29
         let m5 = VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH.powi(VERIFY_ATTEMPTS as i32);
         let m6 = m5 * VERIFY_MARGIN_GROWTH;
         assert!((m5 - 0.243).abs() < 1e-12 && (m6 - 7.29).abs() < 1e-12);
