@@ -210,3 +210,144 @@ fn tampered_fluid_certificates_fail_check() {
         assert_eq!(out.status.code(), Some(1), "{what}: {}", stderr(&out));
     }
 }
+
+/// `verify simulate SPEC --out DIR ARGS...` into a fresh directory; the
+/// output and the directory.
+fn simulate_fluid(spec: &std::path::Path, tag: &str, extra: &[&str]) -> (Output, std::path::PathBuf) {
+    let out = std::env::temp_dir().join(format!("verify-fluid-sim-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let mut args = vec!["simulate", spec.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    (verify(&args), out)
+}
+
+fn column(report: &Value, key: &str) -> Vec<f64> {
+    report[key].as_array().unwrap_or_else(|| panic!("{key}")).iter().map(|x| x.as_f64().unwrap()).collect()
+}
+
+#[test]
+fn simulate_sets_a_fluid_modes_monte_carlo_and_exact_moments_beside_its_certified_growth() {
+    // Near Arnold's boundary (fixture arnold-boundary-sin: U = sin y, walls
+    // at -3 and 3, noise 0.1 y, x-period 7.3): the gravest mode's Sigma^2 is
+    // 0.2626, 26 times the paper's 0.01 (docs/errata.md; the dense
+    // generalised eigenvalue at ny = 64 in tests/fluid.rs).
+    let spec = fixture_path("fluids/arnold-boundary-sin.json");
+    let args = ["--ny", "32", "--paths", "400", "--t-end", "2", "--outputs", "10"];
+    let (out, dir) = simulate_fluid(&spec, "arnold", &args);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let json = dir.join("fluid-arnold-boundary-sin-m1.json");
+    for suffix in ["m1.csv", "m1-growth.png", "m1-growth.svg"] {
+        assert!(dir.join(format!("fluid-arnold-boundary-sin-{suffix}")).is_file(), "{suffix}");
+    }
+    let text = std::fs::read_to_string(&json).unwrap();
+    let report: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(report["m"], 1, "the default mode is the one with the largest certified growth");
+    let certified = report["sigma2_mode"].as_f64().unwrap();
+    assert_eq!(report["sigma2_mode_verified"], true);
+    assert!((certified - 0.2626).abs() < 1e-4, "{certified}");
+    // From the top eigenvector of (Q, V), d E V / dt / V = Sigma_k^2 at t = 0
+    // (Ito, the pointwise noise on the grid being the coadjoint action).
+    let rate = report["initial_rate"].as_f64().unwrap();
+    assert!(rate <= certified && rate > certified * (1.0 - 1e-6), "{rate} vs {certified}");
+    let (times, exact, mean, se, bound) = (
+        column(&report, "times"),
+        column(&report, "exact"),
+        column(&report, "monte_carlo_mean"),
+        column(&report, "monte_carlo_std_error"),
+        column(&report, "certified_bound"),
+    );
+    assert_eq!(times.len(), 10);
+    assert!((times[9] - 2.0).abs() < 1e-12);
+    for i in 0..times.len() {
+        assert!((bound[i] - (certified * times[i]).exp()).abs() < 1e-12 * bound[i]);
+        assert!(
+            exact[i] <= bound[i] * (1.0 + 1e-9),
+            "t = {}: exact {} above the bound {}",
+            times[i],
+            exact[i],
+            bound[i]
+        );
+        // the Strang splitting's bias is O(dt^2): 4 standard errors and 1e-3
+        assert!((mean[i] - exact[i]).abs() <= 4.0 * se[i] + 1e-3 * exact[i], "t = {}", times[i]);
+    }
+    // ... and the paper's exp(0.01 t) is left far behind (errata: E V(2)/V(0)
+    // = 1.515 at ny = 64, against e^0.02 = 1.020).
+    assert!(exact[9] > 1.4 && exact[9] > 1.3 * (0.02f64).exp(), "{}", exact[9]);
+    assert!(report["summary"]["paper_bound_exceeded_at"].as_f64().is_some());
+    assert_eq!(report["summary"]["monte_carlo_within_4_se_of_exact"], 10);
+    // Two runs on one directory: the same numbers, byte for byte.
+    let (again, _) = simulate_fluid(&spec, "arnold", &args);
+    assert_eq!(again.status.code(), Some(0));
+    assert_eq!(std::fs::read_to_string(&json).unwrap(), text);
+}
+
+#[test]
+fn simulate_runs_the_compressible_generators_discrete_sde() {
+    // Compatible potential noise (fixture compressible-compatible-noise) at
+    // ny = 16, the gravest mode by default. From the top eigenvector of
+    // (Q_B, K), the discrete SDE's own rate lambda_B, the exact second moment
+    // grows no faster than exp(lambda_B t) from any start
+    // (fluid::barotropic_sde; tests/barotropic.rs).
+    let spec = fixture_path("fluids/compressible-compatible-noise.json");
+    let (out, dir) = simulate_fluid(&spec, "compressible", &["--paths", "300", "--t-end", "1", "--outputs", "5"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let report: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("fluid-compressible-compatible-noise-m1.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        (report["m"].as_u64(), report["ny"].as_u64(), report["model"].as_str()),
+        (Some(1), Some(16), Some("compressible"))
+    );
+    let rate = report["initial_rate"].as_f64().unwrap();
+    let (times, exact, mean, se) = (
+        column(&report, "times"),
+        column(&report, "exact"),
+        column(&report, "monte_carlo_mean"),
+        column(&report, "monte_carlo_std_error"),
+    );
+    for i in 0..times.len() {
+        assert!(exact[i] > 1.0 && exact[i] <= (rate * times[i]).exp() * (1.0 + 1e-9), "t = {}", times[i]);
+        assert!((mean[i] - exact[i]).abs() <= 4.0 * se[i] + 1e-3 * exact[i], "t = {}", times[i]);
+    }
+}
+
+#[test]
+fn simulate_refuses_bad_fluid_options_by_name() {
+    let spec = fixture_path("fluids/arnold-boundary-sin.json");
+    let cases: [(&[&str], &str); 13] = [
+        (&["--mode", "0"], "--mode"),
+        (&["--mode", "5"], "--mode"),
+        (&["--ny", "8"], "--ny"),
+        (&["--ny", "4096"], "--ny"),
+        (&["--shard", "0/2"], "--shard"),
+        (&["--compare-isotropic"], "--compare-isotropic"),
+        (&["--delta", "1e-3"], "--delta"),
+        (&["--paths", "1"], "--paths"),
+        (&["--dt", "1e-308", "--t-end", "1e308"], "--t-end/--dt"),
+        (&["--t-end", "0.001"], "--t-end"),
+        (&["--dt", "-1"], "--dt"),
+        (&["--dt", "NaN"], "--dt"),
+        (&["--paths", "10000000", "--t-end", "100"], "--paths/--dt/--t-end"),
+    ];
+    for (i, (args, flag)) in cases.iter().enumerate() {
+        let (out, _) = simulate_fluid(&spec, &format!("bad{i}"), args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(flag), "{args:?}: {}", stderr(&out));
+    }
+    // No certified growth to set a simulation beside.
+    let (out, _) = simulate_fluid(&fixture_path("fluids/sin2y-unstable.json"), "unstable", &[]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("linearly_unstable"), "{}", stderr(&out));
+    // The fluid options on a finite-dimensional spec.
+    let (out, _) = simulate_fluid(&fixture_path("rigid-body-major-axis.json"), "finite", &["--mode", "1"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--mode/--ny"), "{}", stderr(&out));
+    // A name holding `../` writes inside --out only.
+    let named = temp_file("escape.json", &spec_with(|v| v["name"] = "../../escape".into()));
+    let (out, dir) = simulate_fluid(&named, "escape", &["--paths", "10", "--t-end", "0.1", "--ny", "16"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let written: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(!written.is_empty() && written.iter().all(|f| !f.to_string_lossy().contains('/')), "{written:?}");
+    assert!(!dir.join("../../escape-m1.json").exists() && !dir.join("../escape-m1.json").exists());
+}

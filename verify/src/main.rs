@@ -32,6 +32,7 @@ use std::process::ExitCode;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod fluid_plots;
+mod fluid_simulate;
 mod merge_cmd;
 mod messages;
 mod npz_out;

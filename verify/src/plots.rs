@@ -59,6 +59,8 @@ pub struct GrowthChart<'a> {
     pub bound: Option<(String, Vec<f64>)>,
     /// The certified stopping time, if finite.
     pub stopping_time: Option<f64>,
+    /// The growth axis's label.
+    pub y_label: &'a str,
 }
 
 /// How a legend entry is drawn.
@@ -343,7 +345,7 @@ where
     chart
         .configure_mesh()
         .x_desc("t")
-        .y_desc("E|dmu_t|^2 / |dmu_0|^2")
+        .y_desc(c.y_label)
         .x_label_formatter(&linear_ticks(t_max))
         .y_label_formatter(&log_ticks)
         .label_style(("sans-serif", 14))
@@ -618,6 +620,7 @@ mod tests {
             band: Some(("band".into(), data.iter().map(|x| x * 0.9).collect(), data.iter().map(|x| x * 1.1).collect())),
             bound: Some(("bound".into(), bound)),
             stopping_time: Some(17.0),
+            y_label: "E|dmu_t|^2 / |dmu_0|^2",
         };
         let mut svg = String::new();
         draw_growth(SVGBackend::with_string(&mut svg, (1000, 860)).into_drawing_area(), &chart).unwrap();
@@ -680,6 +683,7 @@ mod tests {
             band: None,
             bound: Some(("b".into(), vec![1.0, f64::MAX, f64::INFINITY])),
             stopping_time: None,
+            y_label: "E|dmu_t|^2 / |dmu_0|^2",
         };
         let draw = |c: &GrowthChart| {
             let mut svg = String::new();

@@ -15,9 +15,9 @@ use std::path::PathBuf;
 pub struct SimulateArgs {
     /// The spec (JSON).
     pub spec: PathBuf,
-    /// Number of paths.
-    #[arg(long, default_value_t = 10_000)]
-    pub paths: usize,
+    /// Number of paths (default 10 000; 1 000 for a fluid spec).
+    #[arg(long)]
+    pub paths: Option<usize>,
     /// Time step.
     #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
     pub dt: f64,
@@ -48,6 +48,15 @@ pub struct SimulateArgs {
     /// Threshold eps on |dmu_t|_P^2 (default: the spec's stopping epsilon, else 0.1).
     #[arg(long, allow_negative_numbers = true)]
     pub epsilon: Option<f64>,
+    /// Fluid specs: the x-mode to simulate (default: the one with the
+    /// largest certified growth; the gravest for the compressible model).
+    #[arg(long)]
+    pub mode: Option<usize>,
+    /// Fluid specs: the y-grid of the simulated SDE, 16 to 512 (default: the
+    /// spec's ny, at most 32; 16 for the compressible model). The growth it
+    /// is set beside is certified on the same grid.
+    #[arg(long)]
+    pub ny: Option<usize>,
     /// Output directory.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
@@ -184,11 +193,12 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let text =
         std::fs::read_to_string(&args.spec).map_err(|e| bad(format!("{}: cannot read: {e}", args.spec.display())))?;
     if serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| spec::is_fluid_spec(&v)) {
-        return Err(bad(format!(
-            "{}: $.fluid: `simulate` runs finite-dimensional specs; a fluid certificate's growth is checked against a Monte Carlo of the discretised SDE in tests/fluid.rs (fluid::simulate::ModeSde)",
-            args.spec.display()
-        )));
+        return crate::fluid_simulate::run(args, &text);
     }
+    if args.mode.is_some() || args.ny.is_some() {
+        return Err(bad("--mode/--ny: for fluid specs only".into()));
+    }
+    let paths = args.paths.unwrap_or(10_000);
     let spec = spec::parse_spec(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let scheme = Scheme::from_name(&args.scheme)
         .ok_or_else(|| bad(format!("--scheme: '{}' is not 'lie' or 'heun'", excerpt(&args.scheme))))?;
@@ -202,7 +212,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         None => None,
     };
     let settings = StudySettings {
-        paths: args.paths,
+        paths,
         dt: args.dt,
         t_end: args.t_end,
         outputs: args.outputs,
@@ -280,7 +290,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let file_stem = file_stem_noted(&spec.name);
     let (index, count) = shard.unwrap_or((0, 1));
     let sums = if args.merge.is_empty() {
-        let shard_paths = simulate::block_paths(args.paths, &simulate::shard_blocks(args.paths, index, count)).len();
+        let shard_paths = simulate::block_paths(paths, &simulate::shard_blocks(paths, index, count)).len();
         let bar =
             crate::progress_bar(shard_paths as u64 * prepared.ensembles(), "{bar:40} {pos}/{len} paths ({eta} left)");
         let tick = |k: u64| {
@@ -352,7 +362,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             .ok_or_else(|| bad("--compare-isotropic: the spec has no noise to compare with".into()))?;
         let model = simulate::Model::new(&iso);
         let target = simulate::Target::Nonlinear { model: &model, scheme, mu0: prepared.mu0.clone() };
-        let bar = crate::progress_bar(args.paths as u64, "{bar:40} {pos}/{len} paths, isotropic noise ({eta} left)");
+        let bar = crate::progress_bar(paths as u64, "{bar:40} {pos}/{len} paths, isotropic noise ({eta} left)");
         let tick = |k: u64| {
             if let Some(b) = &bar {
                 b.inc(k)
@@ -370,7 +380,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     write_density(
         &dir.join(format!("{file_stem}-density")),
         &DensityChart {
-            title: format!("{name}: density of {observable_name} ({} paths, {})", args.paths, scheme.as_str()),
+            title: format!("{name}: density of {observable_name} ({} paths, {})", paths, scheme.as_str()),
             observable: observable_name,
             times,
             histogram: &nonlinear.histogram,
@@ -414,6 +424,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
                     )
                 }),
                 stopping_time,
+                y_label: "E|dmu_t|^2 / |dmu_0|^2",
             },
         )
         .map_err(io)?;
@@ -422,7 +433,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     eprintln!(
         "{}: {} paths x {} steps ({}), Casimir drift {:.1e}; outputs in {}",
         name,
-        args.paths,
+        paths,
         nonlinear.steps,
         scheme.as_str(),
         nonlinear.casimir_drift,

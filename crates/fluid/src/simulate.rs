@@ -121,6 +121,11 @@ impl ModeSde {
         ModeSde { k, v, vc, r: mode.drift_matrix(coef), eta: coef.eta.clone() }
     }
 
+    /// Noise fields.
+    pub fn fields(&self) -> usize {
+        self.eta.len()
+    }
+
     /// `V(w) = w^H V w`.
     pub fn energy(&self, w: &DVector<C>) -> f64 {
         w.dotc(&(&self.vc * w)).re
@@ -165,21 +170,46 @@ impl ModeSde {
         Some(strang_ensemble(&x0, &half, self.eta.len(), &run, noise, |x| self.energy(x)))
     }
 
-    /// The exact `E V(t)` from `w0`, at `t = j * t_end / samples`, `j = 1..=samples`.
-    pub fn exact_mean_energy(&self, w0: &[f64], t_end: f64, samples: usize) -> Vec<(f64, f64)> {
-        let n = w0.len();
-        let k = self.k;
-        let minus_ik = C::new(0.0, -k);
-        let a = self.r.map(|x| minus_ik * x);
+    /// `A~ = A + (1/2) sum_j B_j^2` and the `B_j = -ik diag(eta_j)` of the
+    /// Itô moment equation.
+    fn moment_operators(&self) -> (DMatrix<C>, Vec<DMatrix<C>>) {
+        let n = self.r.nrows();
+        let minus_ik = C::new(0.0, -self.k);
         let bs: Vec<DMatrix<C>> = self
             .eta
             .iter()
             .map(|e| DMatrix::from_diagonal(&DVector::from_iterator(n, e.iter().map(|x| minus_ik * x))))
             .collect();
-        let mut a_tilde = a.clone();
+        let mut a_tilde = self.r.map(|x| minus_ik * x);
         for b in &bs {
             a_tilde += (b * b) * C::new(0.5, 0.0);
         }
+        (a_tilde, bs)
+    }
+
+    /// Runge–Kutta steps per sample: `h |A~|_F <= 0.01`.
+    fn rk4_steps(a_tilde: &DMatrix<C>, t_end: f64, samples: usize) -> usize {
+        let scale = a_tilde.norm().max(1.0);
+        ((t_end * scale / samples as f64) / 0.01).ceil().max(1.0) as usize
+    }
+
+    /// About how many floating-point operations [`Self::exact_mean_energy`]
+    /// takes for `(t_end, samples)`: four right-hand sides per Runge–Kutta
+    /// step, each `2 + 2J` complex products of `n x n` matrices (8 `n^3`
+    /// flops). For a caller to decide whether to run it (`verify simulate`).
+    pub fn exact_mean_energy_flops(&self, t_end: f64, samples: usize) -> f64 {
+        if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
+            return 0.0;
+        }
+        let (a_tilde, bs) = self.moment_operators();
+        let steps = (samples * Self::rk4_steps(&a_tilde, t_end, samples)) as f64;
+        steps * 4.0 * (2.0 + 2.0 * bs.len() as f64) * 8.0 * (self.r.nrows() as f64).powi(3)
+    }
+
+    /// The exact `E V(t)` from `w0`, at `t = j * t_end / samples`, `j = 1..=samples`.
+    pub fn exact_mean_energy(&self, w0: &[f64], t_end: f64, samples: usize) -> Vec<(f64, f64)> {
+        let n = w0.len();
+        let (a_tilde, bs) = self.moment_operators();
         let rhs = |s: &DMatrix<C>| -> DMatrix<C> {
             let mut out = &a_tilde * s + s * a_tilde.adjoint();
             for b in &bs {
@@ -190,8 +220,7 @@ impl ModeSde {
         let x0 = DVector::from_iterator(n, w0.iter().map(|x| C::new(*x, 0.0)));
         let mut s = &x0 * x0.adjoint();
         let vc = &self.vc;
-        let scale = a_tilde.norm().max(1.0);
-        let sub = ((t_end * scale / samples as f64) / 0.01).ceil().max(1.0) as usize;
+        let sub = Self::rk4_steps(&a_tilde, t_end, samples);
         let h = t_end / (samples * sub) as f64;
         let mut out = vec![];
         for j in 1..=samples {

@@ -27,7 +27,13 @@ fn weight(profile: &Profile, choice: &Choice, uniform: bool, c: f64, y: f64) -> 
     }
 }
 
-fn coefficients(profile: &Profile, choice: &Choice, uniform: bool, grid: &WallGrid, c: f64) -> BarotropicCoefficients {
+pub(super) fn coefficients(
+    profile: &Profile,
+    choice: &Choice,
+    uniform: bool,
+    grid: &WallGrid,
+    c: f64,
+) -> BarotropicCoefficients {
     let y = grid.nodes();
     let u: Vec<f64> = y.iter().map(|y| profile.u[0].eval(*y)).collect();
     let eta_prime: Vec<Vec<f64>> = profile.eta.iter().map(|[_, d]| y.iter().map(|y| d.eval(*y)).collect()).collect();

@@ -19,6 +19,7 @@ mod incompressible;
 mod instability;
 mod pseudomomentum;
 mod scaling;
+mod simulation;
 
 use compressible::*;
 use forms::*;
@@ -30,6 +31,7 @@ use scaling::*;
 pub use forms::chosen_form;
 pub use incompressible::prove_mode_bounds;
 pub use pseudomomentum::{discrete_pseudomomentum, DiscretePseudomomentum, PseudomomentumRow};
+pub use simulation::{mode_study, ModeStudy};
 
 /// Incompressible or compressible (barotropic, `rho_e = 1`).
 #[derive(Clone, Copy, Debug, PartialEq)]

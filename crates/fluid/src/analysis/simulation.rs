@@ -1,0 +1,206 @@
+//! One x-mode's discretised linear SDE with the functional the analysis
+//! used, for `verify simulate` on a fluid spec: the Monte Carlo and the
+//! exact second moment beside the certified growth.
+
+use super::*;
+use crate::barotropic::{BarotropicMode, WallGrid};
+use crate::barotropic_sde::BarotropicSde;
+use crate::simulate::{EnsembleRow, ModeSde};
+use nalgebra::{Complex, DMatrix, DVector};
+
+type C = Complex<f64>;
+
+enum Sde {
+    Incompressible { sde: ModeSde, start: Vec<f64> },
+    Compressible { sde: Box<BarotropicSde>, start: DVector<C> },
+}
+
+/// The linear SDE of x-mode `m` on the problem's grid (`problem.ny`), built
+/// as [`analyse`] and [`prove_mode_bounds`] build its matrices (the same
+/// choice of functional and form; for the compressible model the
+/// generator's at the Galilean shift the analysis chose), started from the
+/// direction whose `E V` grows fastest at `t = 0`.
+///
+/// That start is the top eigenvector of the discrete SDE's own generator
+/// form: of `(Q, V)` in the incompressible model, where the pointwise noise
+/// on the grid is the coadjoint action and `Q` is its generator form, so
+/// the rate is the mode's `Sigma^2_k`; of `(Q_B, K)` in the compressible
+/// model (`lambda_B`, [`crate::barotropic_sde`]), which exceeds the
+/// certified `Sigma^2_k` by at most the discrete Casimir defect. Dense:
+/// for moderate `ny`.
+///
+/// ```
+/// use fluid::analysis::{analyse, mode_study, FluidModel, FluidProblem, FluidSettings};
+/// use fluid::{expr::parse, grid::Boundary, profile::Profile};
+/// let p = |s: &str| parse(s, &Default::default()).unwrap();
+/// let profile = Profile::new(p("sin(y)"), vec![p("0.3*cos(y)")], (0.0, std::f64::consts::PI), Boundary::Walls);
+/// let problem = FluidProblem { model: FluidModel::Incompressible, profile, x_period: 6.283185307179586, ny: 16, x_modes: 1 };
+/// let analysis = analyse(&problem, &FluidSettings::default()).unwrap();
+/// let study = mode_study(&problem, analysis.form.galilean_shift, 1).unwrap();
+/// // the initial rate from the worst start is the certified per-mode Sigma^2 ...
+/// let certified = analysis.modes[0].sigma2_upper.unwrap();
+/// assert!(study.initial_rate() <= certified && study.initial_rate() > certified * (1.0 - 1e-6));
+/// // ... and the exact second moment stays under exp(Sigma^2 t)
+/// for (t, ratio) in study.exact_growth(1.0, 4) {
+///     assert!(ratio <= (certified * t).exp());
+/// }
+/// ```
+pub struct ModeStudy {
+    m: usize,
+    k: f64,
+    rate: f64,
+    sde: Sde,
+}
+
+/// The wavenumber of mode `m` of `problem`, if it is one.
+fn wavenumber(problem: &FluidProblem, m: usize) -> Option<f64> {
+    wavenumbers(problem).into_iter().find(|(mm, _)| *mm == m).map(|(_, k)| k)
+}
+
+/// The study of x-mode `m` (see [`ModeStudy`]); `None` when the mode does
+/// not exist, the profile admits no form, the compressible model has no
+/// shift (`shift` is the analysis's `form.galilean_shift`) or no walls, or
+/// the form is not numerically definite.
+pub fn mode_study(problem: &FluidProblem, shift: Option<f64>, m: usize) -> Option<ModeStudy> {
+    let k = wavenumber(problem, m)?;
+    let profile = &problem.profile;
+    let (a, b) = profile.interval;
+    match problem.model {
+        FluidModel::Incompressible => {
+            let grid = YGrid::new(profile.boundary, a, b, problem.ny);
+            let coef = profile.coefficients(&grid);
+            let form = form_for(&choose(profile), profile, &coef, &grid)?;
+            let mode = Mode::new(&grid, k);
+            let (rate, start) = dense_top(&mode.generator_matrix(&form, &coef), &mode.form_matrix(&form))?;
+            let sde = ModeSde::new(&grid, &coef, &form, k);
+            Some(ModeStudy { m, k, rate, sde: Sde::Incompressible { sde, start } })
+        }
+        FluidModel::Compressible { sound_speed } => {
+            if profile.boundary != Boundary::Walls {
+                return None;
+            }
+            let c = shift?;
+            let choice = choose(profile);
+            let uniform = profile.u[1].sign_on(a, b, crate::choice::SIGN_PROOF_BUDGET) == SignProof::Zero;
+            let grid = WallGrid::new(a, b, problem.ny);
+            let coef = coefficients(profile, &choice, uniform, &grid, c);
+            if !coef.usable() {
+                return None;
+            }
+            let sde = BarotropicSde::new(&BarotropicMode::new(&grid, &coef, k, sound_speed, c))?;
+            let (rate, start) = sde.pointwise_generator_rate();
+            Some(ModeStudy { m, k, rate, sde: Sde::Compressible { sde: Box::new(sde), start } })
+        }
+    }
+}
+
+/// The top eigenpair of the pencil `(Q, V)`, `V ≻ 0` (dense Cholesky).
+fn dense_top(q: &DMatrix<f64>, v: &DMatrix<f64>) -> Option<(f64, Vec<f64>)> {
+    let linv = nalgebra::Cholesky::new(v.clone())?.l().try_inverse()?;
+    let t = &linv * q * linv.transpose();
+    let eig = nalgebra::SymmetricEigen::new((&t + t.transpose()) * 0.5);
+    let top = eig.eigenvalues.imax();
+    let x = linv.transpose() * eig.eigenvectors.column(top);
+    x.iter().all(|v| v.is_finite()).then(|| (eig.eigenvalues[top], x.iter().copied().collect()))
+}
+
+impl ModeStudy {
+    /// The x-mode's index `m`.
+    pub fn m(&self) -> usize {
+        self.m
+    }
+
+    /// Its wavenumber.
+    pub fn k(&self) -> f64 {
+        self.k
+    }
+
+    /// Unknowns of the discrete SDE.
+    pub fn unknowns(&self) -> usize {
+        match &self.sde {
+            Sde::Incompressible { start, .. } => start.len(),
+            Sde::Compressible { sde, .. } => sde.n(),
+        }
+    }
+
+    /// Noise fields.
+    fn fields(&self) -> usize {
+        match &self.sde {
+            Sde::Incompressible { sde, .. } => sde.fields(),
+            Sde::Compressible { sde, .. } => sde.fields(),
+        }
+    }
+
+    /// `d E V / dt / V` at `t = 0` from the start: the largest eigenvalue of
+    /// the discrete SDE's generator form (dense).
+    pub fn initial_rate(&self) -> f64 {
+        self.rate
+    }
+
+    /// `E V(t) / V(0)` from the start by the exact second moment, at
+    /// `t = j t_end / samples`, `j = 1..=samples`.
+    pub fn exact_growth(&self, t_end: f64, samples: usize) -> Vec<(f64, f64)> {
+        match &self.sde {
+            Sde::Incompressible { sde, start } => {
+                let v0 = sde.energy(&complex(start));
+                sde.exact_mean_energy(start, t_end, samples).into_iter().map(|(t, e)| (t, e / v0)).collect()
+            }
+            Sde::Compressible { sde, start } => {
+                let v0 = sde.energy(start);
+                sde.exact_moments(t_end, samples)
+                    .into_iter()
+                    .map(|m| (m.t, start.dotc(&(&m.g * start)).re / v0))
+                    .collect()
+            }
+        }
+    }
+
+    /// About how many floating-point operations [`Self::exact_growth`] takes.
+    pub fn exact_growth_flops(&self, t_end: f64, samples: usize) -> f64 {
+        match &self.sde {
+            Sde::Incompressible { sde, .. } => sde.exact_mean_energy_flops(t_end, samples),
+            Sde::Compressible { sde, .. } => sde.exact_moments_flops(t_end, samples),
+        }
+    }
+
+    /// About how many floating-point operations [`Self::ensemble`] takes
+    /// per path and step: two products with the dense half-step drift
+    /// propagator (`8 n^2` flops each, complex), the compressible noise's
+    /// node couplings (one more per field) and the energy at the records.
+    pub fn flops_per_path_step(&self) -> f64 {
+        let n2 = (self.unknowns() as f64).powi(2);
+        let coupling = match self.sde {
+            Sde::Incompressible { .. } => 0.0,
+            Sde::Compressible { .. } => self.fields() as f64,
+        };
+        (2.0 + coupling) * 8.0 * n2
+    }
+
+    /// `E V(t) / V(0)` from the start by Monte Carlo (Strang splitting of
+    /// the exact drift and noise flows), with its standard error, at every
+    /// multiple of `record_every` of `steps` steps of `dt`. Deterministic
+    /// in `seed` whatever the thread count. `None` if the drift's
+    /// propagator could not be formed.
+    pub fn ensemble(
+        &self,
+        dt: f64,
+        steps: usize,
+        record_every: usize,
+        paths: usize,
+        seed: u64,
+    ) -> Option<Vec<EnsembleRow>> {
+        let (rows, v0) = match &self.sde {
+            Sde::Incompressible { sde, start } => {
+                (sde.ensemble(start, dt, steps, record_every, paths, seed)?, sde.energy(&complex(start)))
+            }
+            Sde::Compressible { sde, start } => {
+                (sde.ensemble(start, dt, steps, record_every, paths, seed), sde.energy(start))
+            }
+        };
+        Some(rows.into_iter().map(|r| EnsembleRow { mean: r.mean / v0, std_error: r.std_error / v0, ..r }).collect())
+    }
+}
+
+fn complex(x: &[f64]) -> DVector<C> {
+    DVector::from_iterator(x.len(), x.iter().map(|x| C::new(*x, 0.0)))
+}
