@@ -349,6 +349,13 @@ fn pseudomomentum_is_conserved_along_every_simulated_path() {
     let x0: Vec<f64> = grid.nodes().iter().map(|y| (3.0 * y).sin() + 0.5).collect();
     let rows = sde.ensemble(&x0, 0.02, 100, 50, 200, 3).unwrap();
     assert!(rows[0].max_path_drift < 1e-11, "{}", rows[0].max_path_drift);
+    // so its exact second moment keeps E V(t) = V(0): a closed form for the
+    // Taylor integration of the moment equation to meet
+    let w0 = nalgebra::DVector::from_iterator(x0.len(), x0.iter().map(|x| nalgebra::Complex::new(*x, 0.0)));
+    let v0 = sde.energy(&w0);
+    for (t, ev) in sde.exact_mean_energy(&x0, 5.0, 5) {
+        assert!((ev - v0).abs() < 1e-12 * v0, "t = {t}: E V = {ev}, V(0) = {v0}");
+    }
     // whereas the energy alone is not conserved pathwise
     let energy = Form { energy: 1.0, w: vec![0.0; grid.n()], sign: fluid::Sign::Positive };
     let rows = ModeSde::new(&grid, &coef, &energy, 2.0).ensemble(&x0, 0.02, 100, 50, 200, 3);
