@@ -242,6 +242,7 @@ fn simulate_sets_a_fluid_modes_monte_carlo_and_exact_moments_beside_its_certifie
     let text = std::fs::read_to_string(&json).unwrap();
     let report: Value = serde_json::from_str(&text).unwrap();
     assert_eq!(report["m"], 1, "the default mode is the one with the largest certified growth");
+    assert!(report["certified_bound"].as_array().is_some());
     let certified = report["sigma2_mode"].as_f64().unwrap();
     assert_eq!(report["sigma2_mode_verified"], true);
     assert!((certified - 0.2626).abs() < 1e-4, "{certified}");
@@ -335,6 +336,12 @@ fn simulate_refuses_bad_fluid_options_by_name() {
         assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
         assert!(stderr(&out).contains(flag), "{args:?}: {}", stderr(&out));
     }
+    // Noise near 1e100: Sigma^2 near 1e199, so exp(Sigma^2 t) leaves the
+    // doubles long before the default t_end.
+    let loud = temp_file("loud.json", &spec_with(|v| v["fluid"]["noise"][0] = "1e100*cos(y)".into()));
+    let (out, _) = simulate_fluid(&loud, "loud", &["--paths", "10"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--t-end"), "{}", stderr(&out));
     // No certified growth to set a simulation beside.
     let (out, _) = simulate_fluid(&fixture_path("fluids/sin2y-unstable.json"), "unstable", &[]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));

@@ -94,12 +94,18 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         // certified Sigma_k^2 (at ny = 16, mode 32 of the compatible-noise
         // fixture: lambda_B = 650 against 0.087).
         None if compressible => 1,
-        // Incompressible: the mode whose certified growth is largest.
-        None => analysis
-            .modes
-            .iter()
-            .max_by(|a, b| a.sigma2_upper.unwrap_or(a.sigma2).total_cmp(&b.sigma2_upper.unwrap_or(b.sigma2)))
-            .map_or(1, |r| r.m),
+        // Incompressible: the mode whose certified growth is largest (the
+        // gravest of equals: `max_by` would give the last).
+        None => {
+            let growth = |r: &fluid::analysis::ModeResult| r.sigma2_upper.unwrap_or(r.sigma2);
+            let mut best = &analysis.modes[0];
+            for r in &analysis.modes[1..] {
+                if growth(r) > growth(best) {
+                    best = r;
+                }
+            }
+            best.m
+        }
     };
     let Some(row) = analysis.modes.iter().find(|r| r.m == m) else {
         return Err(Failure::Failed(format!("internal: mode {m} missing from the analysis")));
@@ -129,6 +135,14 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
     if args.outputs == 0 {
         return Err(bad("--outputs: need at least one output time".into()));
     }
+    // exp(Sigma_k^2 t) must be a double over the run (noise near 1e100
+    // makes Sigma_k^2 near 1e200).
+    if certified * t_end > 700.0 {
+        return Err(bad(format!(
+            "--t-end: the certified exp(Sigma_k^2 t) with Sigma_k^2 = {certified:e} leaves the range of doubles before t = {t_end}; pass --t-end (and --dt) below {:e}",
+            700.0 / certified
+        )));
+    }
     let wanted = (t_end / dt).ceil();
     if wanted > 1e8 {
         return Err(bad(format!("--t-end/--dt: {wanted:e} steps per path; at most 1e8")));
@@ -152,8 +166,13 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         )));
     }
     let exact_seconds = study.exact_growth_flops(t_end, records) / FLOPS_PER_SECOND;
-    let run_exact = exact_seconds <= EXACT_SECONDS || args.force;
-    if !run_exact {
+    let run_exact = exact_seconds.is_finite() && (exact_seconds <= EXACT_SECONDS || args.force);
+    if !exact_seconds.is_finite() {
+        eprintln!(
+            "note: the exact second moment would need more than {} Taylor steps per output time (the noise's amplitude): not run",
+            fluid::simulate::MAX_TAYLOR_STEPS
+        );
+    } else if !run_exact {
         eprintln!(
             "note: the exact second moment would take about {:.0} minutes at ny = {ny}: skipped (--force runs it, a smaller --ny is faster)",
             exact_seconds / 60.0
@@ -174,7 +193,13 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
     let times: Vec<f64> = rows.iter().map(|r| r.t).collect();
     let mean: Vec<f64> = rows.iter().map(|r| r.mean).collect();
     let se: Vec<f64> = rows.iter().map(|r| r.std_error).collect();
-    let exact: Option<Vec<f64>> = exact.map(|e| e.iter().map(|(_, v)| *v).collect());
+    let exact: Option<Vec<f64>> = exact.filter(|e| e.len() == records).map(|e| e.iter().map(|(_, v)| *v).collect());
+    let overflowed = mean.iter().chain(exact.iter().flatten()).filter(|v| !v.is_finite()).count();
+    if overflowed > 0 {
+        eprintln!(
+            "note: {overflowed} values of the Monte Carlo mean or the exact moment are not finite (beyond the range of doubles; null in the JSON): a shorter --t-end shows the growth"
+        );
+    }
     let bound: Vec<f64> = times.iter().map(|t| (certified * t).exp()).collect();
     let rate_curve: Vec<f64> = times.iter().map(|t| (rate * t).exp()).collect();
 

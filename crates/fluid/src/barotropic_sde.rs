@@ -166,14 +166,15 @@ impl BarotropicSde {
     }
 
     /// The exact second moment at `t = j t_end / samples`, `j = 1..=samples`
-    /// (none unless `t_end` is positive and finite).
+    /// (none unless `t_end` is positive and finite and the steps are at
+    /// most [`crate::simulate::MAX_TAYLOR_STEPS`] per sample).
     pub fn exact_moments(&self, t_end: f64, samples: usize) -> Vec<ExactMoment> {
         if !(t_end.is_finite() && t_end > 0.0) {
             return vec![];
         }
         let n = self.n();
         let dt = t_end / samples as f64;
-        let sub = self.taylor_steps(dt);
+        let Some(sub) = self.taylor_steps(dt) else { return vec![] };
         let h = dt / sub as f64;
         let mut g = DMatrix::<C>::identity(n, n);
         let mut out = Vec::with_capacity(samples);
@@ -191,14 +192,16 @@ impl BarotropicSde {
     /// The Taylor steps over a time `dt`: each of norm at most 4 against
     /// `|backward_rate| <= 2 |A~^|_2 + sum |B^_j|_2^2` (operator norms on the
     /// Frobenius space).
-    fn taylor_steps(&self, dt: f64) -> usize {
+    /// `None` when that is not finite or above
+    /// [`crate::simulate::MAX_TAYLOR_STEPS`].
+    fn taylor_steps(&self, dt: f64) -> Option<usize> {
         let mut a_tilde = self.a_hat.clone();
         for bj in &self.b_hat {
             a_tilde += bj * bj * C::new(0.5, 0.0);
         }
         let spectral = |m: &DMatrix<C>| m.clone().singular_values().max();
         let op_norm = 2.0 * spectral(&a_tilde) + self.b_hat.iter().map(|b| spectral(b).powi(2)).sum::<f64>();
-        ((op_norm * dt) / 4.0).ceil().max(1.0) as usize
+        crate::simulate::taylor_step_count(op_norm * dt)
     }
 
     /// About how many floating-point operations [`Self::exact_moments`]
@@ -212,7 +215,8 @@ impl BarotropicSde {
             return 0.0;
         }
         let n3 = (self.n() as f64).powi(3);
-        let steps = (samples * self.taylor_steps(t_end / samples as f64)) as f64;
+        let Some(sub) = self.taylor_steps(t_end / samples as f64) else { return f64::INFINITY };
+        let steps = samples as f64 * sub as f64;
         steps * 40.0 * (1.0 + 3.0 * self.b_hat.len() as f64) * 8.0 * n3 + samples as f64 * 30.0 * n3
     }
 

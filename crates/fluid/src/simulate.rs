@@ -23,6 +23,17 @@ use rayon::prelude::*;
 
 type C = Complex<f64>;
 
+/// The most Taylor steps per output time the exact second moments take
+/// (noise near `1e100` would ask for more than any run could finish).
+pub const MAX_TAYLOR_STEPS: usize = 1 << 30;
+
+/// Steps of norm at most 4 over an interval where the operator's norm bound
+/// times the length is `norm_dt`; `None` if not finite or too many.
+pub(crate) fn taylor_step_count(norm_dt: f64) -> Option<usize> {
+    let steps = (norm_dt / 4.0).ceil().max(1.0);
+    (steps.is_finite() && steps <= MAX_TAYLOR_STEPS as f64).then_some(steps as usize)
+}
+
 /// One x-mode's linear SDE, ready to simulate.
 #[derive(Clone, Debug)]
 pub struct ModeSde {
@@ -188,15 +199,17 @@ impl ModeSde {
 
     /// Taylor steps over a time `dt`, each of norm at most 4 against
     /// `|S -> A~ S + S A~^H + sum_j B_j S B_j^H| <= 2 |A~|_2 + sum_j |B_j|_2^2`
-    /// on the Frobenius space, with `|A~|_2 <= sqrt(|A~|_1 |A~|_inf)`.
-    fn taylor_steps(a_tilde: &DMatrix<C>, bs: &[Vec<C>], dt: f64) -> usize {
+    /// on the Frobenius space, with `|A~|_2 <= sqrt(|A~|_1) sqrt(|A~|_inf)` (two roots: the product may overflow).
+    /// `None` when that is not finite or above [`MAX_TAYLOR_STEPS`] (the
+    /// integration would not end in any useful time).
+    fn taylor_steps(a_tilde: &DMatrix<C>, bs: &[Vec<C>], dt: f64) -> Option<usize> {
         let col =
             (0..a_tilde.ncols()).map(|j| a_tilde.column(j).iter().map(|x| x.norm()).sum::<f64>()).fold(0.0, f64::max);
         let row =
             (0..a_tilde.nrows()).map(|i| a_tilde.row(i).iter().map(|x| x.norm()).sum::<f64>()).fold(0.0, f64::max);
         let noise: f64 = bs.iter().map(|b| b.iter().map(|x| x.norm_sqr()).fold(0.0, f64::max)).sum();
-        let op_norm = 2.0 * (col * row).sqrt() + noise;
-        ((op_norm * dt) / 4.0).ceil().max(1.0) as usize
+        let op_norm = 2.0 * col.sqrt() * row.sqrt() + noise;
+        taylor_step_count(op_norm * dt)
     }
 
     /// About how many floating-point operations [`Self::exact_mean_energy`]
@@ -212,11 +225,13 @@ impl ModeSde {
             return 0.0;
         }
         let (a_tilde, bs) = self.moment_operators();
-        let steps = (samples * Self::taylor_steps(&a_tilde, &bs, t_end / samples as f64)) as f64;
+        let Some(sub) = Self::taylor_steps(&a_tilde, &bs, t_end / samples as f64) else { return f64::INFINITY };
+        let steps = samples as f64 * sub as f64;
         steps * 12.0 * 16.0 * (self.r.nrows() as f64).powi(3)
     }
 
-    /// The exact `E V(t)` from `w0`, at `t = j * t_end / samples`, `j = 1..=samples`:
+    /// The exact `E V(t)` from `w0`, at `t = j * t_end / samples`, `j = 1..=samples`
+    /// (none when the steps would be too many: [`MAX_TAYLOR_STEPS`]):
     /// `S(t) = exp(t L) S(0)` by the Taylor series of the exponential in
     /// steps of norm at most 4, each summed until a term falls below `1e-17`
     /// of the sum (the truncation error of a step is below `4^m / m!` of its
@@ -244,7 +259,7 @@ impl ModeSde {
         let mut s = &x0 * x0.adjoint();
         let vc = &self.vc;
         let dt = t_end / samples as f64;
-        let sub = Self::taylor_steps(&a_tilde, &bs, dt);
+        let Some(sub) = Self::taylor_steps(&a_tilde, &bs, dt) else { return vec![] };
         let h = dt / sub as f64;
         let mut out = vec![];
         for j in 1..=samples {
@@ -258,7 +273,8 @@ impl ModeSde {
                     }
                 }
             }
-            out.push((j as f64 * dt, (vc * &s).trace().re));
+            // tr(V S) = sum_ab V_ab S_ba, without the product
+            out.push((j as f64 * dt, vc.iter().zip(s.transpose().iter()).map(|(v, x)| (v * x).re).sum()));
         }
         out
     }
