@@ -139,7 +139,7 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
     // makes Sigma_k^2 near 1e200).
     if certified * t_end > 700.0 {
         return Err(bad(format!(
-            "--t-end: the certified exp(Sigma_k^2 t) with Sigma_k^2 = {certified:e} leaves the range of doubles before t = {t_end}; pass --t-end (and --dt) below {:e}",
+            "--t-end: the certified exp(Sigma_k^2 t) with Sigma_k^2 = {certified:e} leaves the range of doubles before t = {t_end:e}; pass --t-end (and --dt) below {:e}",
             700.0 / certified
         )));
     }
