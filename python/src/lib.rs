@@ -170,12 +170,18 @@ fn simulate_text(
 ) -> PyResult<String> {
     let scheme = simulate::Scheme::from_name(scheme)
         .ok_or_else(|| PyValueError::new_err(format!("scheme: {scheme:?} is not 'lie' or 'heun'")))?;
-    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))? {
-        spec::AnySpec::Lie(s) => s,
-        _ => return Err(PyValueError::new_err(
-            "simulate runs finite-dimensional specs (fluid, Zeitlin and large specs are certified, not simulated here)",
-        )),
-    };
+    let spec =
+        match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))? {
+            spec::AnySpec::Lie(s) => s,
+            spec::AnySpec::Fluid(_) => {
+                return Err(PyValueError::new_err(
+                    "simulate runs finite-dimensional specs; a fluid spec's x-mode is simulated by simulate_fluid",
+                ))
+            }
+            _ => return Err(PyValueError::new_err(
+                "simulate runs finite-dimensional specs (Zeitlin and large specs are certified, not simulated here)",
+            )),
+        };
     let cert = py.detach(|| spec::certify(&spec));
     let coords = spec.system.algebra().coordinates();
     let observable = match &observable {
@@ -221,6 +227,56 @@ fn simulate_text(
     .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let verdict = cert.json["verdict"].as_str().unwrap_or_default();
     let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, threads as u64);
+    Ok(report.to_string())
+}
+
+/// One x-mode of a fluid spec simulated beside its certified growth
+/// (`spec::simulate_fluid`, as `verify simulate` runs it): the report as
+/// JSON text. Notes (a skipped exact moment, values beyond the doubles) are
+/// in the report's `notes`. Not interruptible: the estimate and `force`
+/// keep runs short.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+#[pyo3(signature = (text, base=None, mode=None, ny=None, paths=None, dt=0.01, t_end=None, outputs=200, seed=1, force=false))]
+fn simulate_fluid_text(
+    py: Python<'_>,
+    text: String,
+    base: Option<PathBuf>,
+    mode: Option<usize>,
+    ny: Option<usize>,
+    paths: Option<usize>,
+    dt: f64,
+    t_end: Option<f64>,
+    outputs: usize,
+    seed: u64,
+    force: bool,
+) -> PyResult<String> {
+    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))? {
+        spec::AnySpec::Fluid(s) => s,
+        _ => return Err(PyValueError::new_err("simulate_fluid runs fluid specs; use simulate for the others")),
+    };
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let options = spec::FluidSimulationOptions {
+        mode,
+        ny,
+        paths,
+        dt,
+        t_end,
+        outputs,
+        seed,
+        force,
+        threads: rayon::current_num_threads().min(cores) as f64,
+    };
+    let mut notes = vec![];
+    let run = py.detach(|| spec::simulate_fluid(&spec, &options, &mut |n: String| notes.push(n)));
+    let run = run.map_err(|e| match e {
+        spec::FluidSimulationError::TooLong { .. } => {
+            PyValueError::new_err(format!("{e}; lower them or ny, or pass force=True"))
+        }
+        e => PyValueError::new_err(e.to_string()),
+    })?;
+    let mut report = run.report;
+    report["notes"] = notes.into();
     Ok(report.to_string())
 }
 
@@ -465,6 +521,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(validate_text, m)?)?;
     m.add_function(wrap_pyfunction!(stopping_time, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_text, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate_fluid_text, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_text, m)?)?;
     m.add_function(wrap_pyfunction!(engine_version, m)?)?;
     Ok(())

@@ -61,7 +61,13 @@ pub struct GrowthChart<'a> {
     pub stopping_time: Option<f64>,
     /// The growth axis's label.
     pub y_label: &'a str,
+    /// The caption of the panel divided by the bound.
+    pub ratio_caption: &'a str,
 }
+
+/// The ratio panel's caption for a finite-dimensional study.
+pub const FINITE_RATIO_CAPTION: &str =
+    "divided by the certified bound exp(Sigma^2 t): the claim is that the exact moments stay at or below 1";
 
 /// How a legend entry is drawn.
 #[derive(Clone, Copy)]
@@ -397,10 +403,7 @@ where
             return Err("the ratios to the bound span more decades than a log axis can draw".into());
         };
         let mut panel = ChartBuilder::on(&bottom)
-            .caption(
-                "divided by the certified bound exp(Sigma^2 t): the claim is that the exact moments stay at or below 1",
-                ("sans-serif", 15),
-            )
+            .caption(c.ratio_caption, ("sans-serif", 15))
             .margin(12)
             .margin_right(30)
             .x_label_area_size(35)
@@ -621,6 +624,7 @@ mod tests {
             bound: Some(("bound".into(), bound)),
             stopping_time: Some(17.0),
             y_label: "E|dmu_t|^2 / |dmu_0|^2",
+            ratio_caption: FINITE_RATIO_CAPTION,
         };
         let mut svg = String::new();
         draw_growth(SVGBackend::with_string(&mut svg, (1000, 860)).into_drawing_area(), &chart).unwrap();
@@ -684,6 +688,7 @@ mod tests {
             bound: Some(("b".into(), vec![1.0, f64::MAX, f64::INFINITY])),
             stopping_time: None,
             y_label: "E|dmu_t|^2 / |dmu_0|^2",
+            ratio_caption: FINITE_RATIO_CAPTION,
         };
         let draw = |c: &GrowthChart| {
             let mut svg = String::new();

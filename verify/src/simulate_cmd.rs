@@ -425,6 +425,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
                 }),
                 stopping_time,
                 y_label: "E|dmu_t|^2 / |dmu_0|^2",
+                ratio_caption: crate::plots::FINITE_RATIO_CAPTION,
             },
         )
         .map_err(io)?;

@@ -46,6 +46,8 @@ mod claims;
 pub mod document;
 #[cfg(feature = "fluid")]
 mod fluid;
+#[cfg(feature = "fluid")]
+mod fluid_simulation;
 mod json;
 #[cfg(feature = "fluid")]
 mod large;
@@ -70,6 +72,12 @@ pub use claims::{verify_claims, ClaimFailure};
 pub use fluid::{
     certify_fluid, certify_fluid_spec, certify_fluid_with, check_fluid_certificate, fluid_certificate_json,
     fluid_spec_from_value, parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
+};
+
+#[cfg(feature = "fluid")]
+pub use fluid_simulation::{
+    simulate_fluid, FluidSimulation, FluidSimulationError, FluidSimulationOptions, Notes, FLUID_EXACT_SECONDS,
+    FLUID_SIMULATION_DEFAULT_NY, FLUID_SIMULATION_DEFAULT_PATHS, FLUID_SIMULATION_MAX_NY, FLUID_SIMULATION_SECONDS,
 };
 
 #[cfg(feature = "fluid")]

@@ -43,6 +43,18 @@ def simulate_text(
     force: bool = False,
     progress: Optional[Callable[[int, int], Any]] = None,
 ) -> str: ...
+def simulate_fluid_text(
+    text: str,
+    base: Optional[_Path] = None,
+    mode: Optional[int] = None,
+    ny: Optional[int] = None,
+    paths: Optional[int] = None,
+    dt: float = 0.01,
+    t_end: Optional[float] = None,
+    outputs: int = 200,
+    seed: int = 1,
+    force: bool = False,
+) -> str: ...
 def engine_version() -> str: ...
 def sweep_text(
     text: str,
