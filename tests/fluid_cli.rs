@@ -232,12 +232,18 @@ fn simulate_sets_a_fluid_modes_monte_carlo_and_exact_moments_beside_its_certifie
     // 0.2626, 26 times the paper's 0.01 (docs/errata.md; the dense
     // generalised eigenvalue at ny = 64 in tests/fluid.rs).
     let spec = fixture_path("fluids/arnold-boundary-sin.json");
-    let args = ["--ny", "32", "--paths", "400", "--t-end", "2", "--outputs", "10"];
+    let args = ["--ny", "32", "--paths", "400", "--t-end", "2", "--outputs", "10", "--npz"];
     let (out, dir) = simulate_fluid(&spec, "arnold", &args);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let json = dir.join("fluid-arnold-boundary-sin-m1.json");
     for suffix in ["m1.csv", "m1-growth.png", "m1-growth.svg"] {
         assert!(dir.join(format!("fluid-arnold-boundary-sin-{suffix}")).is_file(), "{suffix}");
+    }
+    // --npz: a zip archive (numpy's) holding the series by name
+    let npz = std::fs::read(dir.join("fluid-arnold-boundary-sin-m1.npz")).unwrap();
+    assert!(npz.starts_with(b"PK"));
+    for series in ["times.npy", "exact.npy", "monte_carlo_mean.npy", "certified_bound.npy"] {
+        assert!(npz.windows(series.len()).any(|w| w == series.as_bytes()), "{series}");
     }
     let text = std::fs::read_to_string(&json).unwrap();
     let report: Value = serde_json::from_str(&text).unwrap();
