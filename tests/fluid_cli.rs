@@ -360,6 +360,16 @@ fn simulate_refuses_bad_fluid_options_by_name() {
     let (out, _) = simulate_fluid(&fixture_path("fluids/sin2y-unstable.json"), "unstable", &[]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("linearly_unstable"), "{}", stderr(&out));
+    // ... nor does noise that moves the equilibrium (compressible, the
+    // paper's transport noise) or one whose Sigma^2 is below the doubles
+    // (noise 1e-160: inconclusive).
+    let (out, _) = simulate_fluid(&fixture_path("fluids/compressible-channel.json"), "incompatible", &[]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("noise_incompatible"), "{}", stderr(&out));
+    let quiet = temp_file("quiet.json", &spec_with(|v| v["fluid"]["noise"][0] = "1e-160*cos(y)".into()));
+    let (out, _) = simulate_fluid(&quiet, "quiet", &[]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("inconclusive"), "{}", stderr(&out));
     // The fluid options on a finite-dimensional spec.
     let (out, _) = simulate_fluid(&fixture_path("rigid-body-major-axis.json"), "finite", &["--mode", "1"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));

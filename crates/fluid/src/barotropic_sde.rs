@@ -220,19 +220,10 @@ impl BarotropicSde {
         steps * 40.0 * (1.0 + 3.0 * self.b_hat.len() as f64) * 8.0 * n3 + samples as f64 * 30.0 * n3
     }
 
-    /// `exp(h L) G^` by its Taylor series, summed until a term is below
-    /// `1e-17` of the sum (at most 200 terms).
+    /// `exp(h L) G^` by its Taylor series ([`crate::simulate::taylor_exp`]),
+    /// each term kept Hermitian.
     fn taylor_step(&self, g: &DMatrix<C>, h: f64) -> DMatrix<C> {
-        let mut sum = g.clone();
-        let mut term = g.clone();
-        for m in 1..=200 {
-            term = hermitian_part(&self.backward_rate(&term)) * C::new(h / m as f64, 0.0);
-            sum += &term;
-            if term.norm() <= 1e-17 * sum.norm() && m >= 4 {
-                break;
-            }
-        }
-        sum
+        crate::simulate::taylor_exp(g, h, |t| hermitian_part(&self.backward_rate(t)))
     }
 
     /// `exp(A h)`, exact from the eigenbasis of the Hermitian `-i A^`.

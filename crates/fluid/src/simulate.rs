@@ -34,6 +34,23 @@ pub(crate) fn taylor_step_count(norm_dt: f64) -> Option<usize> {
     (steps.is_finite() && steps <= MAX_TAYLOR_STEPS as f64).then_some(steps as usize)
 }
 
+/// `exp(h L) s` by the Taylor series of the exponential, summed until a
+/// term falls below `1e-17` of the sum (at least 4 terms, at most 200): one
+/// step of the exact second moments here and in [`crate::barotropic_sde`],
+/// `apply` being `L`.
+pub(crate) fn taylor_exp(s: &DMatrix<C>, h: f64, apply: impl Fn(&DMatrix<C>) -> DMatrix<C>) -> DMatrix<C> {
+    let mut sum = s.clone();
+    let mut term = s.clone();
+    for m in 1..=200 {
+        term = apply(&term) * C::new(h / m as f64, 0.0);
+        sum += &term;
+        if term.norm() <= 1e-17 * sum.norm() && m >= 4 {
+            break;
+        }
+    }
+    sum
+}
+
 /// One x-mode's linear SDE, ready to simulate.
 #[derive(Clone, Debug)]
 pub struct ModeSde {
@@ -264,14 +281,7 @@ impl ModeSde {
         let mut out = vec![];
         for j in 1..=samples {
             for _ in 0..sub {
-                let mut term = s.clone();
-                for m in 1..=200 {
-                    term = apply(&term) * C::new(h / m as f64, 0.0);
-                    s += &term;
-                    if term.norm() <= 1e-17 * s.norm() && m >= 4 {
-                        break;
-                    }
-                }
+                s = taylor_exp(&s, h, apply);
             }
             // tr(V S) = sum_ab V_ab S_ba, without the product
             out.push((j as f64 * dt, vc.iter().zip(s.transpose().iter()).map(|(v, x)| (v * x).re).sum()));

@@ -46,7 +46,6 @@ enum Sde {
 /// }
 /// ```
 pub struct ModeStudy {
-    m: usize,
     k: f64,
     rate: f64,
     sde: Sde,
@@ -73,7 +72,7 @@ pub fn mode_study(problem: &FluidProblem, shift: Option<f64>, m: usize) -> Optio
             let mode = Mode::new(&grid, k);
             let (rate, start) = dense_top(&mode.generator_matrix(&form, &coef), &mode.form_matrix(&form))?;
             let sde = ModeSde::new(&grid, &coef, &form, k);
-            Some(ModeStudy { m, k, rate, sde: Sde::Incompressible { sde, start } })
+            Some(ModeStudy { k, rate, sde: Sde::Incompressible { sde, start } })
         }
         FluidModel::Compressible { sound_speed } => {
             if profile.boundary != Boundary::Walls {
@@ -89,7 +88,7 @@ pub fn mode_study(problem: &FluidProblem, shift: Option<f64>, m: usize) -> Optio
             }
             let sde = BarotropicSde::new(&BarotropicMode::new(&grid, &coef, k, sound_speed, c))?;
             let (rate, start) = sde.pointwise_generator_rate();
-            Some(ModeStudy { m, k, rate, sde: Sde::Compressible { sde: Box::new(sde), start } })
+            Some(ModeStudy { k, rate, sde: Sde::Compressible { sde: Box::new(sde), start } })
         }
     }
 }
@@ -105,11 +104,6 @@ fn dense_top(q: &DMatrix<f64>, v: &DMatrix<f64>) -> Option<(f64, Vec<f64>)> {
 }
 
 impl ModeStudy {
-    /// The x-mode's index `m`.
-    pub fn m(&self) -> usize {
-        self.m
-    }
-
     /// Its wavenumber.
     pub fn k(&self) -> f64 {
         self.k
