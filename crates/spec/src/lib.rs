@@ -277,6 +277,9 @@ pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
 /// (a Zeitlin field's `.npy`) are relative to it (to the current folder
 /// when `None`).
 pub fn parse_any_spec_in(text: &str, base: Option<&std::path::Path>) -> Result<AnySpec, SpecError> {
+    // Only a Zeitlin spec reads files (and needs the folder).
+    #[cfg(not(feature = "fluid"))]
+    let _ = base;
     let value: serde_json::Value = json::parse_json(text)?;
     if is_fluid_spec(&value) {
         #[cfg(feature = "fluid")]
