@@ -233,11 +233,12 @@ fn simulate_text(
 /// One x-mode of a fluid spec simulated beside its certified growth
 /// (`spec::simulate_fluid`, as `verify simulate` runs it): the report as
 /// JSON text. Notes (a skipped exact moment, values beyond the doubles) are
-/// in the report's `notes`. Not interruptible: the estimate and `force`
-/// keep runs short.
+/// in the report's `notes`. The run is on a worker thread: Ctrl-C stops it
+/// and `progress(done, total)` follows it (two phases: the analysis on the
+/// grid, then the Monte Carlo and the exact moment).
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (text, base=None, mode=None, ny=None, paths=None, dt=0.01, t_end=None, outputs=200, seed=1, force=false))]
+#[pyo3(signature = (text, base=None, mode=None, ny=None, paths=None, dt=0.01, t_end=None, outputs=200, seed=1, force=false, progress=None))]
 fn simulate_fluid_text(
     py: Python<'_>,
     text: String,
@@ -250,6 +251,7 @@ fn simulate_fluid_text(
     outputs: usize,
     seed: u64,
     force: bool,
+    progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<String> {
     let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))? {
         spec::AnySpec::Fluid(s) => s,
@@ -268,7 +270,11 @@ fn simulate_fluid_text(
         threads: rayon::current_num_threads().min(cores) as f64,
     };
     let mut notes = vec![];
-    let run = py.detach(|| spec::simulate_fluid(&spec, &options, &mut |n: String| notes.push(n)));
+    let state = Progress::new();
+    let run = interruptible(py, progress.as_ref(), &state, || {
+        spec::simulate_fluid_with(&spec, &options, &state, &mut |n: String| notes.push(n))
+    })?;
+    // (`Cancelled` only follows an interrupt, which `interruptible` has raised)
     let run = run.map_err(|e| match e {
         spec::FluidSimulationError::TooLong { .. } => {
             PyValueError::new_err(format!("{e}; lower them or ny, or pass force=True"))

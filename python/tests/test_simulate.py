@@ -137,6 +137,19 @@ def test_progress_counts_both_ensembles_and_ctrl_c_stops_a_long_run(interrupted)
     interrupted("simulate('fixtures/rigid-body-major-axis.json', paths=400000, t_end=200.0, force=True)", 2.0)
 
 
+def test_simulate_fluid_reports_progress_and_ctrl_c_stops_it(interrupted):
+    """The count only grows and ends at its total (two phases: the analysis
+    on the grid, then the Monte Carlo and the exact moment); Ctrl-C ends a
+    run planned for about an hour (10^6 paths of 1000 steps at ny = 32)."""
+    calls = []
+    r = ec.simulate_fluid(FIXTURES / "fluids" / "arnold-boundary-sin.json", ny=16, paths=2000, t_end=2.0, outputs=4,
+                          progress=lambda done, total: calls.append((done, total)))
+    assert r["m"] == 1
+    assert calls and calls[-1][0] == calls[-1][1] > 0
+    assert all(a[0] <= b[0] and a[1] <= b[1] for a, b in zip(calls, calls[1:]))
+    interrupted("simulate_fluid('fixtures/fluids/arnold-boundary-sin.json', paths=10**6, t_end=10.0, force=True)", 2.0)
+
+
 def test_the_report_counts_the_engine_threads():
     """RAYON_NUM_THREADS sets the engine's threads: the report records them
     (and the time estimate counts them), as `verify simulate` does."""

@@ -54,6 +54,8 @@ fn failure(shown: &str, e: FluidSimulationError) -> Failure {
         e @ FluidSimulationError::NoGrowth { .. } => bad(format!("{shown}: {e}")),
         e @ FluidSimulationError::Unrepresentable(_) => bad(format!("{shown}: {e}")),
         FluidSimulationError::Failed(m) => Failure::Failed(format!("internal: {m}")),
+        // (nothing cancels a command-line run: Ctrl-C ends the process)
+        e @ FluidSimulationError::Cancelled => Failure::Failed(format!("{shown}: {e}")),
     }
 }
 
@@ -74,15 +76,33 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         force: args.force,
         threads: (rayon::current_num_threads() as f64).min(cores),
     };
-    let mut notes = |n: String| {
-        eprintln!(
+    // A bar on stderr when it is a terminal: the analysis on the grid, then
+    // the Monte Carlo and the exact moment (notes print above it).
+    let bar = crate::progress_bar(1, "{msg} [{bar:30}] {percent:>3}% ({elapsed})");
+    let note = |n: String| {
+        let line = format!(
             "note: {}",
             n.replace("forcing runs it", "--force runs it")
                 .replace("smaller ny", "smaller --ny")
                 .replace("shorter t_end", "shorter --t-end")
-        )
+        );
+        match &bar {
+            Some(bar) => bar.suspend(|| eprintln!("{line}")),
+            None => eprintln!("{line}"),
+        }
     };
-    let run = spec::simulate_fluid(&spec, &options, &mut notes).map_err(|e| failure(&shown, e))?;
+    let state = outcome::Progress::new();
+    let simulate = || spec::simulate_fluid_with(&spec, &options, &state, &mut |n| note(n));
+    let run = match &bar {
+        Some(bar) => {
+            bar.set_message(excerpt(&shown));
+            let run = crate::run_showing_progress(bar, &state, simulate);
+            bar.finish_and_clear();
+            run
+        }
+        None => simulate(),
+    };
+    let run = run.map_err(|e| failure(&shown, e))?;
     let spec::FluidSimulation {
         report,
         compressible,

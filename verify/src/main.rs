@@ -158,9 +158,22 @@ pub(crate) fn certify_showing_progress(
     };
     bar.set_message(messages::excerpt(label));
     let state = outcome::Progress::new();
+    // (nothing cancels here: `certify_with` returns a certificate)
+    let out = run_showing_progress(&bar, &state, || spec.certify_with(&state));
+    bar.finish_and_clear();
+    out.unwrap_or_else(|_| spec.certify())
+}
+
+/// Run `work` on a scoped thread (with the main thread's 8 MiB of stack)
+/// while this one moves `bar` to `state`'s counts every 100 ms; on this
+/// thread when no thread can be started.
+pub(crate) fn run_showing_progress<R: Send>(
+    bar: &indicatif::ProgressBar,
+    state: &outcome::Progress,
+    work: impl Fn() -> R + Sync,
+) -> R {
     let out = std::thread::scope(|scope| {
-        let worker =
-            std::thread::Builder::new().stack_size(8 << 20).spawn_scoped(scope, || spec.certify_with(&state)).ok()?;
+        let worker = std::thread::Builder::new().stack_size(8 << 20).spawn_scoped(scope, &work).ok()?;
         while !worker.is_finished() {
             let (done, total) = state.snapshot();
             bar.set_length(total);
@@ -168,13 +181,11 @@ pub(crate) fn certify_showing_progress(
             std::thread::sleep(std::time::Duration::from_millis(100));
         }
         match worker.join() {
-            Ok(out) => out.ok(),
+            Ok(out) => Some(out),
             Err(panic) => std::panic::resume_unwind(panic),
         }
     });
-    bar.finish_and_clear();
-    // `None`: no thread could be started (nothing cancels here): on this one.
-    out.unwrap_or_else(|| spec.certify())
+    out.unwrap_or_else(work)
 }
 
 fn read(path: &Path) -> Result<String, Failure> {

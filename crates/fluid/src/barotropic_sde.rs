@@ -35,8 +35,9 @@
 //! second order for the Stratonovich equation.
 
 use crate::barotropic::BarotropicMode;
-use crate::simulate::{strang_ensemble, EnsembleRow, StrangRun};
+use crate::simulate::{strang_ensemble, EnsembleRow, StrangRun, Ticks};
 use nalgebra::{Complex, DMatrix, DVector};
+use outcome::{Cancelled, Progress};
 
 type C = Complex<f64>;
 
@@ -169,24 +170,37 @@ impl BarotropicSde {
     /// (none unless `t_end` is positive and finite and the steps are at
     /// most [`crate::simulate::MAX_TAYLOR_STEPS`] per sample).
     pub fn exact_moments(&self, t_end: f64, samples: usize) -> Vec<ExactMoment> {
-        if !(t_end.is_finite() && t_end > 0.0) {
-            return vec![];
+        // A fresh `Progress` is never cancelled.
+        self.exact_moments_ticked(t_end, samples, Ticks { progress: &Progress::new(), weight: 1 }).unwrap_or_default()
+    }
+
+    /// [`Self::exact_moments`], its Taylor steps reported to `ticks`.
+    pub(crate) fn exact_moments_ticked(
+        &self,
+        t_end: f64,
+        samples: usize,
+        ticks: Ticks<'_>,
+    ) -> Result<Vec<ExactMoment>, Cancelled> {
+        if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
+            return Ok(vec![]);
         }
         let n = self.n();
         let dt = t_end / samples as f64;
-        let Some(sub) = self.taylor_steps(dt) else { return vec![] };
+        let Some(sub) = self.taylor_steps(dt) else { return Ok(vec![]) };
         let h = dt / sub as f64;
         let mut g = DMatrix::<C>::identity(n, n);
         let mut out = Vec::with_capacity(samples);
         for j in 1..=samples {
             for _ in 0..sub {
+                ticks.check()?;
                 g = self.taylor_step(&g, h);
+                ticks.step(1);
             }
             let worst = largest_hermitian_eigenvalue(&g);
             let g_orig = &self.l * &g * self.l.adjoint();
             out.push(ExactMoment { t: j as f64 * dt, worst_growth: worst, g: g_orig });
         }
-        out
+        Ok(out)
     }
 
     /// The Taylor steps over a time `dt`: each of norm at most 4 against
@@ -216,8 +230,12 @@ impl BarotropicSde {
         }
         let n3 = (self.n() as f64).powi(3);
         let Some(sub) = self.taylor_steps(t_end / samples as f64) else { return f64::INFINITY };
-        let steps = samples as f64 * sub as f64;
-        steps * 40.0 * (1.0 + 3.0 * self.b_hat.len() as f64) * 8.0 * n3 + samples as f64 * 30.0 * n3
+        samples as f64 * sub as f64 * self.taylor_step_flops() + samples as f64 * 30.0 * n3
+    }
+
+    /// The flops of one Taylor step in that estimate.
+    pub(crate) fn taylor_step_flops(&self) -> f64 {
+        40.0 * (1.0 + 3.0 * self.b_hat.len() as f64) * 8.0 * (self.n() as f64).powi(3)
     }
 
     /// `exp(h L) G^` by its Taylor series ([`crate::simulate::taylor_exp`]),
@@ -247,8 +265,20 @@ impl BarotropicSde {
         paths: usize,
         seed: u64,
     ) -> Vec<EnsembleRow> {
+        let run = StrangRun { dt, steps, record_every, paths, seed };
+        // A fresh `Progress` is never cancelled.
+        self.ensemble_ticked(x0, &run, Ticks { progress: &Progress::new(), weight: 1 }).unwrap_or_default()
+    }
+
+    /// [`Self::ensemble`], its path-steps reported to `ticks`.
+    pub(crate) fn ensemble_ticked(
+        &self,
+        x0: &DVector<C>,
+        run: &StrangRun,
+        ticks: Ticks<'_>,
+    ) -> Result<Vec<EnsembleRow>, Cancelled> {
         let n = self.n();
-        let half = self.drift_propagator(dt / 2.0);
+        let half = self.drift_propagator(run.dt / 2.0);
         let diag: Vec<Vec<C>> = self.b.iter().map(|b| (0..n).map(|i| b[(i, i)]).collect()).collect();
         let off: Vec<DMatrix<C>> = self
             .b
@@ -270,7 +300,6 @@ impl BarotropicSde {
                 z[i] *= e.exp();
             }
         };
-        let run = StrangRun { dt, steps, record_every, paths, seed };
-        strang_ensemble(x0, &half, self.b.len(), &run, noise, |x| self.energy(x))
+        strang_ensemble(x0, &half, self.b.len(), run, ticks, noise, |x| self.energy(x))
     }
 }

@@ -18,6 +18,7 @@
 use crate::grid::YGrid;
 use crate::modes::{Coefficients, Form, Mode};
 use nalgebra::{Complex, DMatrix, DVector};
+use outcome::{Cancelled, Progress};
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 
@@ -62,6 +63,25 @@ pub struct ModeSde {
     eta: Vec<Vec<f64>>,
 }
 
+/// Steps of a long run reported to a [`Progress`] (`weight` of its units
+/// each: [`crate::analysis::ModeStudy`] counts thousands of flops, so an
+/// ensemble and an exact moment share one bar), and its cancel flag.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Ticks<'a> {
+    pub progress: &'a Progress,
+    pub weight: u64,
+}
+
+impl Ticks<'_> {
+    pub(crate) fn step(&self, steps: u64) {
+        self.progress.step(steps.saturating_mul(self.weight));
+    }
+
+    pub(crate) fn check(&self) -> Result<(), Cancelled> {
+        self.progress.check()
+    }
+}
+
 /// The sizes of a Strang-splitting ensemble.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StrangRun {
@@ -77,14 +97,17 @@ pub(crate) struct StrangRun {
 /// `dW`, one per field, each of variance `dt`), half drift; `energy` recorded
 /// every `record_every` steps. One random stream per path
 /// ([`simulate::path_rng`]), so the numbers do not depend on the threads.
+/// Each path reports its steps to `ticks` at every record and stops there
+/// once the run is cancelled.
 pub(crate) fn strang_ensemble(
     x0: &DVector<C>,
     half: &DMatrix<C>,
     fields: usize,
     run: &StrangRun,
+    ticks: Ticks<'_>,
     noise: impl Fn(&DVector<C>, &[f64], &mut DVector<C>) + Sync,
     energy: impl Fn(&DVector<C>) -> f64 + Sync,
-) -> Vec<EnsembleRow> {
+) -> Result<Vec<EnsembleRow>, Cancelled> {
     let &StrangRun { dt, steps, record_every, paths, seed } = run;
     let n = x0.len();
     let v0 = energy(x0);
@@ -93,7 +116,7 @@ pub(crate) fn strang_ensemble(
     let sq = dt.sqrt();
     let per_path: Vec<Vec<f64>> = (0..paths)
         .into_par_iter()
-        .map(|p| {
+        .map(|p| -> Result<Vec<f64>, Cancelled> {
             let mut rng = simulate::path_rng(seed, p as u64);
             let mut x = x0.clone();
             let (mut y, mut z) = (DVector::<C>::zeros(n), DVector::<C>::zeros(n));
@@ -108,13 +131,15 @@ pub(crate) fn strang_ensemble(
                 x.gemv(one, half, &z, zero);
                 if s % record_every == 0 {
                     out.push(energy(&x));
+                    ticks.step(record_every as u64);
+                    ticks.check()?;
                 }
             }
-            out
+            Ok(out)
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let max_path_drift = per_path.iter().flatten().map(|e| (e - v0).abs() / v0).fold(0.0, f64::max);
-    (0..records)
+    Ok((0..records)
         .map(|r| {
             let vals: Vec<f64> = per_path.iter().map(|v| v[r]).collect();
             let mean = vals.iter().sum::<f64>() / paths as f64;
@@ -126,7 +151,7 @@ pub(crate) fn strang_ensemble(
                 max_path_drift,
             }
         })
-        .collect()
+        .collect())
 }
 
 /// `E V(t)` at the requested times, with its Monte Carlo standard error.
@@ -187,7 +212,19 @@ impl ModeSde {
         paths: usize,
         seed: u64,
     ) -> Option<Vec<EnsembleRow>> {
-        let half = self.drift_propagator(dt / 2.0)?;
+        let run = StrangRun { dt, steps, record_every, paths, seed };
+        // A fresh `Progress` is never cancelled.
+        self.ensemble_ticked(w0, &run, Ticks { progress: &Progress::new(), weight: 1 }).ok().flatten()
+    }
+
+    /// [`Self::ensemble`], its path-steps reported to `ticks`.
+    pub(crate) fn ensemble_ticked(
+        &self,
+        w0: &[f64],
+        run: &StrangRun,
+        ticks: Ticks<'_>,
+    ) -> Result<Option<Vec<EnsembleRow>>, Cancelled> {
+        let Some(half) = self.drift_propagator(run.dt / 2.0) else { return Ok(None) };
         let x0 = DVector::from_iterator(w0.len(), w0.iter().map(|x| C::new(*x, 0.0)));
         // The noise operators commute and are diagonal: the flow is a phase per node.
         let noise = |y: &DVector<C>, dws: &[f64], z: &mut DVector<C>| {
@@ -196,8 +233,7 @@ impl ModeSde {
                 z[a] = y[a] * C::from_polar(1.0, -self.k * phase);
             }
         };
-        let run = StrangRun { dt, steps, record_every, paths, seed };
-        Some(strang_ensemble(&x0, &half, self.eta.len(), &run, noise, |x| self.energy(x)))
+        strang_ensemble(&x0, &half, self.eta.len(), run, ticks, noise, |x| self.energy(x)).map(Some)
     }
 
     /// `A~ = A + (1/2) sum_j B_j^2` and the diagonals `-ik eta_j` of the
@@ -243,8 +279,12 @@ impl ModeSde {
         }
         let (a_tilde, bs) = self.moment_operators();
         let Some(sub) = Self::taylor_steps(&a_tilde, &bs, t_end / samples as f64) else { return f64::INFINITY };
-        let steps = samples as f64 * sub as f64;
-        steps * 12.0 * 16.0 * (self.r.nrows() as f64).powi(3)
+        samples as f64 * sub as f64 * self.taylor_step_flops()
+    }
+
+    /// The flops of one Taylor step in that estimate.
+    pub(crate) fn taylor_step_flops(&self) -> f64 {
+        12.0 * 16.0 * (self.r.nrows() as f64).powi(3)
     }
 
     /// The exact `E V(t)` from `w0`, at `t = j * t_end / samples`, `j = 1..=samples`
@@ -254,8 +294,21 @@ impl ModeSde {
     /// of the sum (the truncation error of a step is below `4^m / m!` of its
     /// norm, `m` the number of terms; at most 200).
     pub fn exact_mean_energy(&self, w0: &[f64], t_end: f64, samples: usize) -> Vec<(f64, f64)> {
+        // A fresh `Progress` is never cancelled.
+        self.exact_mean_energy_ticked(w0, t_end, samples, Ticks { progress: &Progress::new(), weight: 1 })
+            .unwrap_or_default()
+    }
+
+    /// [`Self::exact_mean_energy`], its Taylor steps reported to `ticks`.
+    pub(crate) fn exact_mean_energy_ticked(
+        &self,
+        w0: &[f64],
+        t_end: f64,
+        samples: usize,
+        ticks: Ticks<'_>,
+    ) -> Result<Vec<(f64, f64)>, Cancelled> {
         if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
-            return vec![];
+            return Ok(vec![]);
         }
         let n = w0.len();
         let (a_tilde, bs) = self.moment_operators();
@@ -276,16 +329,18 @@ impl ModeSde {
         let mut s = &x0 * x0.adjoint();
         let vc = &self.vc;
         let dt = t_end / samples as f64;
-        let Some(sub) = Self::taylor_steps(&a_tilde, &bs, dt) else { return vec![] };
+        let Some(sub) = Self::taylor_steps(&a_tilde, &bs, dt) else { return Ok(vec![]) };
         let h = dt / sub as f64;
         let mut out = vec![];
         for j in 1..=samples {
             for _ in 0..sub {
+                ticks.check()?;
                 s = taylor_exp(&s, h, apply);
+                ticks.step(1);
             }
             // tr(V S) = sum_ab V_ab S_ba, without the product
             out.push((j as f64 * dt, vc.iter().zip(s.transpose().iter()).map(|(v, x)| (v * x).re).sum()));
         }
-        out
+        Ok(out)
     }
 }

@@ -9,7 +9,7 @@
 //! second moment give `E V(t) / V(0)`.
 
 use crate::FluidSpec;
-use fluid::analysis::{analyse, mode_study, FluidModel, FluidProblem, ModeResult, Verdict};
+use fluid::analysis::{analyse_with, mode_study, FluidError, FluidModel, FluidProblem, ModeResult, Progress, Verdict};
 use serde_json::{json, Value};
 
 /// The grid the simulation runs on when none is asked for (at most the
@@ -102,9 +102,18 @@ pub enum FluidSimulationError {
     /// `1e150` and above make its generator form overflow).
     #[error("{0}")]
     Unrepresentable(String),
+    /// The run was stopped through its [`Progress`] before it ended.
+    #[error("the simulation was cancelled before it finished")]
+    Cancelled,
     /// Something that should not fail did.
     #[error("internal: {0}")]
     Failed(String),
+}
+
+impl From<fluid::analysis::Cancelled> for FluidSimulationError {
+    fn from(_: fluid::analysis::Cancelled) -> Self {
+        FluidSimulationError::Cancelled
+    }
 }
 
 fn invalid(field: &'static str, message: String) -> FluidSimulationError {
@@ -190,6 +199,43 @@ pub fn simulate_fluid(
     options: &FluidSimulationOptions,
     notes: Notes<'_>,
 ) -> Result<FluidSimulation, FluidSimulationError> {
+    simulate_fluid_with(spec, options, &Progress::new(), notes)
+}
+
+/// [`simulate_fluid`], its steps counted in `progress` and stopped with
+/// [`FluidSimulationError::Cancelled`] soon after [`Progress::cancel`]
+/// (between the analysis's modes, at each path's next output time, between
+/// two Taylor steps of the exact moment). The count has two phases, each
+/// planned when it starts: the analysis on the simulation's grid, then the
+/// Monte Carlo and the exact moment together (in about a thousand flops
+/// each, [`fluid::analysis::ModeStudy::ensemble_units`]); `done` only grows.
+///
+/// ```
+/// # let text = r#"{"name": "t", "fluid": {"model": "incompressible", "x_period": "2*pi",
+/// #   "y_interval": [0, "pi"], "boundary": "walls", "shear_flow": "sin(y)",
+/// #   "noise": ["0.3*cos(y)"], "ny": 32, "x_modes": 2}}"#;
+/// # let spec = spec::parse_fluid_spec(text).unwrap();
+/// # let options = spec::FluidSimulationOptions {
+/// #     mode: None, ny: Some(16), paths: Some(200), dt: 0.01, t_end: Some(1.0),
+/// #     outputs: 4, seed: 1, force: false, threads: 1.0,
+/// # };
+/// use fluid::analysis::Progress;
+/// let progress = Progress::new();
+/// let run = spec::simulate_fluid_with(&spec, &options, &progress, &mut |_| {}).unwrap();
+/// let (done, total) = progress.snapshot();
+/// assert!(total > 0 && done == total);
+/// // the same numbers as without a progress
+/// assert_eq!(run.mean, spec::simulate_fluid(&spec, &options, &mut |_| {}).unwrap().mean);
+/// progress.cancel();
+/// let stopped = spec::simulate_fluid_with(&spec, &options, &progress, &mut |_| {});
+/// assert_eq!(stopped.unwrap_err(), spec::FluidSimulationError::Cancelled);
+/// ```
+pub fn simulate_fluid_with(
+    spec: &FluidSpec,
+    options: &FluidSimulationOptions,
+    progress: &Progress,
+    notes: Notes<'_>,
+) -> Result<FluidSimulation, FluidSimulationError> {
     let compressible = matches!(spec.problem.model, FluidModel::Compressible { .. });
     let default_ny = if compressible { FLUID_SIMULATION_DEFAULT_NY.1 } else { FLUID_SIMULATION_DEFAULT_NY.0 };
     let ny = options.ny.unwrap_or(spec.problem.ny.min(default_ny));
@@ -212,7 +258,10 @@ pub fn simulate_fluid(
         return Err(invalid("outputs", "need at least one output time".into()));
     }
     let problem = FluidProblem { ny, ..spec.problem.clone() };
-    let analysis = analyse(&problem, &spec.settings).map_err(|e| FluidSimulationError::Failed(e.to_string()))?;
+    let analysis = analyse_with(&problem, &spec.settings, progress).map_err(|e| match e {
+        FluidError::Cancelled(_) => FluidSimulationError::Cancelled,
+        e => FluidSimulationError::Failed(e.to_string()),
+    })?;
     if analysis.verdict != Verdict::Stable || analysis.modes.is_empty() {
         return Err(FluidSimulationError::NoGrowth {
             ny,
@@ -329,10 +378,18 @@ pub fn simulate_fluid(
             options.threads
         ));
     }
+    progress.check()?;
+    progress.plan(study.ensemble_units(steps, paths).saturating_add(if run_exact {
+        study.exact_growth_units(t_end, records)
+    } else {
+        0
+    }));
     let (rows, exact) = rayon::join(
-        || study.ensemble(dt, steps, record_every, paths, options.seed),
-        || run_exact.then(|| study.exact_growth(t_end, records)),
+        || study.ensemble_with(dt, steps, record_every, paths, options.seed, progress),
+        || run_exact.then(|| study.exact_growth_with(t_end, records, progress)).transpose(),
     );
+    let (rows, exact) = (rows?, exact?);
+    progress.settle();
     let rows = rows.ok_or_else(|| FluidSimulationError::Failed("the drift's propagator could not be formed".into()))?;
     let times: Vec<f64> = rows.iter().map(|r| r.t).collect();
     let mean: Vec<f64> = rows.iter().map(|r| r.mean).collect();

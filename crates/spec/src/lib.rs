@@ -76,8 +76,9 @@ pub use fluid::{
 
 #[cfg(feature = "fluid")]
 pub use fluid_simulation::{
-    simulate_fluid, FluidSimulation, FluidSimulationError, FluidSimulationOptions, Notes, FLUID_EXACT_SECONDS,
-    FLUID_SIMULATION_DEFAULT_NY, FLUID_SIMULATION_DEFAULT_PATHS, FLUID_SIMULATION_MAX_NY, FLUID_SIMULATION_SECONDS,
+    simulate_fluid, simulate_fluid_with, FluidSimulation, FluidSimulationError, FluidSimulationOptions, Notes,
+    FLUID_EXACT_SECONDS, FLUID_SIMULATION_DEFAULT_NY, FLUID_SIMULATION_DEFAULT_PATHS, FLUID_SIMULATION_MAX_NY,
+    FLUID_SIMULATION_SECONDS,
 };
 
 #[cfg(feature = "fluid")]

@@ -536,6 +536,7 @@ def simulate_fluid(
     seed: int = 1,
     force: bool = False,
     base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+    progress: ProgressLike = None,
 ) -> Dict[str, Any]:
     """One x-mode of a fluid spec's discretised linear SDE beside its certified growth.
 
@@ -553,7 +554,10 @@ def simulate_fluid(
     and ``notes``. A Monte Carlo estimated above 15 minutes is refused, and
     an exact moment above 2 minutes skipped, unless ``force=True``. Raises
     :class:`SpecError` for an invalid spec, ``ValueError`` for invalid
-    settings or a spec without certified growth. Not interruptible.
+    settings or a spec without certified growth. Ctrl-C stops a run
+    (``KeyboardInterrupt``); ``progress`` as in :func:`certify` (the count
+    has two phases, each planned when it starts: the analysis on the grid,
+    then the Monte Carlo and the exact moment, in thousands of flops).
 
     >>> import energy_casimir as ec
     >>> r = ec.simulate_fluid("fixtures/fluids/arnold-boundary-sin.json", ny=16, paths=100, t_end=1.0, outputs=4)
@@ -563,18 +567,20 @@ def simulate_fluid(
     True
     """
     text, base = _read_input(spec, "simulate_fluid", base_dir)
-    out = _core.simulate_fluid_text(
-        text,
-        _base(base),
-        mode=None if mode is None else int(mode),
-        ny=None if ny is None else int(ny),
-        paths=None if paths is None else int(paths),
-        dt=float(dt),
-        t_end=None if t_end is None else float(t_end),
-        outputs=int(outputs),
-        seed=int(seed),
-        force=bool(force),
-    )
+    with _Progress(progress, "simulate_fluid") as p:
+        out = _core.simulate_fluid_text(
+            text,
+            _base(base),
+            mode=None if mode is None else int(mode),
+            ny=None if ny is None else int(ny),
+            paths=None if paths is None else int(paths),
+            dt=float(dt),
+            t_end=None if t_end is None else float(t_end),
+            outputs=int(outputs),
+            seed=int(seed),
+            force=bool(force),
+            progress=p.callback,
+        )
     return _arrays(json.loads(out))
 
 

@@ -54,6 +54,7 @@ def simulate_fluid_text(
     outputs: int = 200,
     seed: int = 1,
     force: bool = False,
+    progress: Optional[Callable[[int, int], Any]] = None,
 ) -> str: ...
 def engine_version() -> str: ...
 def sweep_text(

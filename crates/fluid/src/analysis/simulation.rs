@@ -5,7 +5,7 @@
 use super::*;
 use crate::barotropic::{BarotropicMode, WallGrid};
 use crate::barotropic_sde::BarotropicSde;
-use crate::simulate::{EnsembleRow, ModeSde};
+use crate::simulate::{EnsembleRow, ModeSde, StrangRun, Ticks};
 use nalgebra::{Complex, DMatrix, DVector};
 
 type C = Complex<f64>;
@@ -134,19 +134,72 @@ impl ModeStudy {
     /// `E V(t) / V(0)` from the start by the exact second moment, at
     /// `t = j t_end / samples`, `j = 1..=samples`.
     pub fn exact_growth(&self, t_end: f64, samples: usize) -> Vec<(f64, f64)> {
-        match &self.sde {
+        // A fresh `Progress` is never cancelled.
+        self.exact_growth_with(t_end, samples, &Progress::new()).unwrap_or_default()
+    }
+
+    /// [`Self::exact_growth`], counting [`Self::exact_growth_units`] in
+    /// `progress` as it goes and stopping with [`Cancelled`] soon after
+    /// [`Progress::cancel`] (between two Taylor steps).
+    ///
+    /// ```
+    /// # use fluid::analysis::{analyse, mode_study, FluidModel, FluidProblem, FluidSettings, Progress};
+    /// # use fluid::{expr::parse, grid::Boundary, profile::Profile};
+    /// # let p = |s: &str| parse(s, &Default::default()).unwrap();
+    /// # let profile = Profile::new(p("sin(y)"), vec![p("0.3*cos(y)")], (0.0, std::f64::consts::PI), Boundary::Walls);
+    /// # let problem = FluidProblem { model: FluidModel::Incompressible, profile, x_period: 6.283185307179586, ny: 16, x_modes: 1 };
+    /// # let analysis = analyse(&problem, &FluidSettings::default()).unwrap();
+    /// let study = mode_study(&problem, analysis.form.galilean_shift, 1).unwrap();
+    /// let progress = Progress::new();
+    /// progress.plan(study.exact_growth_units(1.0, 4));
+    /// let growth = study.exact_growth_with(1.0, 4, &progress).unwrap();
+    /// assert_eq!(growth, study.exact_growth(1.0, 4));
+    /// let (done, total) = progress.snapshot();
+    /// assert!(total > 0 && done == total);
+    /// progress.cancel();
+    /// assert!(study.exact_growth_with(1.0, 4, &progress).is_err());
+    /// ```
+    pub fn exact_growth_with(
+        &self,
+        t_end: f64,
+        samples: usize,
+        progress: &Progress,
+    ) -> Result<Vec<(f64, f64)>, Cancelled> {
+        Ok(match &self.sde {
             Sde::Incompressible { sde, start } => {
                 let v0 = sde.energy(&complex(start));
-                sde.exact_mean_energy(start, t_end, samples).into_iter().map(|(t, e)| (t, e / v0)).collect()
+                let ticks = Ticks { progress, weight: units(sde.taylor_step_flops()) };
+                sde.exact_mean_energy_ticked(start, t_end, samples, ticks)?
+                    .into_iter()
+                    .map(|(t, e)| (t, e / v0))
+                    .collect()
             }
             Sde::Compressible { sde, start } => {
                 let v0 = sde.energy(start);
-                sde.exact_moments(t_end, samples)
+                let ticks = Ticks { progress, weight: units(sde.taylor_step_flops()) };
+                sde.exact_moments_ticked(t_end, samples, ticks)?
                     .into_iter()
                     .map(|m| (m.t, start.dotc(&(&m.g * start)).re / v0))
                     .collect()
             }
+        })
+    }
+
+    /// The units of a [`Progress`] that [`Self::exact_growth_with`] counts
+    /// (about a thousand flops each, as [`Self::ensemble_units`], so the two
+    /// runs can share one total); 0 when it would not run.
+    pub fn exact_growth_units(&self, t_end: f64, samples: usize) -> u64 {
+        let flops = self.exact_growth_flops(t_end, samples);
+        if flops.is_finite() {
+            units(flops)
+        } else {
+            0
         }
+    }
+
+    /// The units of a [`Progress`] that [`Self::ensemble_with`] counts.
+    pub fn ensemble_units(&self, steps: usize, paths: usize) -> u64 {
+        units(self.flops_per_path_step()).saturating_mul(steps as u64).saturating_mul(paths as u64)
     }
 
     /// About how many floating-point operations [`Self::exact_growth`] takes.
@@ -183,16 +236,42 @@ impl ModeStudy {
         paths: usize,
         seed: u64,
     ) -> Option<Vec<EnsembleRow>> {
+        // A fresh `Progress` is never cancelled.
+        self.ensemble_with(dt, steps, record_every, paths, seed, &Progress::new()).ok().flatten()
+    }
+
+    /// [`Self::ensemble`], counting [`Self::ensemble_units`] in `progress`
+    /// as the paths go and stopping with [`Cancelled`] soon after
+    /// [`Progress::cancel`] (at each path's next record).
+    pub fn ensemble_with(
+        &self,
+        dt: f64,
+        steps: usize,
+        record_every: usize,
+        paths: usize,
+        seed: u64,
+        progress: &Progress,
+    ) -> Result<Option<Vec<EnsembleRow>>, Cancelled> {
+        let run = StrangRun { dt, steps, record_every, paths, seed };
+        let ticks = Ticks { progress, weight: units(self.flops_per_path_step()) };
         let (rows, v0) = match &self.sde {
             Sde::Incompressible { sde, start } => {
-                (sde.ensemble(start, dt, steps, record_every, paths, seed)?, sde.energy(&complex(start)))
+                let Some(rows) = sde.ensemble_ticked(start, &run, ticks)? else { return Ok(None) };
+                (rows, sde.energy(&complex(start)))
             }
-            Sde::Compressible { sde, start } => {
-                (sde.ensemble(start, dt, steps, record_every, paths, seed), sde.energy(start))
-            }
+            Sde::Compressible { sde, start } => (sde.ensemble_ticked(start, &run, ticks)?, sde.energy(start)),
         };
-        Some(rows.into_iter().map(|r| EnsembleRow { mean: r.mean / v0, std_error: r.std_error / v0, ..r }).collect())
+        Ok(Some(
+            rows.into_iter().map(|r| EnsembleRow { mean: r.mean / v0, std_error: r.std_error / v0, ..r }).collect(),
+        ))
     }
+}
+
+/// Flops in units of a thousand (at least one), the unit a [`ModeStudy`]
+/// counts its progress in.
+fn units(flops: f64) -> u64 {
+    // (`as` saturates; the clamp keeps a sum of many within u64)
+    (flops / 1000.0).ceil().clamp(1.0, 1e15) as u64
 }
 
 fn complex(x: &[f64]) -> DVector<C> {
