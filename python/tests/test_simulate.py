@@ -138,15 +138,31 @@ def test_progress_counts_both_ensembles_and_ctrl_c_stops_a_long_run(interrupted)
 
 
 def test_simulate_fluid_reports_progress_and_ctrl_c_stops_it(interrupted):
-    """The count only grows and ends at its total (two phases: the analysis
-    on the grid, then the Monte Carlo and the exact moment); Ctrl-C ends a
-    run planned for about an hour (10^6 paths of 1000 steps at ny = 32)."""
+    """The count is planned once and only grows: it is seen part way
+    (a run of a few seconds, looked at ten times a second) and ends at its
+    total; an exception in the callback stops the run and propagates; Ctrl-C
+    ends a run estimated at about 20 minutes (10^6 paths of 1000 steps at
+    ny = 32)."""
+    arnold = FIXTURES / "fluids" / "arnold-boundary-sin.json"
     calls = []
-    r = ec.simulate_fluid(FIXTURES / "fluids" / "arnold-boundary-sin.json", ny=16, paths=2000, t_end=2.0, outputs=4,
+    r = ec.simulate_fluid(arnold, ny=16, paths=8000, t_end=2.0, outputs=4,
                           progress=lambda done, total: calls.append((done, total)))
     assert r["m"] == 1
     assert calls and calls[-1][0] == calls[-1][1] > 0
-    assert all(a[0] <= b[0] and a[1] <= b[1] for a, b in zip(calls, calls[1:]))
+    assert any(0 < done < total for done, total in calls), calls
+    planned = {total for _, total in calls if total > 0}
+    assert len(planned) == 1, planned
+    assert all(a[0] <= b[0] for a, b in zip(calls, calls[1:]))
+
+    class Stop(Exception):
+        pass
+
+    def stop(done, total):
+        if done > 0:
+            raise Stop
+
+    with pytest.raises(Stop):
+        ec.simulate_fluid(arnold, ny=16, paths=200000, t_end=10.0, outputs=4, force=True, progress=stop)
     interrupted("simulate_fluid('fixtures/fluids/arnold-boundary-sin.json', paths=10**6, t_end=10.0, force=True)", 2.0)
 
 

@@ -176,8 +176,11 @@ pub(crate) fn run_showing_progress<R: Send>(
         let worker = std::thread::Builder::new().stack_size(8 << 20).spawn_scoped(scope, &work).ok()?;
         while !worker.is_finished() {
             let (done, total) = state.snapshot();
-            bar.set_length(total);
-            bar.set_position(done);
+            // (indicatif draws a length of 0 as full: nothing planned yet)
+            if total > 0 {
+                bar.set_length(total);
+                bar.set_position(done);
+            }
             std::thread::sleep(std::time::Duration::from_millis(100));
         }
         match worker.join() {

@@ -192,8 +192,7 @@ impl BarotropicSde {
         let mut out = Vec::with_capacity(samples);
         for j in 1..=samples {
             for _ in 0..sub {
-                ticks.check()?;
-                g = self.taylor_step(&g, h);
+                g = self.taylor_step(&g, h, ticks.progress)?;
                 ticks.step(1);
             }
             let worst = largest_hermitian_eigenvalue(&g);
@@ -228,9 +227,25 @@ impl BarotropicSde {
         if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
             return 0.0;
         }
-        let n3 = (self.n() as f64).powi(3);
-        let Some(sub) = self.taylor_steps(t_end / samples as f64) else { return f64::INFINITY };
-        samples as f64 * sub as f64 * self.taylor_step_flops() + samples as f64 * 30.0 * n3
+        match self.exact_taylor_steps(t_end, samples) {
+            Some(steps) => steps as f64 * self.taylor_step_flops() + samples as f64 * self.per_sample_flops(),
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The flops of each sample's eigenvalue problem and products in that
+    /// estimate.
+    pub(crate) fn per_sample_flops(&self) -> f64 {
+        30.0 * (self.n() as f64).powi(3)
+    }
+
+    /// The Taylor steps [`Self::exact_moments`] takes in all (0 when it has
+    /// nothing to do); `None` when they would be too many.
+    pub(crate) fn exact_taylor_steps(&self, t_end: f64, samples: usize) -> Option<usize> {
+        if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
+            return Some(0);
+        }
+        self.taylor_steps(t_end / samples as f64)?.checked_mul(samples)
     }
 
     /// The flops of one Taylor step in that estimate.
@@ -240,8 +255,8 @@ impl BarotropicSde {
 
     /// `exp(h L) G^` by its Taylor series ([`crate::simulate::taylor_exp`]),
     /// each term kept Hermitian.
-    fn taylor_step(&self, g: &DMatrix<C>, h: f64) -> DMatrix<C> {
-        crate::simulate::taylor_exp(g, h, |t| hermitian_part(&self.backward_rate(t)))
+    fn taylor_step(&self, g: &DMatrix<C>, h: f64, progress: &Progress) -> Result<DMatrix<C>, Cancelled> {
+        crate::simulate::taylor_exp(g, h, |t| hermitian_part(&self.backward_rate(t)), progress)
     }
 
     /// `exp(A h)`, exact from the eigenbasis of the Hermitian `-i A^`.

@@ -38,18 +38,25 @@ pub(crate) fn taylor_step_count(norm_dt: f64) -> Option<usize> {
 /// `exp(h L) s` by the Taylor series of the exponential, summed until a
 /// term falls below `1e-17` of the sum (at least 4 terms, at most 200): one
 /// step of the exact second moments here and in [`crate::barotropic_sde`],
-/// `apply` being `L`.
-pub(crate) fn taylor_exp(s: &DMatrix<C>, h: f64, apply: impl Fn(&DMatrix<C>) -> DMatrix<C>) -> DMatrix<C> {
+/// `apply` being `L`. `progress` is looked at before each term (a step of
+/// the compressible model at ny = 256 can take a minute).
+pub(crate) fn taylor_exp(
+    s: &DMatrix<C>,
+    h: f64,
+    apply: impl Fn(&DMatrix<C>) -> DMatrix<C>,
+    progress: &Progress,
+) -> Result<DMatrix<C>, Cancelled> {
     let mut sum = s.clone();
     let mut term = s.clone();
     for m in 1..=200 {
+        progress.check()?;
         term = apply(&term) * C::new(h / m as f64, 0.0);
         sum += &term;
         if term.norm() <= 1e-17 * sum.norm() && m >= 4 {
             break;
         }
     }
-    sum
+    Ok(sum)
 }
 
 /// One x-mode's linear SDE, ready to simulate.
@@ -110,6 +117,10 @@ pub(crate) fn strang_ensemble(
 ) -> Result<Vec<EnsembleRow>, Cancelled> {
     let &StrangRun { dt, steps, record_every, paths, seed } = run;
     let n = x0.len();
+    // Steps between two looks at `ticks`: about 1e7 flops (two products
+    // with the dense `half`, `16 n^2` flops), at most an output interval,
+    // so that a cancel is seen within milliseconds however few the outputs.
+    let chunk = ((1e7 / (16.0 * (n * n).max(1) as f64)) as usize).clamp(1, record_every.max(1));
     let v0 = energy(x0);
     let records = steps / record_every;
     let (one, zero) = (C::new(1.0, 0.0), C::new(0.0, 0.0));
@@ -117,7 +128,9 @@ pub(crate) fn strang_ensemble(
     let per_path: Vec<Vec<f64>> = (0..paths)
         .into_par_iter()
         .map(|p| -> Result<Vec<f64>, Cancelled> {
+            ticks.check()?;
             let mut rng = simulate::path_rng(seed, p as u64);
+            let mut counted = 0;
             let mut x = x0.clone();
             let (mut y, mut z) = (DVector::<C>::zeros(n), DVector::<C>::zeros(n));
             let mut dws = vec![0.0; fields];
@@ -131,7 +144,10 @@ pub(crate) fn strang_ensemble(
                 x.gemv(one, half, &z, zero);
                 if s % record_every == 0 {
                     out.push(energy(&x));
-                    ticks.step(record_every as u64);
+                }
+                if s % chunk == 0 || s == steps {
+                    ticks.step((s - counted) as u64);
+                    counted = s;
                     ticks.check()?;
                 }
             }
@@ -274,12 +290,20 @@ impl ModeSde {
     /// (7.7 s and 64 s, `channel-sin-walls` to `t = 10`). For a caller to
     /// decide whether to run it.
     pub fn exact_mean_energy_flops(&self, t_end: f64, samples: usize) -> f64 {
+        match self.exact_taylor_steps(t_end, samples) {
+            Some(steps) => steps as f64 * self.taylor_step_flops(),
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The Taylor steps [`Self::exact_mean_energy`] takes in all (0 when it
+    /// has nothing to do); `None` when they would be too many.
+    pub(crate) fn exact_taylor_steps(&self, t_end: f64, samples: usize) -> Option<usize> {
         if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
-            return 0.0;
+            return Some(0);
         }
         let (a_tilde, bs) = self.moment_operators();
-        let Some(sub) = Self::taylor_steps(&a_tilde, &bs, t_end / samples as f64) else { return f64::INFINITY };
-        samples as f64 * sub as f64 * self.taylor_step_flops()
+        Self::taylor_steps(&a_tilde, &bs, t_end / samples as f64)?.checked_mul(samples)
     }
 
     /// The flops of one Taylor step in that estimate.
@@ -334,8 +358,7 @@ impl ModeSde {
         let mut out = vec![];
         for j in 1..=samples {
             for _ in 0..sub {
-                ticks.check()?;
-                s = taylor_exp(&s, h, apply);
+                s = taylor_exp(&s, h, apply, ticks.progress)?;
                 ticks.step(1);
             }
             // tr(V S) = sum_ab V_ab S_ba, without the product

@@ -116,6 +116,31 @@ impl From<fluid::analysis::Cancelled> for FluidSimulationError {
     }
 }
 
+/// `work` with a fresh [`Progress`] that is cancelled when `outer` is (a
+/// scoped thread looks every 10 ms until `work` returns). The analysis on
+/// the simulation's grid counts its own steps in it, so that `outer` has one
+/// plan, in one unit, and its fraction done only grows. Without a thread,
+/// `work` runs all the same, only not cancellable.
+fn with_cancel_of<R>(outer: &Progress, work: impl FnOnce(&Progress) -> R) -> R {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let inner = Progress::new();
+    let finished = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let _watcher = std::thread::Builder::new().spawn_scoped(scope, || {
+            while !finished.load(Ordering::Acquire) {
+                if outer.is_cancelled() {
+                    inner.cancel();
+                    return;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            }
+        });
+        let out = work(&inner);
+        finished.store(true, Ordering::Release);
+        out
+    })
+}
+
 fn invalid(field: &'static str, message: String) -> FluidSimulationError {
     FluidSimulationError::Invalid { field, message }
 }
@@ -204,11 +229,12 @@ pub fn simulate_fluid(
 
 /// [`simulate_fluid`], its steps counted in `progress` and stopped with
 /// [`FluidSimulationError::Cancelled`] soon after [`Progress::cancel`]
-/// (between the analysis's modes, at each path's next output time, between
-/// two Taylor steps of the exact moment). The count has two phases, each
-/// planned when it starts: the analysis on the simulation's grid, then the
-/// Monte Carlo and the exact moment together (in about a thousand flops
-/// each, [`fluid::analysis::ModeStudy::ensemble_units`]); `done` only grows.
+/// (between the analysis's modes, every 1e7 flops or so of each path,
+/// between two terms of a Taylor step of the exact moment). The count is
+/// planned once, when the Monte Carlo and the exact moment start, in units
+/// of about a thousand flops
+/// ([`fluid::analysis::ModeStudy::ensemble_units`]); until then (the
+/// analysis on the simulation's grid and the dense start) it is `(0, 0)`.
 ///
 /// ```
 /// # let text = r#"{"name": "t", "fluid": {"model": "incompressible", "x_period": "2*pi",
@@ -258,10 +284,11 @@ pub fn simulate_fluid_with(
         return Err(invalid("outputs", "need at least one output time".into()));
     }
     let problem = FluidProblem { ny, ..spec.problem.clone() };
-    let analysis = analyse_with(&problem, &spec.settings, progress).map_err(|e| match e {
-        FluidError::Cancelled(_) => FluidSimulationError::Cancelled,
-        e => FluidSimulationError::Failed(e.to_string()),
-    })?;
+    let analysis =
+        with_cancel_of(progress, |inner| analyse_with(&problem, &spec.settings, inner)).map_err(|e| match e {
+            FluidError::Cancelled(_) => FluidSimulationError::Cancelled,
+            e => FluidSimulationError::Failed(e.to_string()),
+        })?;
     if analysis.verdict != Verdict::Stable || analysis.modes.is_empty() {
         return Err(FluidSimulationError::NoGrowth {
             ny,
@@ -358,7 +385,8 @@ pub fn simulate_fluid_with(
             minutes: mc_seconds / 60.0,
         });
     }
-    let exact_seconds = study.exact_growth_flops(t_end, records) / FLOPS_PER_SECOND;
+    let (exact_flops, exact_units) = study.exact_growth_cost(t_end, records);
+    let exact_seconds = exact_flops / FLOPS_PER_SECOND;
     let run_exact = exact_seconds.is_finite() && (exact_seconds <= FLUID_EXACT_SECONDS || options.force);
     if !exact_seconds.is_finite() {
         notes(format!(
@@ -379,11 +407,10 @@ pub fn simulate_fluid_with(
         ));
     }
     progress.check()?;
-    progress.plan(study.ensemble_units(steps, paths).saturating_add(if run_exact {
-        study.exact_growth_units(t_end, records)
-    } else {
-        0
-    }));
+    // (capped: a forced run of 1e7 paths of 1e8 steps would pass u64, and
+    // the count only needs its proportions)
+    let planned = study.ensemble_units(steps, paths).saturating_add(if run_exact { exact_units } else { 0 });
+    progress.plan(planned.min(u64::MAX / 4));
     let (rows, exact) = rayon::join(
         || study.ensemble_with(dt, steps, record_every, paths, options.seed, progress),
         || run_exact.then(|| study.exact_growth_with(t_end, records, progress)).transpose(),

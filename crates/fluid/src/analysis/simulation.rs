@@ -138,9 +138,10 @@ impl ModeStudy {
         self.exact_growth_with(t_end, samples, &Progress::new()).unwrap_or_default()
     }
 
-    /// [`Self::exact_growth`], counting [`Self::exact_growth_units`] in
-    /// `progress` as it goes and stopping with [`Cancelled`] soon after
-    /// [`Progress::cancel`] (between two Taylor steps).
+    /// [`Self::exact_growth`], counting [`Self::exact_growth_cost`] in
+    /// `progress` as it goes (its [`Self::exact_growth_cost`]) and stopping
+    /// with [`Cancelled`] soon after [`Progress::cancel`] (between two terms
+    /// of a Taylor step).
     ///
     /// ```
     /// # use fluid::analysis::{analyse, mode_study, FluidModel, FluidProblem, FluidSettings, Progress};
@@ -151,7 +152,7 @@ impl ModeStudy {
     /// # let analysis = analyse(&problem, &FluidSettings::default()).unwrap();
     /// let study = mode_study(&problem, analysis.form.galilean_shift, 1).unwrap();
     /// let progress = Progress::new();
-    /// progress.plan(study.exact_growth_units(1.0, 4));
+    /// progress.plan(study.exact_growth_cost(1.0, 4).1);
     /// let growth = study.exact_growth_with(1.0, 4, &progress).unwrap();
     /// assert_eq!(growth, study.exact_growth(1.0, 4));
     /// let (done, total) = progress.snapshot();
@@ -185,15 +186,27 @@ impl ModeStudy {
         })
     }
 
-    /// The units of a [`Progress`] that [`Self::exact_growth_with`] counts
-    /// (about a thousand flops each, as [`Self::ensemble_units`], so the two
-    /// runs can share one total); 0 when it would not run.
-    pub fn exact_growth_units(&self, t_end: f64, samples: usize) -> u64 {
-        let flops = self.exact_growth_flops(t_end, samples);
-        if flops.is_finite() {
-            units(flops)
-        } else {
-            0
+    /// What [`Self::exact_growth`] costs: about how many floating-point
+    /// operations ([`Self::exact_growth_flops`]), and the units of a
+    /// [`Progress`] that [`Self::exact_growth_with`] counts (about a
+    /// thousand flops each, as [`Self::ensemble_units`], so the two runs can
+    /// share one total). Infinite flops and 0 units when the Taylor steps
+    /// would be too many (it then computes nothing).
+    pub fn exact_growth_cost(&self, t_end: f64, samples: usize) -> (f64, u64) {
+        // (the step count once: for the compressible model it takes SVDs)
+        let (steps, step_flops, per_sample) = match &self.sde {
+            Sde::Incompressible { sde, .. } => (sde.exact_taylor_steps(t_end, samples), sde.taylor_step_flops(), 0.0),
+            Sde::Compressible { sde, .. } => {
+                (sde.exact_taylor_steps(t_end, samples), sde.taylor_step_flops(), sde.per_sample_flops())
+            }
+        };
+        match steps {
+            Some(0) => (0.0, 0),
+            Some(steps) => (
+                steps as f64 * step_flops + samples as f64 * per_sample,
+                units(step_flops).saturating_mul(steps as u64),
+            ),
+            None => (f64::INFINITY, 0),
         }
     }
 
@@ -204,10 +217,7 @@ impl ModeStudy {
 
     /// About how many floating-point operations [`Self::exact_growth`] takes.
     pub fn exact_growth_flops(&self, t_end: f64, samples: usize) -> f64 {
-        match &self.sde {
-            Sde::Incompressible { sde, .. } => sde.exact_mean_energy_flops(t_end, samples),
-            Sde::Compressible { sde, .. } => sde.exact_moments_flops(t_end, samples),
-        }
+        self.exact_growth_cost(t_end, samples).0
     }
 
     /// About how many floating-point operations [`Self::ensemble`] takes
@@ -242,7 +252,7 @@ impl ModeStudy {
 
     /// [`Self::ensemble`], counting [`Self::ensemble_units`] in `progress`
     /// as the paths go and stopping with [`Cancelled`] soon after
-    /// [`Progress::cancel`] (at each path's next record).
+    /// [`Progress::cancel`] (each path looks every 1e7 flops or so).
     pub fn ensemble_with(
         &self,
         dt: f64,
@@ -268,9 +278,9 @@ impl ModeStudy {
 }
 
 /// Flops in units of a thousand (at least one), the unit a [`ModeStudy`]
-/// counts its progress in.
+/// counts its progress in. (Products of these with counts saturate; a
+/// caller planning their sum caps it, see `spec::simulate_fluid_with`.)
 fn units(flops: f64) -> u64 {
-    // (`as` saturates; the clamp keeps a sum of many within u64)
     (flops / 1000.0).ceil().clamp(1.0, 1e15) as u64
 }
 
