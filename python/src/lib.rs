@@ -234,8 +234,9 @@ fn simulate_text(
 /// (`spec::simulate_fluid`, as `verify simulate` runs it): the report as
 /// JSON text. Notes (a skipped exact moment, values beyond the doubles) are
 /// in the report's `notes`. The run is on a worker thread: Ctrl-C stops it
-/// and `progress(done, total)` follows it (two phases: the analysis on the
-/// grid, then the Monte Carlo and the exact moment).
+/// and `progress(done, total)` follows it (planned once, when the Monte
+/// Carlo and the exact moment start; `(0, 0)` during the analysis on the
+/// grid).
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (text, base=None, mode=None, ny=None, paths=None, dt=0.01, t_end=None, outputs=200, seed=1, force=false, progress=None))]

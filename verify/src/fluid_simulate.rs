@@ -76,8 +76,9 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         force: args.force,
         threads: (rayon::current_num_threads() as f64).min(cores),
     };
-    // A bar on stderr when it is a terminal: the analysis on the grid, then
-    // the Monte Carlo and the exact moment (notes print above it).
+    // A bar on stderr when it is a terminal, for the Monte Carlo and the
+    // exact moment (empty during the analysis on the grid; notes print
+    // above it).
     let bar = crate::progress_bar(1, "{msg} [{bar:30}] {percent:>3}% ({elapsed})");
     let note = |n: String| {
         let line = format!(

@@ -104,8 +104,9 @@ pub(crate) struct StrangRun {
 /// `dW`, one per field, each of variance `dt`), half drift; `energy` recorded
 /// every `record_every` steps. One random stream per path
 /// ([`simulate::path_rng`]), so the numbers do not depend on the threads.
-/// Each path reports its steps to `ticks` at every record and stops there
-/// once the run is cancelled.
+/// Each path reports its steps to `ticks` every `chunk` steps (about 1e7
+/// flops, at most an output interval) and stops there once the run is
+/// cancelled.
 pub(crate) fn strang_ensemble(
     x0: &DVector<C>,
     half: &DMatrix<C>,
