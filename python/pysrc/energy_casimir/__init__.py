@@ -556,8 +556,8 @@ def simulate_fluid(
     :class:`SpecError` for an invalid spec, ``ValueError`` for invalid
     settings or a spec without certified growth. Ctrl-C stops a run
     (``KeyboardInterrupt``); ``progress`` as in :func:`certify` (the count
-    has two phases, each planned when it starts: the analysis on the grid,
-    then the Monte Carlo and the exact moment, in thousands of flops).
+    is planned once, when the Monte Carlo and the exact moment start, in
+    thousands of flops; it is ``(0, 0)`` during the analysis on the grid).
 
     >>> import energy_casimir as ec
     >>> r = ec.simulate_fluid("fixtures/fluids/arnold-boundary-sin.json", ny=16, paths=100, t_end=1.0, outputs=4)
