@@ -74,6 +74,114 @@ pub fn pow2(e: i32) -> f64 {
     f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
 }
 
+/// Band buffers kept for reuse within a thread.
+///
+/// Why. The verified checks allocate several bands of `(J + 3) n` rows a
+/// check (the lifted matrix and its bounds, the scaled copy, the factors,
+/// `L |D| L^T`, the shifted Cholesky), megabytes each, and the ladder and
+/// the modes repeat them. glibc returns such blocks to the kernel when they
+/// are freed (`munmap`, or `madvise` in a worker thread's arena), so every
+/// new one page-faulted in again: measured 2026-11-27 (fifth session) at ny = 1024 (mode 1
+/// of `bench/cubic-walls.json`, `fluid_mode`), 29% of a banded check
+/// (11.2 ms, against 8.0 ms with glibc told to keep its memory through
+/// `MALLOC_MMAP_THRESHOLD_` and `MALLOC_TRIM_THRESHOLD_`). A few freed
+/// bands per thread are kept here instead; small ones are left to the
+/// allocator. What is kept is at most [`pool::KEEP`] bands a thread, so
+/// memory stays linear in the size of the matrices.
+mod pool {
+    use std::cell::RefCell;
+
+    /// Bands of fewer doubles (256 KB) are left to the allocator.
+    const MIN_LEN: usize = 1 << 15;
+    /// At most this many free bands are kept a thread.
+    pub(super) const KEEP: usize = 6;
+
+    thread_local! {
+        static FREE: RefCell<Vec<Vec<f64>>> = const { RefCell::new(Vec::new()) };
+    }
+
+    /// A kept buffer of capacity at least `len` if there is one (else the
+    /// largest kept, or none), emptied.
+    fn take(len: usize) -> Option<Vec<f64>> {
+        if len < MIN_LEN {
+            return None;
+        }
+        FREE.try_with(|f| {
+            let mut f = f.try_borrow_mut().ok()?;
+            let at = f
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| v.capacity() >= len)
+                .min_by_key(|(_, v)| v.capacity())
+                .or_else(|| f.iter().enumerate().max_by_key(|(_, v)| v.capacity()))
+                .map(|(i, _)| i)?;
+            let mut v = f.swap_remove(at);
+            v.clear();
+            Some(v)
+        })
+        .ok()
+        .flatten()
+    }
+
+    /// `len` zeros.
+    pub(super) fn zeroed(len: usize) -> Vec<f64> {
+        match take(len) {
+            Some(mut v) => {
+                v.resize(len, 0.0);
+                v
+            }
+            None => vec![0.0; len],
+        }
+    }
+
+    /// A copy of `src`, given back when dropped.
+    pub(super) fn copy_of(src: &[f64]) -> Buffer {
+        Buffer(match take(src.len()) {
+            Some(mut v) => {
+                v.extend_from_slice(src);
+                v
+            }
+            None => src.to_vec(),
+        })
+    }
+
+    /// A buffer that is given back to the pool when dropped.
+    pub(super) struct Buffer(Vec<f64>);
+
+    impl std::ops::Deref for Buffer {
+        type Target = [f64];
+        fn deref(&self) -> &[f64] {
+            &self.0
+        }
+    }
+
+    impl std::ops::DerefMut for Buffer {
+        fn deref_mut(&mut self) -> &mut [f64] {
+            &mut self.0
+        }
+    }
+
+    impl Drop for Buffer {
+        fn drop(&mut self) {
+            give(std::mem::take(&mut self.0));
+        }
+    }
+
+    /// Keep `v` for reuse (if large, and fewer than [`KEEP`] are kept).
+    pub(super) fn give(v: Vec<f64>) {
+        if v.capacity() < MIN_LEN {
+            return;
+        }
+        let _ = FREE.try_with(|f| {
+            if let Ok(mut f) = f.try_borrow_mut() {
+                if f.len() < KEEP {
+                    f.push(v);
+                }
+            }
+        });
+    }
+}
+
 /// A symmetric `n x n` matrix with `a[i][j] = 0` for `|i - j| > bandwidth`,
 /// stored by its lower band: `band[i * (b + 1) + d] = a[i][i - d]`.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,6 +189,12 @@ pub struct SymBanded {
     n: usize,
     b: usize,
     band: Vec<f64>,
+}
+
+impl Drop for SymBanded {
+    fn drop(&mut self) {
+        pool::give(std::mem::take(&mut self.band));
+    }
 }
 
 /// A banded matrix and an entrywise bound on its rounding, built entry by
@@ -211,7 +325,7 @@ fn eliminate(c: &mut [f64], t: &mut [f64], b: usize, k: usize, pivot: f64, times
 impl SymBanded {
     /// The zero matrix of size `n` and bandwidth `b`.
     pub fn zeros(n: usize, b: usize) -> Self {
-        SymBanded { n, b, band: vec![0.0; n * (b + 1)] }
+        SymBanded { n, b, band: pool::zeroed(n * (b + 1)) }
     }
 
     /// Size.
@@ -261,6 +375,21 @@ impl SymBanded {
                 y[i - d] += row[d] * x[i];
             }
         }
+    }
+
+    /// This matrix stored by full rows, for repeated products ([`BandedRows`]).
+    pub fn rows(&self) -> BandedRows {
+        let (n, b) = (self.n, self.b);
+        let w = 2 * b + 1;
+        let mut rows = vec![0.0; n * w];
+        for i in 0..n {
+            for j in i.saturating_sub(b)..=i {
+                let v = self.get(i, j);
+                rows[i * w + (j + b - i)] = v;
+                rows[j * w + (i + b - j)] = v;
+            }
+        }
+        BandedRows { n, b, rows }
     }
 
     /// `A diag(w) A`, a symmetric matrix of bandwidth `2b`.
@@ -488,7 +617,7 @@ impl SymBanded {
         // c[i * b1 + d]: a[i][i - d] (the diagonal shifted) until pivot
         // i - d is taken, then L[i][i - d], L = R^T. Right-looking
         // (`eliminate`), like `ldl`.
-        let mut c = self.band.clone();
+        let mut c = pool::copy_of(&self.band);
         let mut diag_err = vec![0.0f64; n];
         for i in 0..n {
             let d = c[i * b1] - shift[i];
@@ -769,11 +898,11 @@ impl SymBanded {
     /// form used until 2026-11-27 chained each entry's sum to the next and
     /// took about twice as long (4.6 ms against 9.6 ms for the lifted
     /// matrix of ny = 2048, two noise fields).
-    fn ldl(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+    fn ldl(&self) -> Option<(pool::Buffer, Vec<f64>)> {
         let (n, b) = (self.n, self.b);
         let b1 = b + 1;
         // l[i * b1 + d]: a[i][i - d] until pivot i - d is taken, then L[i][i - d]
-        let mut l = self.band.clone();
+        let mut l = pool::copy_of(&self.band);
         let mut dg = vec![0.0; n];
         let mut t = vec![0.0; b];
         for k in 0..n {
@@ -844,7 +973,7 @@ impl SymBanded {
     /// Cholesky factor `A = C C^T`, `C` lower triangular with the same bandwidth.
     pub fn cholesky(&self) -> Result<BandedCholesky, BandedError> {
         let mut c = vec![];
-        self.factor_into(None, &mut c).map(|()| BandedCholesky { n: self.n, b: self.b, c })
+        self.factor_into(None, &mut c).map(|()| BandedCholesky::from_band(self.n, self.b, &c))
     }
 
     /// Whether `self - shift * other` (same size and bandwidth) has a
@@ -902,36 +1031,128 @@ impl SymBanded {
     }
 }
 
-/// A banded Cholesky factor `A = C C^T`.
+/// A symmetric banded matrix stored by full rows, for repeated products:
+/// `rows[i * (2b + 1) + (j + b - i)] = a[i][j]` (0 outside the matrix), so
+/// `(A x)_i` is one forward inner product (four partial sums) of a
+/// stored row with `x[i - b ..= i + b]`. [`SymBanded::mul_vec`] reads the
+/// lower band only and so walks `x` backwards in one pass and scatters into
+/// `y` in a second; this costs twice the memory and is built once.
+///
+/// ```
+/// use fluid::banded::SymBanded;
+/// // tridiag(-1, 2, -1) of size 4 times (1, 2, 3, 4) = (0, 0, 0, 5)
+/// let mut a = SymBanded::zeros(4, 1);
+/// for i in 0..4 { a.add(i, i, 2.0); }
+/// for i in 1..4 { a.add(i, i - 1, -1.0); }
+/// let mut y = vec![0.0; 4];
+/// a.rows().mul_vec(&[1.0, 2.0, 3.0, 4.0], &mut y);
+/// assert_eq!(y, vec![0.0, 0.0, 0.0, 5.0]);
+/// ```
+#[derive(Clone, Debug)]
+pub struct BandedRows {
+    n: usize,
+    b: usize,
+    rows: Vec<f64>,
+}
+
+impl BandedRows {
+    /// `y = A x`.
+    pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        let (n, b) = (self.n, self.b);
+        let w = 2 * b + 1;
+        for (i, yi) in y.iter_mut().enumerate().take(n) {
+            let (lo, hi) = (i.saturating_sub(b), (i + b).min(n - 1));
+            let row = &self.rows[i * w + (lo + b - i)..=i * w + (hi + b - i)];
+            *yi = dot(row, &x[lo..=hi]);
+        }
+    }
+}
+
+/// A banded Cholesky factor `A = C C^T`, stored for its solves: each row of
+/// `C` and each column of `C` (a row of `C^T`) as a forward slice, and the
+/// reciprocals of the diagonal.
+///
+/// Why two copies. A triangular solve is a chain: each unknown needs the one
+/// before it. Read from the factorisation's band (`C[i][i - d]` at
+/// `d = 1..=b`), the lower solve walks `x` backwards and the upper one
+/// scatters into it, so each row waits on its `b` products in turn and on a
+/// division. Here each row is one forward inner product of four partial
+/// sums (which vectorises), the unknown just solved enters last,
+/// and the division is a multiplication by the stored reciprocal: the
+/// chain per row is one multiply-add and one product. The solves are not
+/// part of any verified claim (Lanczos, conjugate gradients, simulations).
+/// Measured 2026-11-27 (fifth session) at ny = 1024 (`fluid_mode`, mode 1 of
+/// `bench/cubic-walls.json`, best of 20): see docs/fluids.md §5.
 #[derive(Clone, Debug)]
 pub struct BandedCholesky {
     n: usize,
     b: usize,
-    c: Vec<f64>,
+    /// `lower[i * b + (b - d)] = C[i][i - d]`, `d = 1..=b` (0 before row 0):
+    /// row `i` left of the diagonal, in column order.
+    lower: Vec<f64>,
+    /// `upper[i * b + (d - 1)] = C[i + d][i]`, `d = 1..=b` (0 past row
+    /// `n - 1`): column `i` below the diagonal, in row order.
+    upper: Vec<f64>,
+    /// `1 / C[i][i]`.
+    recip: Vec<f64>,
 }
 
 impl BandedCholesky {
+    /// The solver of the factor held in a lower band (`c[i * (b + 1) + d] = C[i][i - d]`).
+    fn from_band(n: usize, b: usize, c: &[f64]) -> Self {
+        let b1 = b + 1;
+        let mut lower = vec![0.0; n * b];
+        let mut upper = vec![0.0; n * b];
+        for i in 0..n {
+            for d in 1..=b.min(i) {
+                let v = c[i * b1 + d];
+                lower[i * b + (b - d)] = v;
+                upper[(i - d) * b + (d - 1)] = v;
+            }
+        }
+        let recip = (0..n).map(|i| 1.0 / c[i * b1]).collect();
+        BandedCholesky { n, b, lower, upper, recip }
+    }
+
     /// Solve `C z = x` in place.
     pub fn solve_lower(&self, x: &mut [f64]) {
-        let b1 = self.b + 1;
+        let b = self.b;
+        if b == 0 {
+            x.iter_mut().zip(&self.recip).for_each(|(x, r)| *x *= r);
+            return;
+        }
         for i in 0..self.n {
-            let mut s = x[i];
-            for d in 1..=self.b.min(i) {
-                s -= self.c[i * b1 + d] * x[i - d];
-            }
-            x[i] = s / self.c[i * b1];
+            let row = &self.lower[i * b..(i + 1) * b];
+            // columns i - b .. i - 2 first, then i - 1 (the last unknown solved)
+            let lo = i.saturating_sub(b);
+            let s = if i == 0 {
+                x[0]
+            } else {
+                let far = dot(&row[b - (i - lo)..b - 1], &x[lo..i - 1]);
+                (x[i] - far) - row[b - 1] * x[i - 1]
+            };
+            x[i] = s * self.recip[i];
         }
     }
 
     /// Solve `C^T z = x` in place.
     pub fn solve_upper(&self, x: &mut [f64]) {
-        let b1 = self.b + 1;
-        for i in (0..self.n).rev() {
-            let xi = x[i] / self.c[i * b1];
-            x[i] = xi;
-            for d in 1..=self.b.min(i) {
-                x[i - d] -= self.c[i * b1 + d] * xi;
-            }
+        let (n, b) = (self.n, self.b);
+        if b == 0 {
+            x.iter_mut().zip(&self.recip).for_each(|(x, r)| *x *= r);
+            return;
+        }
+        for i in (0..n).rev() {
+            let col = &self.upper[i * b..(i + 1) * b];
+            // rows i + 2 .. i + b first, then i + 1 (the last unknown solved)
+            let hi = (i + b).min(n - 1);
+            let s = if i + 1 == n {
+                x[i]
+            } else {
+                let far = if hi >= i + 2 { dot(&col[1..hi - i], &x[i + 2..=hi]) } else { 0.0 };
+                (x[i] - far) - col[0] * x[i + 1]
+            };
+            x[i] = s * self.recip[i];
         }
     }
 

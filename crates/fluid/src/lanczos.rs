@@ -99,7 +99,7 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
         if !b.is_finite() {
             return Ritz::breakdown(steps);
         }
-        let check = steps == m_max || steps % 8 == 0 || b <= 1e-300;
+        let check = check_now(steps, m_max) || b <= 1e-300;
         if check {
             let (_, theta, residual, scale) = top_ritz(&alpha, &beta, b);
             last = Ritz { value: theta, residual, iterations: steps, scale };
@@ -188,7 +188,7 @@ pub fn largest_generalized_eigenvalue(
         if !b.is_finite() {
             return Ritz::breakdown(steps);
         }
-        if steps == m_max || steps % 8 == 0 || b <= 1e-300 {
+        if check_now(steps, m_max) || b <= 1e-300 {
             let (coefficients, theta, residual, scale) = top_ritz(&alpha, &beta, b);
             best = Some((coefficients, theta, residual, steps, scale));
             if residual <= tol * scale.max(f64::MIN_POSITIVE) || b <= 1e-14 * scale.max(f64::MIN_POSITIVE) || steps == n
@@ -216,6 +216,17 @@ pub fn largest_generalized_eigenvalue(
     let (num, den) = (dot(&x, &qx), dot(&x, &vp));
     let value = if den > 0.0 { num / den } else { theta };
     Ritz { value, residual, iterations: steps, scale }
+}
+
+/// Whether to look at the Ritz values after `steps` steps: every step from
+/// the fourth to the 31st, then every eighth, and at the last. Each look is
+/// a dense eigenproblem of size `steps` (`O(steps^3)`): cheap beside a step
+/// while the basis is short, and the walls' modes converge within 7 to 20
+/// steps, so looking only every eighth step ran up to seven steps too many.
+/// Measured 2026-11-27 (fifth session) at ny = 1024 (`fluid_mode`, mode 1 of
+/// `bench/cubic-walls.json`): 9 steps instead of 16 (docs/fluids.md §5).
+fn check_now(steps: usize, m_max: usize) -> bool {
+    steps == m_max || (steps >= 4 && (steps < 32 || steps % 8 == 0))
 }
 
 /// Solve `A x = b` for symmetric positive definite `A` by conjugate

@@ -29,15 +29,16 @@
 //! drops out: the Casimir contributes nothing to `Q`. The tests compare this
 //! with the generator crate's general formula on the real embedding.
 
-use crate::banded::{BandedCholesky, SymBanded};
+use crate::banded::{BandedCholesky, BandedRows};
 use crate::grid::{Boundary, YGrid};
 use crate::lanczos::{conjugate_gradients, largest_eigenvalue, largest_generalized_eigenvalue, Ritz};
 use nalgebra::DMatrix;
 use outcome::Sign;
 
-/// Up to this many unknowns per mode (walls, ny = 1024) a bound that the
-/// banded check of [`crate::walls_check`] does not prove is tried by the
-/// dense check (0.3 s a mode there).
+/// Up to this many unknowns per mode (walls, ny = 1024) a mode whose bound
+/// the banded check of [`crate::walls_check`] does not prove is tried by
+/// the dense check (about 0.15 s a mode there;
+/// [`crate::analysis::verified_mode_bound`], [`Mode::verify`]).
 pub const DENSE_FALLBACK_UNKNOWNS: usize = 1023;
 
 /// The profile and the noise at the grid nodes.
@@ -128,6 +129,11 @@ impl<'g> Mode<'g> {
     /// The wavenumber.
     pub fn k(&self) -> f64 {
         self.k
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &'g YGrid {
+        self.grid
     }
 
     /// The real matrix `R` with `A = -ik R` (dense).
@@ -331,7 +337,7 @@ fn symmetrise(a: DMatrix<f64>) -> DMatrix<f64> {
 /// `L`, which the conjugate-gradient iteration then removes. The banded
 /// Cholesky of `V_psi` is also the definiteness screen.
 struct WallOps {
-    l: SymBanded,
+    l: BandedRows,
     l_factor: BandedCholesky,
     v_factor: BandedCholesky,
     m: Vec<f64>,
@@ -366,7 +372,7 @@ impl WallOps {
         let (eta, eta2) = coef.centred_noise();
         let wm = form.w.iter().zip(&m).map(|(w, m)| w * m).collect();
         Some(WallOps {
-            l,
+            l: l.rows(),
             l_factor,
             v_factor,
             m,

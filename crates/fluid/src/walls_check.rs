@@ -33,9 +33,28 @@
 //! eigenvalues, proved by the verified inertia test
 //! [`crate::banded::SymBanded::verified_inertia_within`]. In the same way `V ≻ 0` iff
 //! `[[s M diag(w), M], [M, -s L]]` has inertia `(n + n [s < 0], n [s > 0])`.
-//! Interleaving the unknowns per node (the lifted ones first, then
-//! `omega_a`) gives `B` the bandwidth `(J + 3)(p + 1) - 1`: the work is
-//! `O(n J^3 p^2)`, linear in `ny`.
+//!
+//! **`omega` eliminated exactly first.** `D` is diagonal, so by Haynsworth
+//! again `inertia(B) = inertia(D) + inertia(S)` with the Schur complement
+//! `S = lower - U D^-1 U^T`, `U = [U_1; U_2; ...]`. `U D^-1 U^T` couples
+//! only the lifted unknowns of one node (`U_i` are diagonal), so with the
+//! lifted unknowns interleaved per node `S` has the bandwidth
+//! `(J + 2)(p + 1) - 1` and the work is `O(n J^3 p^2)`, linear in `ny`.
+//! Each entry `(U_i / D_a) U_j` is formed with its rounding bounded: the
+//! roundings of both factors, twice those of `D_a` (a quotient), two of its
+//! own, and one more where it is subtracted from `L`'s diagonal. `D_a` must
+//! be a normal number (its sign is then exact), and so must the quotient;
+//! otherwise nothing is proved. Until 2026-11-27 (fifth session) `omega_a` was an unknown of
+//! `B` itself (last within its node, bandwidth `(J + 3)(p + 1) - 1`): the
+//! factorisation's flops fall by `(4/5)(35/44)^2 = 0.51` for `J = 2`,
+//! `p = 8`. Measured (`fluid_mode`, `RUNG=1 BANDED_ONLY=1`, best of 20,
+//! mode 1 of `bench/cubic-walls.json`): the check took 7.8 ms before and
+//! 5.3 ms after at ny = 1024, 17 and 11 ms at ny = 2048. The margins proved
+//! (`walls_margins`, 32 modes, ny = 1024 and 2048): the same for most
+//! modes; for `U = y^3 + y/2` (`s = +1`) six modes prove a narrower rung and
+//! none a wider one; for `channel-sin-walls` (`s = -1`) seven modes prove a
+//! narrower rung and six a wider one (mode 7 at ny = 1024: `9e-6` instead
+//! of `3e-7`).
 //!
 //! **Why this lifting.** `J + 2` Grams are the fewest for this form: in the
 //! basis `(1, E_1, .., E_J, S2)` its coefficient matrix has the block
@@ -176,62 +195,108 @@ fn below_bar(grid: &YGrid, l: &crate::banded::SymBanded, k: f64, form: &Form, co
     // too): the two squares are then of the size of their difference.
     let s2max = s2.iter().fold(0.0f64, |a, x| a.max(*x));
     let t = crate::banded::pow2(s2max.max(rho).log2().round() as i32);
-    // unknowns per node: with noise omega, y+, y-, y1..yJ; without, omega, y0
-    let stride = if nj > 0 { 3 + nj } else { 2 };
-    // omega last within each node: the lifted unknowns are eliminated first
-    // (with omega first, s = -1 showed the same growth; module docs)
-    let idx = |a: usize, c: usize| a * stride + if c == 0 { stride - 1 } else { c - 1 };
-    let mut big = Bounded::new(n * stride, stride * (p + 1) - 1);
+    // The lifted unknowns per node: with noise y+, y-, y1..yJ; without, y0.
+    // omega is eliminated exactly first (its block D is diagonal), so the
+    // matrix factored is the Schur complement S = lower - U D^-1 U^T
+    // (module docs), of bandwidth (J + 2)(p + 1) - 1.
+    let grams = if nj > 0 { 2 + nj } else { 1 };
+    let idx = |a: usize, c: usize| a * grams + c;
+    // U's entries at node a, Gram c: (value, scale, rounds) with
+    // |exact - value| <= gamma_rounds scale (the counts of the lifting
+    // above); a nonzero value below the normal range proves nothing.
+    let mut u_vals: Vec<(f64, f64, usize)> = Vec::with_capacity(grams);
+    let mut sc = Bounded::new(n * grams, grams * (p + 1) - 1);
+    let mut d_pos = 0;
     for a in 0..n {
-        // s rho m w: `rho m` below the normal range would carry its
-        // underflow, up to 100%, into the entry (found by review: a false
-        // proof with w near 1e277 on an interval of 1e-14); nothing is
-        // proved then
+        // D_a = s rho m w (two roundings): normal and nonzero, so that its
+        // sign is exact and its error relative
         let Some(d) = crate::banded::product_without_early_underflow(&[s * rho, m[a], form.w[a]]) else {
             return false;
         };
-        big.set(idx(a, 0), idx(a, 0), d, 2);
+        if !(d.is_finite() && d.abs() >= f64::MIN_POSITIVE) {
+            return false;
+        }
+        d_pos += usize::from(d > 0.0);
+        u_vals.clear();
         if nj > 0 {
-            // S2 + t + rho: S2 of the rounded centred fields carries nj + 2
-            // roundings, then two sums and the product. A square below the
-            // normal range is off by at most 2^-1075, and t >= 2^-1022
-            // (`pow2` clamps), so the nj squares add at most nj u relative
-            // to S2 + t + rho: nj more roundings. Sums do not underflow
-            // (a sum below the normal range is exact).
             let plus = m[a] * ((s2[a] + t) + rho);
-            big.set(idx(a, 1), idx(a, 0), plus, 2 * nj + 5);
-            // S2 - t + rho cancels: its error is relative to S2 + t + rho
-            big.set_with_error(idx(a, 2), idx(a, 0), m[a] * ((s2[a] - t) + rho), plus, 2 * nj + 5);
+            u_vals.push((plus, plus.abs(), 2 * nj + 5));
+            u_vals.push((m[a] * ((s2[a] - t) + rho), plus.abs(), 2 * nj + 5));
+            for e in &eta {
+                let v = e[a] * m[a];
+                u_vals.push((v, v.abs(), 2));
+            }
         } else {
-            big.set(idx(a, 1), idx(a, 0), m[a], 0);
+            u_vals.push((m[a], m[a].abs(), 0));
         }
-        for (c, e) in eta.iter().enumerate() {
-            big.set(idx(a, 3 + c), idx(a, 0), e[a] * m[a], 2);
+        if u_vals.iter().any(|(v, sc, _)| (*v != 0.0 && v.abs() < f64::MIN_POSITIVE) || !sc.is_finite()) {
+            return false;
         }
-        // the lower block -s L / gamma for a Gram of coefficient gamma:
-        // 1/(4t) -> -4 t s L; -1/(4t) -> 4 t s L; -1 -> s L; rho -> -s L / rho
-        for b in a.saturating_sub(p)..=a {
-            let lab = l.get(a, b);
+        // the lower block -L / g_c at (a, b), with its roundings
+        let lower = |c: usize, lab: f64| -> (f64, usize) {
             if nj > 0 {
                 // a power of two times lab: exact unless it lands below the
                 // normal range (a tiny t), where one rounding is counted
                 let v = 4.0 * t * s * lab;
                 let r = usize::from(lab != 0.0 && v.abs() < f64::MIN_POSITIVE);
-                big.set(idx(a, 1), idx(b, 1), -v, r);
-                big.set(idx(a, 2), idx(b, 2), v, r);
+                match c {
+                    0 => (-v, r),
+                    1 => (v, r),
+                    _ => (s * lab, 0),
+                }
             } else {
-                big.set(idx(a, 1), idx(b, 1), -s * lab / rho, 1);
+                (-s * lab / rho, 1)
             }
-            for c in 0..nj {
-                big.set(idx(a, 3 + c), idx(b, 3 + c), s * lab, 0);
+        };
+        for b in a.saturating_sub(p)..a {
+            let lab = l.get(a, b);
+            for c in 0..grams {
+                let (v, r) = lower(c, lab);
+                sc.set(idx(a, c), idx(b, c), v, r);
+            }
+        }
+        // node a's own block: lower(a, a) - U_c U_e / D_a. The quotient
+        // carries the roundings of both factors, twice those of D_a (a
+        // quotient: 1 / (1 - gamma_r) <= 1 + gamma_2r), and its own two;
+        // the difference one more, relative to the sum of magnitudes.
+        let laa = l.get(a, a);
+        let u = f64::EPSILON / 2.0;
+        for c in 0..grams {
+            for e in 0..=c {
+                let (uc, sc_c, rc) = u_vals[c];
+                let (ue, sc_e, re) = u_vals[e];
+                // (U_c / D_a) U_e: the quotient first, so that its size is
+                // that of the entries of L (the squares U_c U_e alone would
+                // underflow for noise near 2^-400); a quotient below the
+                // normal range proves nothing, the last product may underflow
+                let ratio = uc / d;
+                if ratio != 0.0 && ratio.abs() < f64::MIN_POSITIVE {
+                    return false;
+                }
+                let q = ratio * ue;
+                // an upper bound on sc_c sc_e / |D_a| (two roundings)
+                let q_scale = ((sc_c / d.abs()) * sc_e) * (1.0 + 4.0 * u);
+                if !(q.is_finite() && q_scale.is_finite()) {
+                    return false;
+                }
+                let q_rounds = rc + re + 2 * 2 + 2;
+                if c == e {
+                    let (lv, lr) = lower(c, laa);
+                    let scale = (lv.abs() + q_scale) * (1.0 + 2.0 * u);
+                    sc.set_with_error(idx(a, c), idx(a, e), lv - q, scale, q_rounds.max(lr) + 1);
+                } else {
+                    sc.set_with_error(idx(a, c), idx(a, e), -q, q_scale, q_rounds);
+                }
             }
         }
     }
-    // the lower block's inertia plus (n, 0) for bar V - Q ≻ 0: one Gram
-    // with s g > 0 (y+, or y0 without noise), 1 + J with s g < 0
+    // the lifted matrix's inertia for bar V - Q ≻ 0, less D's (Haynsworth)
     let (neg_grams, pos_grams) = (1, if nj > 0 { 1 + nj } else { 0 });
     let target = if s > 0.0 { (n + n * pos_grams, n * neg_grams) } else { (n + n * neg_grams, n * pos_grams) };
-    big.inertia() == Some(target)
+    let (Some(tp), Some(tn)) = (target.0.checked_sub(d_pos), target.1.checked_sub(n - d_pos)) else {
+        return false;
+    };
+    sc.inertia() == Some((tp, tn))
 }
 
 #[cfg(test)]
@@ -348,6 +413,56 @@ mod tests {
         }
         // and it is useful: most bounds 1e-4 above are proved
         assert!(proved_above >= 20, "{proved_above} of 24");
+    }
+
+    #[test]
+    fn random_pencils_are_never_proved_below_their_dense_eigenvalue() {
+        // The elimination of omega (module docs) on random profiles, noise
+        // fields, wavenumbers and both signs, against nalgebra's dense
+        // eigenvalue of the formed pencil: a bound 1e-6 below it must fail;
+        // for s = +1 one 1e-4 above it must pass (at these sizes the check
+        // proves 3e-7 or better, docs/fluids.md §2).
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(28);
+        for case in 0..18 {
+            let ny = [24, 32, 48][case % 3];
+            let g = YGrid::new(Boundary::Walls, 0.0, std::f64::consts::PI, ny);
+            let y = g.nodes();
+            let a1: f64 = rng.random_range(-0.5..0.5);
+            let fields = 1 + case % 3;
+            let eta: Vec<Vec<f64>> = (0..fields)
+                .map(|_| {
+                    let (c0, c1, c2, f) = (
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(0.5..3.0),
+                    );
+                    y.iter().map(|y| c0 + c1 * y + c2 * (f * y).sin()).collect()
+                })
+                .collect();
+            let coef = Coefficients {
+                u: y.iter().map(|y| 0.5 * y * y + a1 * y.sin()).collect(),
+                upp: y.iter().map(|y| 1.0 - a1 * y.sin()).collect(),
+                eta,
+            };
+            let sign = if case % 2 == 0 { Sign::Positive } else { Sign::Negative };
+            let shift = match sign {
+                Sign::Positive => rng.random_range(1.0..4.0),
+                Sign::Negative => -rng.random_range(40.0..60.0),
+            };
+            let w = coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + shift) / p).collect();
+            let form = Form { energy: 1.0, w, sign };
+            let k = rng.random_range(0.3..5.0);
+            let mode = Mode::new(&g, k);
+            let lam = dense_lambda(&mode, &form, &coef);
+            assert!(lam > 0.0, "case {case}: {lam}");
+            let below = verify_walls(&g, k, &form, &coef, lam * (1.0 - 1e-6));
+            assert!(!below.1, "case {case} ({sign:?}, ny {ny}, k {k}): proved below the eigenvalue");
+            if sign == Sign::Positive {
+                assert_eq!(verify_walls(&g, k, &form, &coef, lam * (1.0 + 1e-4)), (true, true), "case {case}");
+            }
+        }
     }
 
     #[test]

@@ -112,7 +112,7 @@ pub(super) fn analyse_normalised(
         }
     };
 
-    // Per mode at the finest grid: Lanczos, then the dense verified check.
+    // Per mode at the finest grid: Lanczos, then the verified bound.
     let phase = progress.phase(modes);
     let per_mode: Vec<Option<ModeResult>> = ks
         .par_iter()
@@ -123,12 +123,7 @@ pub(super) fn analyse_normalised(
                 // Mode::sigma2 never returns a non-finite value; flooring NaN at 0
                 // would round towards "stable".
                 let sigma2 = s.lambda_max.max(0.0);
-                let rung = match fine.boundary() {
-                    crate::grid::Boundary::Walls => first_rung(fine.n()),
-                    crate::grid::Boundary::Periodic => 0,
-                };
-                let (upper, form_verified) =
-                    verified_upper(sigma2, &s.ritz, rung, |bar| mode.verify(&form, &coef, bar));
+                let (upper, form_verified) = verified_mode_bound(&mode, &form, &coef, sigma2, &s.ritz);
                 Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
             })
         })

@@ -359,33 +359,74 @@ pub(super) fn prove_remaining_modes(
     });
 }
 
-/// The first rung of the margin ladder of `verified_upper` on a walls
-/// grid with `unknowns` interior unknowns. Up to
-/// [`crate::modes::DENSE_FALLBACK_UNKNOWNS`] the dense fallback can prove
-/// the narrowest margin, so the ladder starts at its bottom. Above, only the
-/// banded check runs, and the margin it can prove grows like `h^-2`
-/// (`walls_check` docs), so rungs that cannot succeed are skipped: the
-/// ladder starts at `3e-7` up to 2047 unknowns and one rung higher per
-/// doubling beyond. Measured for `U = y^3 + y/2` (`s = +1`) and the
-/// `channel-sin-walls` fixture (`s = -1`), 32 modes each, with
-/// `walls_margins` and the row-by-row bounds of the inertia test
-/// (2026-11-27, second session): at ny = 2048, 10 and 5 of the 32 modes
-/// prove `3e-7` and none `1e-8`; at ny = 4096 none proves `3e-7`, 9 and 3
-/// prove `9e-6`. The claim is the same kind either way (a verified bound,
-/// or none); only its width can differ, and the widest rung tried does not
-/// change.
+/// Up to this many unknowns (ny = 512 on walls) the banded check proves
+/// the narrowest rung, `1e-8`: measured 2026-11-27 (fifth session) with `walls_margins`
+/// for `U = y^3 + y/2` (`s = +1`) and `channel-sin-walls` (`s = -1`), the
+/// low modes at ny = 128, 256 and 512 prove every rung; at ny = 1024 none
+/// of the 32 modes of either proves `1e-8`.
+pub const BANDED_NARROWEST_UNKNOWNS: usize = 511;
+
+/// The first rung of the margin ladder of `verified_upper` for the banded
+/// check on a walls grid with `unknowns` interior unknowns: the margin it
+/// can prove grows like `h^-2` (`walls_check` docs), so rungs that cannot
+/// succeed are skipped. The bottom up to [`BANDED_NARROWEST_UNKNOWNS`],
+/// `3e-7` up to 2047 unknowns, then one rung higher per doubling. Measured
+/// for `U = y^3 + y/2` (`s = +1`) and the `channel-sin-walls` fixture
+/// (`s = -1`), 32 modes each, with `walls_margins` (2026-11-27, fifth session; the
+/// elimination of `omega` of `walls_check`): at ny = 1024, 13 and 6 of the
+/// 32 modes prove `3e-7` and none `1e-8`; at ny = 2048, 10 and 5 prove
+/// `3e-7`; at ny = 4096 none proves `3e-7`. The claim is the same kind
+/// either way (a verified bound, or none); only its width can differ, and
+/// the widest rung tried does not change.
 pub fn first_rung(unknowns: usize) -> usize {
-    let small = crate::modes::DENSE_FALLBACK_UNKNOWNS;
-    if unknowns <= small {
+    if unknowns <= BANDED_NARROWEST_UNKNOWNS {
         return 0;
     }
     let mut rung = 1;
-    let mut size = 2 * small + 1;
+    let mut size = 4 * BANDED_NARROWEST_UNKNOWNS + 3; // 2047
     while unknowns > size && rung + 1 < VERIFY_ATTEMPTS {
         rung += 1;
         size = 2 * size + 1;
     }
     rung.min(VERIFY_ATTEMPTS - 1)
+}
+
+/// The verified bound of one mode as the analysis finds it: `verified_upper`
+/// with the check for its grid. On walls grids the banded check
+/// ([`crate::walls_check`], `O(ny)`, about the exact pencil of the stored
+/// operators) climbs the ladder from [`first_rung`]; only a mode whose
+/// banded ladder proves nothing, on a grid of at most
+/// [`crate::modes::DENSE_FALLBACK_UNKNOWNS`] unknowns, climbs it again with
+/// the dense check from the bottom. Periodic grids use the dense check.
+/// Returns `(sigma2_upper, form_verified)`.
+///
+/// Until 2026-11-27 (fifth session) every rung on a grid of up to 1023 unknowns that the
+/// banded check did not prove went to the dense check, which proves `1e-8`
+/// there: a narrower bound, at about 150 ms a mode at ny = 1024 against
+/// 5 ms for a banded rung, and a weaker claim (about `K` as computed,
+/// docs/fluids.md §5b). Now most modes at ny = 1024 prove `3e-7` or `9e-6`
+/// with the banded check alone.
+pub fn verified_mode_bound(
+    mode: &Mode,
+    form: &Form,
+    coef: &Coefficients,
+    sigma2: f64,
+    ritz: &crate::lanczos::Ritz,
+) -> (Option<f64>, bool) {
+    let grid = mode.grid();
+    match grid.boundary() {
+        crate::grid::Boundary::Walls => {
+            let banded = verified_upper(sigma2, ritz, first_rung(grid.n()), |bar| {
+                crate::walls_check::verify_walls(grid, mode.k(), form, coef, bar)
+            });
+            if banded.0.is_some() || grid.n() > crate::modes::DENSE_FALLBACK_UNKNOWNS {
+                return banded;
+            }
+            let dense = verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar));
+            (dense.0, banded.1 || dense.1)
+        }
+        crate::grid::Boundary::Periodic => verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar)),
+    }
 }
 
 /// A stated bound in the units of the normalised noise (divided by `4^e`),
@@ -510,10 +551,11 @@ mod tests {
 
     #[test]
     fn the_ladder_skips_the_rungs_the_banded_check_never_proves_on_large_grids() {
-        // first_rung's rule: the bottom up to the dense fallback's 1023
-        // unknowns, `3e-7` (rung 1) up to 2 * 1023 + 1 = 2047, then one rung
-        // per doubling (4095, 8191), never past the widest rung (4).
-        let cases = [(1, 0), (1023, 0), (1024, 1), (2047, 1), (2048, 2), (4095, 2), (4096, 3), (8191, 3), (8192, 4)];
+        // first_rung's rule: the bottom up to 511 unknowns, `3e-7` (rung 1)
+        // up to 2047, then one rung per doubling (4095, 8191), never past
+        // the widest rung (4).
+        let cases =
+            [(1, 0), (511, 0), (512, 1), (1023, 1), (2047, 1), (2048, 2), (4095, 2), (4096, 3), (8191, 3), (8192, 4)];
         for (unknowns, rung) in cases {
             assert_eq!(first_rung(unknowns), rung, "{unknowns} unknowns");
         }
