@@ -375,7 +375,8 @@ pub const BANDED_NARROWEST_UNKNOWNS: usize = 511;
 /// (`s = -1`), 32 modes each, with `walls_margins` (2026-11-27, fifth session; the
 /// elimination of `omega` of `walls_check`): at ny = 1024, 13 and 6 of the
 /// 32 modes prove `3e-7` and none `1e-8`; at ny = 2048, 10 and 5 prove
-/// `3e-7`; at ny = 4096 none proves `3e-7`. The claim is the same kind
+/// `3e-7`; at ny = 4096, 0 and 1 (the ladder starts at `9e-6` there). The
+/// claim is the same kind
 /// either way (a verified bound, or none); only its width can differ, and
 /// the widest rung tried does not change.
 pub fn first_rung(unknowns: usize) -> usize {
