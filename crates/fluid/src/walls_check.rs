@@ -232,6 +232,19 @@ fn below_bar(grid: &YGrid, l: &crate::banded::SymBanded, k: f64, form: &Form, co
         if u_vals.iter().any(|(v, sc, _)| (*v != 0.0 && v.abs() < f64::MIN_POSITIVE) || !sc.is_finite()) {
             return false;
         }
+        // nor one that underflowed to 0 from nonzero terms (found in review,
+        // 2026-11-27: its absolute error, up to 2^-1075, is divided by D_a
+        // below, which the counted roundings do not cover)
+        let underflowed_to_zero = if nj > 0 {
+            u_vals[0].0 == 0.0
+                || (u_vals[1].0 == 0.0 && (s2[a] - t) + rho != 0.0)
+                || eta.iter().zip(&u_vals[2..]).any(|(e, (v, _, _))| *v == 0.0 && e[a] != 0.0)
+        } else {
+            false
+        };
+        if underflowed_to_zero {
+            return false;
+        }
         // the lower block -L / g_c at (a, b), with its roundings
         let lower = |c: usize, lab: f64| -> (f64, usize) {
             if nj > 0 {
@@ -270,7 +283,7 @@ fn below_bar(grid: &YGrid, l: &crate::banded::SymBanded, k: f64, form: &Form, co
                 // underflow for noise near 2^-400); a quotient below the
                 // normal range proves nothing, the last product may underflow
                 let ratio = uc / d;
-                if ratio != 0.0 && ratio.abs() < f64::MIN_POSITIVE {
+                if (ratio != 0.0 && ratio.abs() < f64::MIN_POSITIVE) || (ratio == 0.0 && uc != 0.0) {
                     return false;
                 }
                 let q = ratio * ue;
@@ -463,6 +476,24 @@ mod tests {
                 assert_eq!(verify_walls(&g, k, &form, &coef, lam * (1.0 + 1e-4)), (true, true), "case {case}");
             }
         }
+    }
+
+    #[test]
+    fn a_quotient_that_underflows_to_zero_proves_nothing() {
+        // Found in review (2026-11-27, fifth session): noise near 1e-302 and
+        // a bound near 1e30 (rho = bar / k^2 huge) made U_c / D_a underflow
+        // to exactly 0 while U_c was not, and the entry's bound then missed
+        // the true (U_c / D_a) U_e. The field alternates in sign from node
+        // to node, so its centred values stay near its size and every
+        // U_c = eta m is a normal number. Such a check now proves nothing;
+        // with the noise at ordinary size the same bound is proved.
+        let (g, coef, form) = channel(16, 2.0, Sign::Positive);
+        let field = |f: f64| -> Coefficients {
+            let eta = vec![(0..g.n()).map(|a| if a % 2 == 0 { f } else { -f }).collect()];
+            Coefficients { eta, ..coef.clone() }
+        };
+        assert_eq!(verify_walls(&g, 1.5, &form, &field(1e-302), 1e30), (true, false));
+        assert_eq!(verify_walls(&g, 1.5, &form, &field(1.0), 1e30), (true, true));
     }
 
     #[test]
