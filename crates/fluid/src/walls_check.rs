@@ -47,7 +47,7 @@
 //! otherwise nothing is proved. Until 2026-11-27 (fifth session) `omega_a` was an unknown of
 //! `B` itself (last within its node, bandwidth `(J + 3)(p + 1) - 1`): the
 //! factorisation's flops fall by `(4/5)(35/44)^2 = 0.51` for `J = 2`,
-//! `p = 8`. Measured (`fluid_mode`, `RUNG=1 BANDED_ONLY=1`, best of 20,
+//! `p = 8`. Measured (`fluid_mode` with one banded check at `3e-7`, best of 20,
 //! mode 1 of `bench/cubic-walls.json`): the check took 7.8 ms before and
 //! 5.3 ms after at ny = 1024, 17 and 11 ms at ny = 2048. The margins proved
 //! (`walls_margins`, 32 modes, ny = 1024 and 2048): the same for most
