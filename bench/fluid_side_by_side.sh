@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Side-by-side on one fluid x-mode: the engine's Lanczos estimate of Sigma^2
 # (banded operators in vorticity coordinates) plus its verified bound (the
-# analysis's margin ladder; banded check on walls grids) against
+# analysis's margin ladder; banded check on walls and periodic grids) against
 # scipy.linalg.eigh on the same dense V and Q (written by
 # verify/examples/fluid_mode.rs), same machine, same run. "speed-up" is scipy's
 # top eigenvalue alone over the engine's Lanczos + verified bound. Also the engine's whole certify run at ny = 1024 with its peak
@@ -15,7 +15,8 @@ dir=$(mktemp -d)
 printf '%-22s %5s %3s %11s %11s %9s %11s %12s %12s %9s %9s\n' spec n m "lanczos" "verified" margin "dense chk" "scipy top" "scipy all" "speed-up" "rel.diff"
 for case in "bench/cubic-walls.json 1 1024" "bench/cubic-walls.json 1 2048" "bench/cubic-walls.json 1 4096" \
             "fixtures/fluids/channel-sin-walls.json 1 1024" "fixtures/fluids/channel-sin-walls.json 8 1024" \
-            "fixtures/fluids/kolmogorov-periodic.json 1 256"; do
+            "fixtures/fluids/kolmogorov-periodic.json 1 256" "fixtures/fluids/kolmogorov-periodic.json 1 1024" \
+            "fixtures/fluids/kolmogorov-periodic.json 8 1024" "fixtures/fluids/kolmogorov-periodic.json 1 4096"; do
   set -- $case
   rust=$(./target/release/examples/fluid_mode "$1" "$2" "$dir" 20 "$3")
   n=$(python3 -c 'import json,sys; print(json.loads(sys.argv[1])["n"])' "$rust")
@@ -33,6 +34,6 @@ done
 rm -rf "$dir"
 echo
 echo "whole certify runs (wall time, peak resident memory):"
-for spec in fixtures/fluids/compressible-uniform-noise.json fixtures/fluids/compressible-channel.json fixtures/fluids/channel-sin-walls.json bench/cubic-walls.json bench/compressible-2048.json; do
+for spec in fixtures/fluids/compressible-uniform-noise.json fixtures/fluids/compressible-channel.json fixtures/fluids/channel-sin-walls.json bench/cubic-walls.json bench/kolmogorov-4096.json bench/compressible-2048.json; do
   /usr/bin/time -f "  $(basename "$spec" .json): %e s, %M KB" ./target/release/verify certify "$spec" -o /dev/null 2>&1 | grep -v '^  [A-Z]' | tail -n 1
 done

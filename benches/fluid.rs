@@ -1,7 +1,7 @@
 //! Criterion benchmark of one fluid x-mode: the Lanczos estimate of Sigma^2
-//! (walls: banded operators in vorticity coordinates; periodic: dense
-//! Cholesky), the banded verified check of walls grids
-//! (`fluid::walls_check`, `O(ny)`) and the dense verified check, grouped by
+//! (banded operators in vorticity coordinates), the banded verified check
+//! (`fluid::walls_check`, `O(ny)`; walls and, since 2026-11-28, periodic
+//! grids) and the dense verified check, grouped by
 //! the number of unknowns; and one compressible mode (Lanczos, the banded
 //! verified check, and the discrete SDE's own constant `lambda_max(Q_B, K)`).
 //! The scipy comparison on the same matrices is `bench/fluid_side_by_side.sh`.
@@ -10,7 +10,6 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use fluid::analysis::chosen_form;
 use fluid::barotropic::{BarotropicCoefficients, BarotropicMode, WallGrid};
-use fluid::grid::Boundary;
 use fluid::modes::Mode;
 use fluid::walls_check::verify_walls;
 use std::hint::black_box;
@@ -26,7 +25,12 @@ fn load(name: &str, ny: usize) -> spec::FluidSpec {
 fn modes(c: &mut Criterion) {
     let mut group = c.benchmark_group("fluid-mode");
     group.sample_size(20);
-    for (name, ny) in [("channel-sin-walls", 256), ("channel-sin-walls", 1024), ("kolmogorov-periodic", 256)] {
+    for (name, ny) in [
+        ("channel-sin-walls", 256),
+        ("channel-sin-walls", 1024),
+        ("kolmogorov-periodic", 256),
+        ("kolmogorov-periodic", 1024),
+    ] {
         let spec = load(name, ny);
         let (grid, coef, form) = chosen_form(&spec.problem).unwrap();
         let k = 2.0 * std::f64::consts::PI / spec.problem.x_period;
@@ -35,14 +39,12 @@ fn modes(c: &mut Criterion) {
             b.iter(|| black_box(m.sigma2(&form, &coef, 1e-10).unwrap()))
         });
         let s = mode.sigma2(&form, &coef, 1e-10).unwrap().lambda_max;
-        if grid.boundary() == Boundary::Walls {
-            // A margin the banded check proves at these sizes (docs/fluids.md §2).
-            let bar = s * (1.0 + 1e-5);
-            assert_eq!(verify_walls(&grid, k, &form, &coef, bar), (true, true));
-            group.bench_with_input(BenchmarkId::new(format!("{name}-banded-check"), grid.n()), &mode, |b, _| {
-                b.iter(|| black_box(verify_walls(&grid, k, &form, &coef, bar)))
-            });
-        }
+        // A margin the banded check proves at these sizes (docs/fluids.md §2).
+        let bar = s * (1.0 + 1e-5);
+        assert_eq!(verify_walls(&grid, k, &form, &coef, bar), (true, true));
+        group.bench_with_input(BenchmarkId::new(format!("{name}-banded-check"), grid.n()), &mode, |b, _| {
+            b.iter(|| black_box(verify_walls(&grid, k, &form, &coef, bar)))
+        });
         group.bench_with_input(BenchmarkId::new(format!("{name}-dense-check"), grid.n()), &mode, |b, m| {
             b.iter(|| black_box(m.verify_dense(&form, &coef, s * (1.0 + 1e-8))))
         });

@@ -1,8 +1,9 @@
-//! Fluid certificates at research resolution: the walls check is banded
-//! (`fluid::walls_check`), so ny = 4096 with 32 x-modes is accepted and
-//! certified; the dense check (periodic grids) keeps its work limit.
+//! Fluid certificates at research resolution: the verified check is banded
+//! (`fluid::walls_check`) on walls and periodic grids alike, so ny = 4096
+//! with 32 x-modes is accepted and certified; the dense fallback (up to
+//! 1023 unknowns) keeps its work limit.
 //!
-//! The ny = 4096 certification runs with `--features heavy-tests` (CI, in
+//! The ny = 4096 certifications run with `--features heavy-tests` (CI, in
 //! release mode: about 15 s there); the spec-layer tests always run.
 
 /// `U = y^3 + y/2` on [-1, 1]: `U'' = 6y` vanishes at 0 only, so the
@@ -17,17 +18,54 @@ fn cubic(ny: usize, boundary: &str) -> String {
 }
 
 #[test]
-fn walls_at_ny_4096_with_32_modes_are_accepted_and_periodic_ones_are_refused() {
-    // Walls: the banded check is O(ny), no work limit applies.
+fn ny_4096_with_32_modes_is_accepted_on_both_boundaries_and_the_dense_fallback_keeps_its_limit() {
+    // The banded check is O(ny): no work limit applies above the dense
+    // fallback's 1023 unknowns. (Until 2026-11-28 periodic grids were dense
+    // and refused here: 32 * 2 * 4096^3 / 3 = 1.5e12 > 1e12 operations.)
     spec::parse_fluid_spec(&cubic(4096, "walls")).expect("walls at ny = 4096 are accepted");
-    // Periodic: the dense check, 32 * 2 * 4096^3 / 3 = 1.5e12 > 1e12 operations.
-    let err = spec::parse_fluid_spec(&cubic(4096, "periodic")).unwrap_err();
+    spec::parse_fluid_spec(&kolmogorov(4096, 32)).expect("periodic at ny = 4096 is accepted");
+    // At ny = 1024 with 2048 modes the dense fallback could run on every
+    // mode, 2048 * 2 * 1023^3 / 3 = 1.5e12: refused as before (walls); a
+    // periodic grid of 1016 unknowns, 2048 * 2 * 1016^3 / 3 = 1.4e12, too.
+    let many = cubic(1024, "walls").replace("\"x_modes\": 32", "\"x_modes\": 2048");
+    let err = spec::parse_fluid_spec(&many).unwrap_err();
     assert_eq!(err.path, "$.fluid.x_modes", "{err}");
     assert!(err.to_string().contains("dense verified checks"), "{err}");
-    // Walls at ny = 1024 with 2048 modes: the dense fallback could run on
-    // every mode, 2048 * 2 * 1023^3 / 3 = 1.5e12: refused as before.
-    let many = cubic(1024, "walls").replace("\"x_modes\": 32", "\"x_modes\": 2048");
-    assert_eq!(spec::parse_fluid_spec(&many).unwrap_err().path, "$.fluid.x_modes");
+    assert_eq!(spec::parse_fluid_spec(&kolmogorov(1016, 2048)).unwrap_err().path, "$.fluid.x_modes");
+    // periodic ny = 1024 has 1024 unknowns, above the fallback: accepted
+    spec::parse_fluid_spec(&kolmogorov(1024, 2048)).expect("no dense fallback at 1024 periodic unknowns");
+}
+
+/// Kolmogorov flow `U = sin y`, periodic on `[0, 2 pi)`, x-period `pi`
+/// (`fixtures/fluids/kolmogorov-periodic.json` at another resolution).
+fn kolmogorov(ny: usize, modes: usize) -> String {
+    format!(
+        r#"{{"name": "kolmogorov-{ny}", "fluid": {{"model": "incompressible", "x_period": "pi", "y_interval": [0, "2*pi"],
+            "boundary": "periodic", "shear_flow": "sin(y)", "noise": ["0.3*cos(y)"],
+            "ny": {ny}, "x_modes": {modes}}}}}"#
+    )
+}
+
+#[cfg(feature = "heavy-tests")]
+#[test]
+fn a_periodic_certificate_at_ny_4096_is_verified_and_agrees_with_the_fixture() {
+    let fine = spec::certify_fluid(&spec::parse_fluid_spec(&kolmogorov(4096, 32)).unwrap());
+    assert_eq!(fine["verdict"], "stable");
+    assert_eq!(fine["level"], "verified_float", "{}", fine["checks"]);
+    let s = fine["sigma2"].as_f64().unwrap();
+    let upper = fine["sigma2_upper"].as_f64().unwrap();
+    assert!(upper >= s && upper <= s * (1.0 + 3e-4), "{s} {upper}");
+    // Mode 1 (k = 2) sets Sigma^2. The Fourier collocation used until
+    // 2026-11-28 gave 0.012258079762316933 at ny = 256 (the fixture's old
+    // certificate), the Fourier-Galerkin reference of tests/fluid.rs agrees
+    // with it to 1e-9: measured, the elements at ny = 4096 differ from it
+    // by 1.1e-10 (the Lanczos value at this resolution; 5e-13 at ny = 256).
+    assert!((s - 0.012258079762316933).abs() <= 1e-9 * s, "{s}");
+    // its bound is the first rung tried at 4096 unknowns, 9e-6 (first_rung;
+    // walls_margins shows modes 1 to 3 proving even 3e-7 here)
+    let mode1 = &fine["modes"][0];
+    assert!(mode1["sigma2_upper"].as_f64().unwrap() <= mode1["sigma2"].as_f64().unwrap() * (1.0 + 1e-5));
+    spec::check_fluid_certificate(&fine).expect("the ny = 4096 certificate re-checks");
 }
 
 #[cfg(feature = "heavy-tests")]

@@ -14,8 +14,15 @@
 //!   `psi = (S + k^2 M)^-1 M omega`, so `K = M (S + k^2 M)^-1 M`. The error
 //!   is `O(h^p)` for smooth data; the wall nodes carry no unknown because
 //!   vorticity there decouples (it is only advected).
-//! * **periodic**: Fourier collocation on a uniform grid, `K` the circulant
-//!   with symbol `h / (k^2 + l^2)`; spectrally accurate for smooth periodic data.
+//! * **periodic**: the same elements assembled around the circle: `ny / p`
+//!   elements, `ny` nodes (the last element's end node is the first node),
+//!   `K = M (S + k^2 M)^-1 M` with the cyclic stiffness. The unknowns are
+//!   stored in the *banded order* `0, ny - 1, 1, ny - 2, ...` ([`YGrid::banded_order`]),
+//!   in which the cyclic band of width `p` becomes an ordinary band of
+//!   width `2p`, so every banded solve and the verified banded check of
+//!   [`crate::walls_check`] serve both boundaries. Until 2026-11-28 (sixth
+//!   session) periodic grids used Fourier collocation (`K` a dense
+//!   circulant), whose verified check was dense, `O(ny^3)`.
 //!
 //! These two properties are what make the energy–Casimir–momentum form an
 //! exact invariant of the discrete linearised drift (module [`crate::modes`]):
@@ -43,7 +50,7 @@ impl Boundary {
     }
 }
 
-/// Degree of the spectral elements used for walls.
+/// Degree of the spectral elements (both boundaries).
 pub const ELEMENT_DEGREE: usize = 8;
 
 /// The y-grid: nodes, weights, and the stiffness of `-d^2/dy^2`.
@@ -52,8 +59,11 @@ pub struct YGrid {
     boundary: Boundary,
     nodes: Vec<f64>,
     weights: Vec<f64>,
-    /// Walls: stiffness on interior nodes (bandwidth `ELEMENT_DEGREE`).
-    stiffness: Option<SymBanded>,
+    /// The stiffness on the unknowns, in the banded order (walls:
+    /// bandwidth `ELEMENT_DEGREE`; periodic: `2 ELEMENT_DEGREE`).
+    stiffness: SymBanded,
+    /// `order[i]`: the node at position `i` of the banded order.
+    order: Vec<usize>,
     length: f64,
 }
 
@@ -148,58 +158,59 @@ pub fn gll_derivative(p: usize, x: &[f64]) -> DMatrix<f64> {
 }
 
 impl YGrid {
-    /// A grid with `ny` intervals' worth of resolution on `[a, b]`:
-    /// walls: `ny / ELEMENT_DEGREE` elements (`ny` must be a multiple of the
-    /// degree), `ny - 1` interior unknowns; periodic: `ny` uniform nodes.
+    /// A grid with `ny` intervals' worth of resolution on `[a, b]`, `ny / ELEMENT_DEGREE`
+    /// elements (`ny` must be a multiple of the degree, at least twice it):
+    /// walls: `ny - 1` interior unknowns; periodic: `ny` unknowns.
     pub fn new(boundary: Boundary, a: f64, b: f64, ny: usize) -> Self {
         let length = b - a;
-        match boundary {
-            Boundary::Periodic => {
-                let h = length / ny as f64;
-                YGrid {
-                    boundary,
-                    nodes: (0..ny).map(|j| a + h * j as f64).collect(),
-                    weights: vec![h; ny],
-                    stiffness: None,
-                    length,
-                }
-            }
-            Boundary::Walls => {
-                let p = ELEMENT_DEGREE;
-                assert!(ny % p == 0 && ny >= 2 * p, "ny must be a multiple of {p}, at least {}", 2 * p);
-                let ne = ny / p;
-                let he = length / ne as f64;
-                let (xi, wi) = gll(p);
-                let d = gll_derivative(p, &xi);
-                // element stiffness (2/h) D^T diag(w) D
-                let ke = DMatrix::from_fn(p + 1, p + 1, |i, j| {
-                    (0..=p).map(|q| wi[q] * d[(q, i)] * d[(q, j)]).sum::<f64>() * 2.0 / he
-                });
-                let (nodes, weights) = element_nodes(a, b, ne, &xi, &wi);
-                let nglob = nodes.len();
-                // interior unknowns: global nodes 1..nglob-1
-                let n = nglob - 2;
-                let mut s = SymBanded::zeros(n, p);
-                for e in 0..ne {
-                    for i in 0..=p {
-                        for j in 0..=i {
-                            let (gi, gj) = (e * p + i, e * p + j);
-                            if gi == 0 || gj == 0 || gi == nglob - 1 || gj == nglob - 1 {
-                                continue;
-                            }
-                            s.add(gi - 1, gj - 1, if i == j { ke[(i, i)] } else { ke[(i, j)] });
-                        }
-                    }
-                }
-                YGrid {
-                    boundary,
-                    nodes: nodes[1..nglob - 1].to_vec(),
-                    weights: weights[1..nglob - 1].to_vec(),
-                    stiffness: Some(s),
-                    length,
-                }
+        let p = ELEMENT_DEGREE;
+        assert!(ny % p == 0 && ny >= 2 * p, "ny must be a multiple of {p}, at least {}", 2 * p);
+        let ne = ny / p;
+        let he = length / ne as f64;
+        let (xi, wi) = gll(p);
+        let d = gll_derivative(p, &xi);
+        // element stiffness (2/h) D^T diag(w) D
+        let ke = DMatrix::from_fn(p + 1, p + 1, |i, j| {
+            (0..=p).map(|q| wi[q] * d[(q, i)] * d[(q, j)]).sum::<f64>() * 2.0 / he
+        });
+        let (nodes, mut weights) = element_nodes(a, b, ne, &xi, &wi);
+        let nglob = nodes.len();
+        // unknown(g): the unknown of global node g (None at a wall)
+        let (n, unknown): (usize, Box<dyn Fn(usize) -> Option<usize>>) = match boundary {
+            // interior unknowns: global nodes 1..nglob-1
+            Boundary::Walls => (nglob - 2, Box::new(move |g| (g != 0 && g != nglob - 1).then(|| g - 1))),
+            // node nglob - 1 (= b) is node 0 (= a)
+            Boundary::Periodic => (nglob - 1, Box::new(move |g| Some(g % (nglob - 1)))),
+        };
+        let order: Vec<usize> = match boundary {
+            Boundary::Walls => (0..n).collect(),
+            // 0, n-1, 1, n-2, ...: node t at 2t, node n-1-t at 2t+1 (n is even)
+            Boundary::Periodic => (0..n).map(|i| if i % 2 == 0 { i / 2 } else { n - 1 - i / 2 }).collect(),
+        };
+        let mut position = vec![0; n];
+        for (i, &node) in order.iter().enumerate() {
+            position[node] = i;
+        }
+        let pairs = || (0..ne).flat_map(move |e| (0..=p).flat_map(move |i| (0..=i).map(move |j| (e, i, j))));
+        let placed =
+            |e: usize, i: usize, j: usize| Some((position[unknown(e * p + i)?], position[unknown(e * p + j)?]));
+        let bandwidth = pairs().filter_map(|(e, i, j)| placed(e, i, j)).map(|(r, c)| r.abs_diff(c)).max().unwrap_or(0);
+        let mut s = SymBanded::zeros(n, bandwidth);
+        for (e, i, j) in pairs() {
+            if let Some((r, c)) = placed(e, i, j) {
+                // (i, j) and (j, i) both land on the diagonal when they are one
+                // node (impossible for ne >= 2: an element's two ends differ)
+                s.add(r, c, ke[(i, j)]);
             }
         }
+        let (nodes, weights) = match boundary {
+            Boundary::Walls => (nodes[1..nglob - 1].to_vec(), weights[1..nglob - 1].to_vec()),
+            Boundary::Periodic => {
+                weights[0] += weights[nglob - 1];
+                (nodes[..nglob - 1].to_vec(), weights[..nglob - 1].to_vec())
+            }
+        };
+        YGrid { boundary, nodes, weights, stiffness: s, order, length }
     }
 
     /// Boundary condition.
@@ -227,83 +238,56 @@ impl YGrid {
         self.length
     }
 
-    /// The operator `L_s = S + k^2 M` (walls only): banded, symmetric positive definite.
-    pub fn helmholtz(&self, k: f64) -> Option<SymBanded> {
-        let s = self.stiffness.as_ref()?;
-        let mut l = s.clone();
-        for (i, m) in self.weights.iter().enumerate() {
-            l.add(i, i, k * k * m);
-        }
-        Some(l)
+    /// The banded order of the unknowns: `order[i]` is the node at banded
+    /// position `i` (walls: `0, 1, ..`; periodic: `0, n-1, 1, n-2, ..`, module docs).
+    pub fn banded_order(&self) -> &[usize] {
+        &self.order
     }
 
-    /// The energy matrix `K = M L^-1` of mode `k` (dense, symmetric positive
-    /// definite): `omega^T K omega = int |u|^2 dy` per unit x-length and mode.
+    /// Node data `x` (one value per node) in the banded order.
+    pub fn to_banded(&self, x: &[f64]) -> Vec<f64> {
+        self.order.iter().map(|&a| x[a]).collect()
+    }
+
+    /// The operator `L_s = S + k^2 M` in the banded order ([`YGrid::banded_order`]):
+    /// banded, symmetric positive definite.
+    pub fn helmholtz(&self, k: f64) -> SymBanded {
+        let mut l = self.stiffness.clone();
+        for (i, &a) in self.order.iter().enumerate() {
+            l.add(i, i, k * k * self.weights[a]);
+        }
+        l
+    }
+
+    /// The energy matrix `K = M L^-1 M` of mode `k` (dense, symmetric positive
+    /// definite, node order): `omega^T K omega = int |u|^2 dy` per unit x-length and mode.
     pub fn energy_matrix(&self, k: f64) -> DMatrix<f64> {
         let n = self.n();
-        match self.boundary {
-            Boundary::Walls => {
-                let l = self.helmholtz(k).expect("walls grid has a stiffness");
-                // S + k^2 M is positive definite in exact arithmetic; its
-                // Cholesky fails only when k^2 overflows or underflows the
-                // stiffness (the spec layer bounds k L to keep away from
-                // that): every consumer then sees NaN and refuses to certify.
-                let Ok(f) = l.cholesky() else { return DMatrix::from_element(n, n, f64::NAN) };
-                let mut out = DMatrix::zeros(n, n);
-                let mut col = vec![0.0; n];
-                for j in 0..n {
-                    col.iter_mut().for_each(|c| *c = 0.0);
-                    col[j] = self.weights[j];
-                    f.solve(&mut col);
-                    for i in 0..n {
-                        out[(i, j)] = self.weights[i] * col[i];
-                    }
-                }
-                // exact symmetry of the form (the solve is symmetric up to rounding)
-                let t = out.transpose();
-                (out + t) * 0.5
-            }
-            Boundary::Periodic => {
-                let h = self.length / n as f64;
-                let col = self.periodic_symbol_column(k);
-                DMatrix::from_fn(n, n, |i, j| h * col[(i + n - j) % n])
+        let l = self.helmholtz(k);
+        // S + k^2 M is positive definite in exact arithmetic; its Cholesky
+        // fails only when k^2 overflows or underflows the stiffness (the
+        // spec layer bounds k L to keep away from that): every consumer
+        // then sees NaN and refuses to certify.
+        let Ok(f) = l.cholesky() else { return DMatrix::from_element(n, n, f64::NAN) };
+        let m = self.to_banded(&self.weights);
+        let mut out = DMatrix::zeros(n, n);
+        let mut col = vec![0.0; n];
+        for j in 0..n {
+            col.iter_mut().for_each(|c| *c = 0.0);
+            col[j] = m[j];
+            f.solve(&mut col);
+            for i in 0..n {
+                out[(self.order[i], self.order[j])] = m[i] * col[i];
             }
         }
+        // exact symmetry of the form (the solve is symmetric up to rounding)
+        let t = out.transpose();
+        (out + t) * 0.5
     }
 
-    /// First column of the periodic `L^-1 M` (a circulant): `c_d = (h/N) sum_m cos(2 pi m d / N) / (k^2 + l_m^2)`.
-    fn periodic_symbol_column(&self, k: f64) -> Vec<f64> {
-        let n = self.n();
-        let two_pi = 2.0 * std::f64::consts::PI;
-        // wavenumbers m = -(n/2)+1 .. n/2 ; the Nyquist term enters with its cosine (real, symmetric)
-        let half = n / 2;
-        let ms: Vec<i64> = (-(half as i64) + if n % 2 == 0 { 1 } else { 0 }..=half as i64).collect();
-        let symbol: Vec<f64> = ms
-            .iter()
-            .map(|&m| {
-                let l = two_pi * m as f64 / self.length;
-                let denom = k * k + l * l;
-                // the mean of psi is not determined at k = 0; the k = 0 mode is not used
-                if denom == 0.0 {
-                    0.0
-                } else {
-                    1.0 / denom
-                }
-            })
-            .collect();
-        // cos(2 pi m d / n) depends on (m d) mod n only: one table of n cosines
-        let table: Vec<f64> = (0..n).map(|j| (two_pi * j as f64 / n as f64).cos()).collect();
-        (0..n)
-            .map(|d| {
-                ms.iter().zip(&symbol).map(|(&m, s)| table[(m.rem_euclid(n as i64) as usize * d) % n] * s).sum::<f64>()
-                    / n as f64
-            })
-            .collect()
-    }
-
-    /// Factor of `L_s` (walls only).
+    /// Factor of `L_s` (banded order).
     pub fn helmholtz_factor(&self, k: f64) -> Option<BandedCholesky> {
-        self.helmholtz(k).and_then(|l| l.cholesky().ok())
+        self.helmholtz(k).cholesky().ok()
     }
 }
 
@@ -340,6 +324,38 @@ mod tests {
             let exact = (l / 2.0) / (k * k + n_sin * n_sin);
             assert!((e - exact).abs() < 1e-12, "{boundary:?}: {e} vs {exact}");
         }
+    }
+
+    #[test]
+    fn periodic_stiffness_is_cyclic_and_banded_in_the_interleaved_order() {
+        // On the circle the constants are the kernel of -d^2/dy^2: S 1 = 0
+        // (to rounding); between walls they are not (S 1 != 0 next to the
+        // walls). The interleaved order is a permutation and its band is
+        // 2p wide (module docs), and L = S + k^2 M is definite.
+        for ny in [16, 24, 64, 1024] {
+            let g = YGrid::new(Boundary::Periodic, 0.0, 2.0 * std::f64::consts::PI, ny);
+            let mut seen = vec![false; ny];
+            g.banded_order().iter().for_each(|&a| seen[a] = true);
+            assert!(seen.iter().all(|s| *s), "ny {ny}: not a permutation");
+            let s = g.helmholtz(0.0);
+            // (nodes d <= p apart within one half land 2d apart; across the
+            // middle or the wrap at most 2d - 1; reached once a half holds
+            // two nodes p apart, ny > 2p)
+            assert!(s.bandwidth() <= 2 * ELEMENT_DEGREE, "ny {ny}: {}", s.bandwidth());
+            assert!(ny <= 2 * ELEMENT_DEGREE || s.bandwidth() == 2 * ELEMENT_DEGREE, "ny {ny}: {}", s.bandwidth());
+            let mut out = vec![0.0; ny];
+            s.mul_vec(&vec![1.0; ny], &mut out);
+            let scale = (0..ny).map(|i| s.get(i, i)).fold(0.0, f64::max);
+            assert!(out.iter().all(|x| x.abs() < 1e-12 * scale), "ny {ny}: {out:?}");
+            assert!(g.helmholtz(1.0).verified_positive_definite_within(0.0), "ny {ny}");
+            // the weights integrate 1 to the period
+            let total: f64 = g.weights().iter().sum();
+            assert!((total - 2.0 * std::f64::consts::PI).abs() < 1e-12, "ny {ny}: {total}");
+        }
+        let walls = YGrid::new(Boundary::Walls, 0.0, 1.0, 16);
+        let mut out = vec![0.0; walls.n()];
+        walls.helmholtz(0.0).mul_vec(&vec![1.0; walls.n()], &mut out);
+        assert!(out[0].abs() > 1.0, "{out:?}");
     }
 
     #[test]

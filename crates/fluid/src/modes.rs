@@ -30,8 +30,8 @@
 //! with the generator crate's general formula on the real embedding.
 
 use crate::banded::{BandedCholesky, BandedRows};
-use crate::grid::{Boundary, YGrid};
-use crate::lanczos::{conjugate_gradients, largest_eigenvalue, largest_generalized_eigenvalue, Ritz};
+use crate::grid::YGrid;
+use crate::lanczos::{conjugate_gradients, largest_generalized_eigenvalue, Ritz};
 use nalgebra::DMatrix;
 use outcome::Sign;
 
@@ -181,8 +181,9 @@ impl<'g> Mode<'g> {
     }
 
     /// Largest generalised eigenvalue of `(Q, V)` by Lanczos on
-    /// `C^-1 Q C^-T`, `V = C C^T`: banded in stream-function coordinates for
-    /// walls, dense Cholesky for periodic grids.
+    /// `C^-1 Q C^-T`, `V = C C^T`, with banded solves (both boundaries; the
+    /// vectors are in the grid's banded order, which leaves the eigenvalue
+    /// unchanged).
     pub fn sigma2(&self, form: &Form, coef: &Coefficients, tol: f64) -> Result<ModeSigma2, ModeError> {
         let n = self.grid.n();
         let max_iter = 600;
@@ -197,77 +198,36 @@ impl<'g> Mode<'g> {
             let ritz = Ritz { value: 0.0, residual: 0.0, iterations: 0, scale: 0.0 };
             return Ok(ModeSigma2 { lambda_max: 0.0, ritz });
         }
-        let ritz = match self.grid.boundary() {
-            Boundary::Walls => {
-                let ops = WallOps::new(self.grid, self.k, form, coef).ok_or(ModeError::NotDefinite { k: self.k })?;
-                let cell = std::cell::RefCell::new(WallScratch::new(n));
-                largest_generalized_eigenvalue(
-                    n,
-                    |x, out| ops.q_omega(x, out, &mut cell.borrow_mut()),
-                    |x, out| ops.v_omega(x, out),
-                    |b, x| ops.v_omega_solve(b, x, &mut cell.borrow_mut()),
-                    tol,
-                    max_iter,
-                )
-            }
-            Boundary::Periodic => {
-                // Dense: faer's Cholesky of V, then Lanczos on L^-1 Q L^-T
-                // with triangular solves (the circulant K has no band).
-                use faer::linalg::triangular_solve::{
-                    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
-                };
-                let kmat = self.grid.energy_matrix(self.k);
-                let v = self.form_from_energy(&kmat, form);
-                let q = self.generator_from_energy(&kmat, form, coef);
-                let vf = faer::Mat::<f64>::from_fn(n, n, |i, j| v[(i, j)]);
-                let qf = faer::Mat::<f64>::from_fn(n, n, |i, j| q[(i, j)]);
-                let llt = vf.llt(faer::Side::Lower).map_err(|_| ModeError::NotDefinite { k: self.k })?;
-                let l = llt.L();
-                let mut y = faer::Mat::<f64>::zeros(n, 1);
-                largest_eigenvalue(
-                    n,
-                    |x, out| {
-                        for i in 0..n {
-                            y[(i, 0)] = x[i];
-                        }
-                        solve_upper_triangular_in_place(l.transpose(), y.as_mut(), faer::Par::Seq);
-                        let mut z = &qf * &y;
-                        solve_lower_triangular_in_place(l, z.as_mut(), faer::Par::Seq);
-                        for i in 0..n {
-                            out[i] = z[(i, 0)];
-                        }
-                    },
-                    tol,
-                    max_iter,
-                )
-            }
-        };
+        let ops = WallOps::new(self.grid, self.k, form, coef).ok_or(ModeError::NotDefinite { k: self.k })?;
+        let cell = std::cell::RefCell::new(WallScratch::new(n));
+        let ritz = largest_generalized_eigenvalue(
+            n,
+            |x, out| ops.q_omega(x, out, &mut cell.borrow_mut()),
+            |x, out| ops.v_omega(x, out),
+            |b, x| ops.v_omega_solve(b, x, &mut cell.borrow_mut()),
+            tol,
+            max_iter,
+        );
         if !(ritz.value.is_finite() && ritz.residual.is_finite() && ritz.scale.is_finite()) {
             return Err(ModeError::NonFinite { k: self.k });
         }
         Ok(ModeSigma2 { lambda_max: ritz.value, ritz })
     }
 
-    /// `(V ≻ 0, sigma2_bar V - Q ≻ 0)`, each proved or not: on a walls grid
-    /// by the banded check of [`crate::walls_check`] (`O(ny)`, for the exact
-    /// pencil of the stored operators), then, if that fails and the grid has
-    /// at most [`DENSE_FALLBACK_UNKNOWNS`] unknowns, by the dense check; on a
-    /// periodic grid by the dense check [`Mode::verify_dense`] (`O(ny^3)`:
-    /// the circulant `K` has no band).
+    /// `(V ≻ 0, sigma2_bar V - Q ≻ 0)`, each proved or not: by the banded
+    /// check of [`crate::walls_check`] (`O(ny)`, for the exact pencil of the
+    /// stored operators; both boundaries), then, if that fails and the grid
+    /// has at most [`DENSE_FALLBACK_UNKNOWNS`] unknowns, by the dense check
+    /// [`Mode::verify_dense`].
     pub fn verify(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
-        match self.grid.boundary() {
-            Boundary::Walls => {
-                let banded = crate::walls_check::verify_walls(self.grid, self.k, form, coef, sigma2_bar);
-                if banded.1 || self.grid.n() > DENSE_FALLBACK_UNKNOWNS {
-                    banded
-                } else {
-                    // The banded check proves only wider margins (walls_check
-                    // docs); where the dense one is affordable it may prove more.
-                    let dense = self.verify_dense(form, coef, sigma2_bar);
-                    (banded.0 || dense.0, dense.1)
-                }
-            }
-            Boundary::Periodic => self.verify_dense(form, coef, sigma2_bar),
+        let banded = crate::walls_check::verify_walls(self.grid, self.k, form, coef, sigma2_bar);
+        if banded.1 || self.grid.n() > DENSE_FALLBACK_UNKNOWNS {
+            banded
+        } else {
+            // The banded check proves only wider margins (walls_check
+            // docs); where the dense one is affordable it may prove more.
+            let dense = self.verify_dense(form, coef, sigma2_bar);
+            (banded.0 || dense.0, dense.1)
         }
     }
 
@@ -332,7 +292,7 @@ fn symmetrise(a: DMatrix<f64>) -> DMatrix<f64> {
 /// weighted identity plus a smoothing operator). `V x = b` is solved by
 /// conjugate gradients preconditioned with the exact inverse in
 /// stream-function coordinates, `V^-1 = M^-1 L V_psi^-1 L M^-1` with
-/// `V_psi = s (e L + L diag(w/m) L)` (banded, bandwidth `2p`): that inverse is
+/// `V_psi = s (e L + L diag(w/m) L)` (banded, twice the bandwidth of `L`): that inverse is
 /// exact in exact arithmetic but loses accuracy through the conditioning of
 /// `L`, which the conjugate-gradient iteration then removes. The banded
 /// Cholesky of `V_psi` is also the definiteness screen.
@@ -363,14 +323,18 @@ impl WallScratch {
 
 impl WallOps {
     fn new(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients) -> Option<Self> {
-        let l = grid.helmholtz(k)?;
+        // everything in the grid's banded order (a permutation of the
+        // unknowns: the pencil's eigenvalues do not change)
+        let l = grid.helmholtz(k);
         let l_factor = l.cholesky().ok()?;
-        let m = grid.weights().to_vec();
-        let w_over_m: Vec<f64> = form.w.iter().zip(&m).map(|(w, m)| w / m).collect();
+        let m = grid.to_banded(grid.weights());
+        let w = grid.to_banded(&form.w);
+        let w_over_m: Vec<f64> = w.iter().zip(&m).map(|(w, m)| w / m).collect();
         let v_psi = l.times(form.energy).plus(&l.sandwich(&w_over_m)).times(form.sign.as_f64());
         let v_factor = v_psi.cholesky().ok()?;
         let (eta, eta2) = coef.centred_noise();
-        let wm = form.w.iter().zip(&m).map(|(w, m)| w * m).collect();
+        let (eta, eta2) = (eta.iter().map(|e| grid.to_banded(e)).collect(), grid.to_banded(&eta2));
+        let wm = w.iter().zip(&m).map(|(w, m)| w * m).collect();
         Some(WallOps {
             l: l.rows(),
             l_factor,
@@ -455,6 +419,7 @@ impl WallOps {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::Boundary;
     use exact::{Matrix as ExactMatrix, Rational};
     use nalgebra::SymmetricEigen;
 

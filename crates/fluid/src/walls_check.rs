@@ -115,13 +115,20 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
         return (false, false);
     }
     let n = grid.n();
-    let m = grid.weights();
+    if form.w.len() != n {
+        return (false, false);
+    }
+    // node data in the grid's banded order (walls: the node order; periodic:
+    // interleaved, grid docs): a permutation of the unknowns, which keeps
+    // every inertia
+    let m = &grid.to_banded(grid.weights());
+    let w = &grid.to_banded(&form.w);
     let s = form.sign.as_f64();
     if form.energy == 0.0 {
         // V = s M diag(w) is diagonal (the sign of a product of doubles is
         // exact unless it underflows to 0, which fails the test) and Q = 0,
         // so bar V - Q ⪰ 0 for every bar >= 0 (as the dense check says).
-        let definite = (0..n).all(|a| s * form.w[a] * m[a] > 0.0);
+        let definite = (0..n).all(|a| s * w[a] * m[a] > 0.0);
         return (definite, definite);
     }
     // The liftings below are for V = s (M diag(w) + K): energy 1 (the
@@ -129,9 +136,9 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
     if form.energy != 1.0 {
         return (false, false);
     }
-    let Some(l) = grid.helmholtz(k) else { return (false, false) };
+    let l = grid.helmholtz(k);
     let p = l.bandwidth();
-    if form.w.iter().chain(m).any(|x| !x.is_finite()) || (0..n).any(|i| !l.get(i, i).is_finite()) {
+    if w.iter().chain(m).any(|x| !x.is_finite()) || (0..n).any(|i| !l.get(i, i).is_finite()) {
         return (false, false);
     }
     // Haynsworth's count needs the stored L ≻ 0 (module docs): proved, not
@@ -147,7 +154,7 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
             // V ≻ 0: [[s M w, M], [M, -s L]], unknowns (omega_a, y_a).
             let mut v = Bounded::new(2 * n, 2 * p + 1);
             for a in 0..n {
-                v.set(2 * a, 2 * a, s * m[a] * form.w[a], 1);
+                v.set(2 * a, 2 * a, s * m[a] * w[a], 1);
                 v.set(2 * a + 1, 2 * a, m[a], 0);
                 for b in a.saturating_sub(p)..=a {
                     v.set(2 * a + 1, 2 * b + 1, -s * l.get(a, b), 0);
@@ -156,16 +163,23 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
             let target = if s > 0.0 { (n, n) } else { (2 * n, 0) };
             v.inertia() == Some(target)
         },
-        || below_bar(grid, &l, k, form, coef, bar),
+        || below_bar(grid, &l, k, s, (m, w), coef, bar),
     );
     (definite, definite && below)
 }
 
 /// `bar V - Q ≻ 0` by the lifting of the module docs (`V ≻ 0` proved apart).
-fn below_bar(grid: &YGrid, l: &crate::banded::SymBanded, k: f64, form: &Form, coef: &Coefficients, bar: f64) -> bool {
+/// `m` and `w` in the banded order.
+fn below_bar(
+    grid: &YGrid,
+    l: &crate::banded::SymBanded,
+    k: f64,
+    s: f64,
+    (m, w): (&[f64], &[f64]),
+    coef: &Coefficients,
+    bar: f64,
+) -> bool {
     let n = grid.n();
-    let m = grid.weights();
-    let s = form.sign.as_f64();
     let p = l.bandwidth();
 
     // rho = bar / k^2, rounded down (module docs).
@@ -183,6 +197,7 @@ fn below_bar(grid: &YGrid, l: &crate::banded::SymBanded, k: f64, form: &Form, co
     // The noise fields that are not constant, each less its mean (its
     // rounding is counted in the entries' bounds below).
     let (eta, s2) = coef.centred_noise();
+    let (eta, s2): (Vec<Vec<f64>>, Vec<f64>) = (eta.iter().map(|e| grid.to_banded(e)).collect(), grid.to_banded(&s2));
     let nj = eta.len();
     if s2.iter().any(|x| !x.is_finite()) {
         return false;
@@ -210,7 +225,7 @@ fn below_bar(grid: &YGrid, l: &crate::banded::SymBanded, k: f64, form: &Form, co
     for a in 0..n {
         // D_a = s rho m w (two roundings): normal and nonzero, so that its
         // sign is exact and its error relative
-        let Some(d) = crate::banded::product_without_early_underflow(&[s * rho, m[a], form.w[a]]) else {
+        let Some(d) = crate::banded::product_without_early_underflow(&[s * rho, m[a], w[a]]) else {
             return false;
         };
         if !(d.is_finite() && d.abs() >= f64::MIN_POSITIVE) {
@@ -386,46 +401,53 @@ mod tests {
     fn random_pencils_are_never_proved_below_their_eigenvalue() {
         // Random smooth profiles, weights of either sign and one to three
         // noise fields: a bound 1e-6 below the dense eigenvalue is never
-        // proved, whatever the lifting does.
+        // proved, whatever the lifting does. Both boundaries: a periodic
+        // grid runs the same check on its interleaved order (grid docs).
         use rand::{Rng, SeedableRng};
         let mut rng = rand::rngs::StdRng::seed_from_u64(13);
-        let mut proved_above = 0;
-        for case in 0..24 {
-            let ny = [16, 32, 48][case % 3];
-            let g = YGrid::new(Boundary::Walls, -1.0, 1.0 + rng.random_range(0.0..2.0), ny);
-            let y = g.nodes().to_vec();
-            let nf = 1 + case % 3;
-            let eta: Vec<Vec<f64>> = (0..nf)
-                .map(|_| {
-                    let (a, b, c) =
-                        (rng.random_range(-1.0..1.0), rng.random_range(-2.0..2.0), rng.random_range(-3.0..3.0));
-                    y.iter().map(|y| a * (b * y).sin() + 0.3 * c * y).collect()
-                })
-                .collect();
-            let sign = if case % 2 == 0 { Sign::Positive } else { Sign::Negative };
-            let w: Vec<f64> = y
-                .iter()
-                .map(|y| {
-                    let base = 1.0 + 0.5 * (3.0 * y).cos();
-                    if sign == Sign::Positive {
-                        base
-                    } else {
-                        -20.0 * base
-                    }
-                })
-                .collect();
-            let coef = Coefficients { u: vec![0.0; g.n()], upp: vec![1.0; g.n()], eta };
-            let form = Form { energy: 1.0, w, sign };
-            let k = rng.random_range(0.3..5.0);
-            let mode = Mode::new(&g, k);
-            let lam = dense_lambda(&mode, &form, &coef);
-            assert_eq!(verify_walls(&g, k, &form, &coef, lam * (1.0 - 1e-6) - 1e-300), (true, false), "case {case}");
-            if verify_walls(&g, k, &form, &coef, lam * (1.0 + 1e-4) + 1e-300) == (true, true) {
-                proved_above += 1;
+        for boundary in [Boundary::Walls, Boundary::Periodic] {
+            let mut proved_above = 0;
+            for case in 0..24 {
+                let ny = [16, 32, 48][case % 3];
+                let g = YGrid::new(boundary, -1.0, 1.0 + rng.random_range(0.0..2.0), ny);
+                let y = g.nodes().to_vec();
+                let nf = 1 + case % 3;
+                let eta: Vec<Vec<f64>> = (0..nf)
+                    .map(|_| {
+                        let (a, b, c) =
+                            (rng.random_range(-1.0..1.0), rng.random_range(-2.0..2.0), rng.random_range(-3.0..3.0));
+                        y.iter().map(|y| a * (b * y).sin() + 0.3 * c * y).collect()
+                    })
+                    .collect();
+                let sign = if case % 2 == 0 { Sign::Positive } else { Sign::Negative };
+                let w: Vec<f64> = y
+                    .iter()
+                    .map(|y| {
+                        let base = 1.0 + 0.5 * (3.0 * y).cos();
+                        if sign == Sign::Positive {
+                            base
+                        } else {
+                            -20.0 * base
+                        }
+                    })
+                    .collect();
+                let coef = Coefficients { u: vec![0.0; g.n()], upp: vec![1.0; g.n()], eta };
+                let form = Form { energy: 1.0, w, sign };
+                let k = rng.random_range(0.3..5.0);
+                let mode = Mode::new(&g, k);
+                let lam = dense_lambda(&mode, &form, &coef);
+                assert_eq!(
+                    verify_walls(&g, k, &form, &coef, lam * (1.0 - 1e-6) - 1e-300),
+                    (true, false),
+                    "{boundary:?} case {case}"
+                );
+                if verify_walls(&g, k, &form, &coef, lam * (1.0 + 1e-4) + 1e-300) == (true, true) {
+                    proved_above += 1;
+                }
             }
+            // and it is useful: most bounds 1e-4 above are proved
+            assert!(proved_above >= 20, "{boundary:?}: {proved_above} of 24");
         }
-        // and it is useful: most bounds 1e-4 above are proved
-        assert!(proved_above >= 20, "{proved_above} of 24");
     }
 
     #[test]
@@ -434,12 +456,13 @@ mod tests {
         // fields, wavenumbers and both signs, against nalgebra's dense
         // eigenvalue of the formed pencil: a bound 1e-6 below it must fail;
         // for s = +1 one 1e-4 above it must pass (at these sizes the check
-        // proves 3e-7 or better, docs/fluids.md §2).
+        // proves 3e-7 or better, docs/fluids.md §2). Walls, then periodic
+        // grids (their interleaved order, grid docs).
         use rand::{Rng, SeedableRng};
         let mut rng = rand::rngs::StdRng::seed_from_u64(28);
-        for case in 0..18 {
+        for (case, boundary) in (0..36).map(|c| (c, if c < 18 { Boundary::Walls } else { Boundary::Periodic })) {
             let ny = [24, 32, 48][case % 3];
-            let g = YGrid::new(Boundary::Walls, 0.0, std::f64::consts::PI, ny);
+            let g = YGrid::new(boundary, 0.0, std::f64::consts::PI, ny);
             let y = g.nodes();
             let a1: f64 = rng.random_range(-0.5..0.5);
             let fields = 1 + case % 3;
@@ -471,7 +494,7 @@ mod tests {
             let lam = dense_lambda(&mode, &form, &coef);
             assert!(lam > 0.0, "case {case}: {lam}");
             let below = verify_walls(&g, k, &form, &coef, lam * (1.0 - 1e-6));
-            assert!(!below.1, "case {case} ({sign:?}, ny {ny}, k {k}): proved below the eigenvalue");
+            assert!(!below.1, "case {case} ({boundary:?}, {sign:?}, ny {ny}, k {k}): proved below the eigenvalue");
             if sign == Sign::Positive {
                 assert_eq!(verify_walls(&g, k, &form, &coef, lam * (1.0 + 1e-4)), (true, true), "case {case}");
             }
@@ -540,7 +563,7 @@ mod tests {
         let coef = Coefficients { u: vec![0.0; n], upp: vec![1.0; n], eta: vec![eta.clone()] };
         let form = Form { energy: 1.0, w: w.clone(), sign: Sign::Positive };
         let q = |x: f64| exact::Rational::from_float(x).unwrap();
-        let l = g.helmholtz(1.0).unwrap();
+        let l = g.helmholtz(1.0);
         let p = l.bandwidth();
         let l_exact = exact::Matrix::from_fn(n, n, |a, b| if a.abs_diff(b) <= p { q(l.get(a, b)) } else { q(0.0) });
         let diag = |d: &[f64]| exact::Matrix::from_fn(n, n, |a, b| if a == b { q(d[a]) } else { q(0.0) });

@@ -639,8 +639,8 @@ pub struct FluidDoc {
     /// The noise fields (at most 256): a transport velocity `eta_k(y)`
     /// alone, or with a potential part for compressible flow.
     pub noise: Vec<NoiseEntry>,
-    /// Grid points in y (16 to 4096; a multiple of the element degree with
-    /// walls, even when periodic).
+    /// Grid points in y (16 to 4096; a multiple of the element degree, 8,
+    /// on both boundaries).
     pub ny: Count,
     /// Number of x-modes `m = 1..x_modes` (1 to 2048).
     pub x_modes: Count,

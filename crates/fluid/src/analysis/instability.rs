@@ -32,7 +32,7 @@ pub(super) fn inconclusive_or_unstable(
     progress: &Progress,
 ) -> FluidAnalysis {
     let profile = &problem.profile;
-    let step = if profile.boundary == Boundary::Walls { crate::grid::ELEMENT_DEGREE } else { 2 };
+    let step = crate::grid::ELEMENT_DEGREE;
     let start = settings.instability_ny - settings.instability_ny % step;
     let max_ny = (crate::constants::INSTABILITY_MAX_NY as usize).max(start);
     let ks = wavenumbers(problem);

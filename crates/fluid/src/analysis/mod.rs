@@ -359,23 +359,30 @@ pub(super) fn prove_remaining_modes(
     });
 }
 
-/// Up to this many unknowns (ny = 512 on walls) the banded check proves
-/// the narrowest rung, `1e-8`: measured 2026-11-27 (fifth session) with `walls_margins`
-/// for `U = y^3 + y/2` (`s = +1`) and `channel-sin-walls` (`s = -1`), the
-/// low modes at ny = 128, 256 and 512 prove every rung; at ny = 1024 none
-/// of the 32 modes of either proves `1e-8`.
-pub const BANDED_NARROWEST_UNKNOWNS: usize = 511;
+/// Up to this many unknowns (ny = 512: 511 unknowns on walls, 512 on a
+/// periodic grid) the banded check proves the narrowest rung, `1e-8`:
+/// measured 2026-11-27 (fifth session) with `walls_margins` for
+/// `U = y^3 + y/2` (`s = +1`) and `channel-sin-walls` (`s = -1`), the low
+/// modes at ny = 128, 256 and 512 prove every rung; at ny = 1024 none of
+/// the 32 modes of either proves `1e-8`. For `kolmogorov-periodic`
+/// (`s = -1`, 2026-11-28) mode 1 proves `1e-8` at ny = 512 and none does at
+/// 1024.
+pub const BANDED_NARROWEST_UNKNOWNS: usize = 512;
 
 /// The first rung of the margin ladder of `verified_upper` for the banded
 /// check on a walls grid with `unknowns` interior unknowns: the margin it
 /// can prove grows like `h^-2` (`walls_check` docs), so rungs that cannot
 /// succeed are skipped. The bottom up to [`BANDED_NARROWEST_UNKNOWNS`],
-/// `3e-7` up to 2047 unknowns, then one rung higher per doubling. Measured
+/// `3e-7` up to 2048 unknowns, then one rung higher per doubling (the
+/// thresholds are those of ny, so that walls, `ny - 1` unknowns, and
+/// periodic grids, `ny`, start alike). Measured
 /// for `U = y^3 + y/2` (`s = +1`) and the `channel-sin-walls` fixture
 /// (`s = -1`), 32 modes each, with `walls_margins` (2026-11-27, fifth session; the
 /// elimination of `omega` of `walls_check`): at ny = 1024, 13 and 6 of the
 /// 32 modes prove `3e-7` and none `1e-8`; at ny = 2048, 10 and 5 prove
-/// `3e-7`; at ny = 4096, 0 and 1 (the ladder starts at `9e-6` there). The
+/// `3e-7`; at ny = 4096, 0 and 1 (the ladder starts at `9e-6` there). For
+/// `kolmogorov-periodic` (`s = -1`, 2026-11-28) modes 1 to 3 of 16 prove
+/// `3e-7` at ny = 1024, 2048 and 4096. The
 /// claim is the same kind
 /// either way (a verified bound, or none); only its width can differ, and
 /// the widest rung tried does not change.
@@ -384,21 +391,22 @@ pub fn first_rung(unknowns: usize) -> usize {
         return 0;
     }
     let mut rung = 1;
-    let mut size = 4 * BANDED_NARROWEST_UNKNOWNS + 3; // 2047
+    let mut size = 4 * BANDED_NARROWEST_UNKNOWNS; // 2048
     while unknowns > size && rung + 1 < VERIFY_ATTEMPTS {
         rung += 1;
-        size = 2 * size + 1;
+        size *= 2;
     }
     rung.min(VERIFY_ATTEMPTS - 1)
 }
 
 /// The verified bound of one mode as the analysis finds it: `verified_upper`
-/// with the check for its grid. On walls grids the banded check
-/// ([`crate::walls_check`], `O(ny)`, about the exact pencil of the stored
-/// operators) climbs the ladder from [`first_rung`]; only a mode whose
-/// banded ladder proves nothing, on a grid of at most
-/// [`crate::modes::DENSE_FALLBACK_UNKNOWNS`] unknowns, climbs it again with
-/// the dense check from the bottom. Periodic grids use the dense check.
+/// with the check for its grid. The banded check ([`crate::walls_check`],
+/// `O(ny)`, about the exact pencil of the stored operators) climbs the
+/// ladder from [`first_rung`]; only a mode whose banded ladder proves
+/// nothing, on a grid of at most [`crate::modes::DENSE_FALLBACK_UNKNOWNS`]
+/// unknowns, climbs it again with the dense check from the bottom. Both
+/// boundaries take this path since 2026-11-28 (sixth session); periodic
+/// grids used the dense check alone before.
 /// Returns `(sigma2_upper, form_verified)`.
 ///
 /// Until 2026-11-27 (fifth session) every rung on a grid of up to 1023 unknowns that the
@@ -415,19 +423,14 @@ pub fn verified_mode_bound(
     ritz: &crate::lanczos::Ritz,
 ) -> (Option<f64>, bool) {
     let grid = mode.grid();
-    match grid.boundary() {
-        crate::grid::Boundary::Walls => {
-            let banded = verified_upper(sigma2, ritz, first_rung(grid.n()), |bar| {
-                crate::walls_check::verify_walls(grid, mode.k(), form, coef, bar)
-            });
-            if banded.0.is_some() || grid.n() > crate::modes::DENSE_FALLBACK_UNKNOWNS {
-                return banded;
-            }
-            let dense = verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar));
-            (dense.0, banded.1 || dense.1)
-        }
-        crate::grid::Boundary::Periodic => verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar)),
+    let banded = verified_upper(sigma2, ritz, first_rung(grid.n()), |bar| {
+        crate::walls_check::verify_walls(grid, mode.k(), form, coef, bar)
+    });
+    if banded.0.is_some() || grid.n() > crate::modes::DENSE_FALLBACK_UNKNOWNS {
+        return banded;
     }
+    let dense = verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar));
+    (dense.0, banded.1 || dense.1)
 }
 
 /// A stated bound in the units of the normalised noise (divided by `4^e`),
@@ -552,15 +555,72 @@ mod tests {
 
     #[test]
     fn the_ladder_skips_the_rungs_the_banded_check_never_proves_on_large_grids() {
-        // first_rung's rule: the bottom up to 511 unknowns, `3e-7` (rung 1)
-        // up to 2047, then one rung per doubling (4095, 8191), never past
-        // the widest rung (4).
-        let cases =
-            [(1, 0), (511, 0), (512, 1), (1023, 1), (2047, 1), (2048, 2), (4095, 2), (4096, 3), (8191, 3), (8192, 4)];
+        // first_rung's rule: the bottom up to 512 unknowns, `3e-7` (rung 1)
+        // up to 2048, then one rung per doubling (4096, 8192), never past
+        // the widest rung (4). Walls grids have ny - 1 unknowns, periodic
+        // ones ny: both start alike.
+        let cases = [
+            (1, 0),
+            (511, 0),
+            (512, 0),
+            (513, 1),
+            (1023, 1),
+            (1024, 1),
+            (2047, 1),
+            (2048, 1),
+            (2049, 2),
+            (4095, 2),
+            (4096, 2),
+            (4097, 3),
+            (8192, 3),
+            (8193, 4),
+        ];
         for (unknowns, rung) in cases {
             assert_eq!(first_rung(unknowns), rung, "{unknowns} unknowns");
         }
         assert_eq!(first_rung(usize::MAX), VERIFY_ATTEMPTS - 1);
+    }
+
+    #[test]
+    fn a_mode_the_banded_check_cannot_prove_falls_back_to_the_dense_check_up_to_1023_unknowns() {
+        // The banded lifting is written for the energy coefficient 1 and
+        // proves nothing for another (walls_check docs); the dense check
+        // takes any. A form with energy 2 therefore reaches the dense branch
+        // of verified_mode_bound, which proves the bottom rung (its own
+        // ladder starts there) on 255 (walls) and 256 (periodic) unknowns;
+        // above DENSE_FALLBACK_UNKNOWNS (walls ny = 1032: 1031) nothing is
+        // proved.
+        use crate::grid::{Boundary, YGrid};
+        use crate::modes::{Coefficients, Form, Mode};
+        use outcome::Sign;
+        for (boundary, ny, fallback) in
+            [(Boundary::Walls, 256, true), (Boundary::Periodic, 256, true), (Boundary::Walls, 1032, false)]
+        {
+            let g = YGrid::new(boundary, 0.0, std::f64::consts::PI, ny);
+            let y = g.nodes();
+            let coef = Coefficients {
+                u: y.iter().map(|y| 0.5 * y * y).collect(),
+                upp: vec![1.0; g.n()],
+                eta: vec![y.iter().map(|y| 0.3 * y.sin()).collect()],
+            };
+            let form = Form { energy: 2.0, w: coef.u.iter().map(|u| u + 2.0).collect(), sign: Sign::Positive };
+            let k = 1.5;
+            let mode = Mode::new(&g, k);
+            let r = mode.sigma2(&form, &coef, 1e-12).unwrap();
+            assert!(r.lambda_max > 0.0);
+            // the banded check alone proves nothing, even at twice the value
+            let banded = crate::walls_check::verify_walls(&g, k, &form, &coef, 2.0 * r.lambda_max);
+            assert_eq!(banded, (false, false), "{boundary:?} {ny}");
+            let (bound, definite) = verified_mode_bound(&mode, &form, &coef, r.lambda_max, &r.ritz);
+            if fallback {
+                let bottom = r.lambda_max * (1.0 + VERIFY_MARGIN_START)
+                    + VERIFY_MARGIN_START * VERIFY_RITZ_WEIGHT * r.ritz.scale
+                    + r.ritz.residual;
+                assert_eq!((bound, definite), (Some(bottom), true), "{boundary:?} {ny}");
+            } else {
+                assert_eq!(bound, None, "{boundary:?} {ny}");
+            }
+        }
     }
 
     #[test]
