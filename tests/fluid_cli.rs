@@ -83,6 +83,18 @@ fn fluid_bad_input_is_exit_2_with_the_json_path() {
         ),
         ("ny not an integer", spec_with(|v| v["fluid"]["ny"] = 32.5.into()), "$.fluid.ny", "positive integer"),
         (
+            // even was enough for the Fourier collocation used until 2026-11-28
+            "periodic ny not a multiple of the degree",
+            spec_with(|v| {
+                v["fluid"]["boundary"] = "periodic".into();
+                v["fluid"]["y_interval"] = serde_json::json!([0, "2*pi"]);
+                v["fluid"]["shear_flow"] = "sin(y)".into();
+                v["fluid"]["ny"] = 60.into();
+            }),
+            "$.fluid.ny",
+            "multiple of the element degree",
+        ),
+        (
             "unknown function",
             spec_with(|v| v["fluid"]["shear_flow"] = "tan(y)".into()),
             "$.fluid.shear_flow",

@@ -20,20 +20,19 @@ fn cubic(ny: usize, boundary: &str) -> String {
 #[test]
 fn ny_4096_with_32_modes_is_accepted_on_both_boundaries_and_the_dense_fallback_keeps_its_limit() {
     // The banded check is O(ny): no work limit applies above the dense
-    // fallback's 1023 unknowns. (Until 2026-11-28 periodic grids were dense
-    // and refused here: 32 * 2 * 4096^3 / 3 = 1.5e12 > 1e12 operations.)
+    // fallback's 1023 unknowns, nor on periodic grids, which have no
+    // fallback (fluid::modes::Mode::verify). (Until 2026-11-28 periodic
+    // grids were dense and refused here: 32 * 2 * 4096^3 / 3 = 1.5e12 > 1e12
+    // operations.)
     spec::parse_fluid_spec(&cubic(4096, "walls")).expect("walls at ny = 4096 are accepted");
     spec::parse_fluid_spec(&kolmogorov(4096, 32)).expect("periodic at ny = 4096 is accepted");
-    // At ny = 1024 with 2048 modes the dense fallback could run on every
-    // mode, 2048 * 2 * 1023^3 / 3 = 1.5e12: refused as before (walls); a
-    // periodic grid of 1016 unknowns, 2048 * 2 * 1016^3 / 3 = 1.4e12, too.
+    spec::parse_fluid_spec(&kolmogorov(1016, 2048)).expect("periodic grids have no dense fallback");
+    // Walls at ny = 1024 with 2048 modes: the dense fallback could run on
+    // every mode, 2048 * 2 * 1023^3 / 3 = 1.5e12: refused as before.
     let many = cubic(1024, "walls").replace("\"x_modes\": 32", "\"x_modes\": 2048");
     let err = spec::parse_fluid_spec(&many).unwrap_err();
     assert_eq!(err.path, "$.fluid.x_modes", "{err}");
     assert!(err.to_string().contains("dense verified checks"), "{err}");
-    assert_eq!(spec::parse_fluid_spec(&kolmogorov(1016, 2048)).unwrap_err().path, "$.fluid.x_modes");
-    // periodic ny = 1024 has 1024 unknowns, above the fallback: accepted
-    spec::parse_fluid_spec(&kolmogorov(1024, 2048)).expect("no dense fallback at 1024 periodic unknowns");
 }
 
 /// Kolmogorov flow `U = sin y`, periodic on `[0, 2 pi)`, x-period `pi`

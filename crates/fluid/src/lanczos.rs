@@ -20,9 +20,9 @@
 //!
 //! So this is the plain Lanczos process with full reorthogonalisation (at
 //! most a few hundred vectors for sizes of a few thousand, robust without
-//! restarts). Where the operator *is* formed (the periodic modes build `V`
-//! and `Q` densely, `modes.rs`) a dense eigensolver would also serve; Lanczos
-//! keeps one code path and the same stopping rule for both boundaries. The
+//! restarts). Until 2026-11-28 the periodic modes formed `V` and `Q`
+//! densely (`modes.rs`), where a dense eigensolver would also have served;
+//! now both boundaries apply banded operators. The
 //! Ritz values of the small tridiagonal matrix come from nalgebra's
 //! symmetric eigensolver.
 

@@ -216,12 +216,18 @@ impl<'g> Mode<'g> {
 
     /// `(V ≻ 0, sigma2_bar V - Q ≻ 0)`, each proved or not: by the banded
     /// check of [`crate::walls_check`] (`O(ny)`, for the exact pencil of the
-    /// stored operators; both boundaries), then, if that fails and the grid
-    /// has at most [`DENSE_FALLBACK_UNKNOWNS`] unknowns, by the dense check
-    /// [`Mode::verify_dense`].
+    /// stored operators; both boundaries), then, if that fails on a walls
+    /// grid of at most [`DENSE_FALLBACK_UNKNOWNS`] unknowns, by the dense
+    /// check [`Mode::verify_dense`]. Not on periodic grids: their stiffness
+    /// has the constants in its kernel, so `L = S + k^2 M` is nearly
+    /// singular for small `k L` and the computed `K` the dense check trusts
+    /// can be wrong by far more than its margin (found in review
+    /// 2026-11-28: ny = 16, `k = 7e-7`, a bound 0.12% below the stored
+    /// pencil's eigenvalue proved; test
+    /// `walls_check::tests::no_dense_fallback_on_periodic_grids`).
     pub fn verify(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
         let banded = crate::walls_check::verify_walls(self.grid, self.k, form, coef, sigma2_bar);
-        if banded.1 || self.grid.n() > DENSE_FALLBACK_UNKNOWNS {
+        if banded.1 || !self.dense_fallback() {
             banded
         } else {
             // The banded check proves only wider margins (walls_check
@@ -231,13 +237,20 @@ impl<'g> Mode<'g> {
         }
     }
 
+    /// Whether [`Mode::verify`] may fall back to the dense check: walls
+    /// grids of at most [`DENSE_FALLBACK_UNKNOWNS`] unknowns.
+    pub fn dense_fallback(&self) -> bool {
+        self.grid.boundary() == crate::grid::Boundary::Walls && self.grid.n() <= DENSE_FALLBACK_UNKNOWNS
+    }
+
     /// The dense check at this grid: `V ≻ 0` and `sigma2_bar V - Q ≻ 0`,
     /// each by the rigorous floating-point Cholesky test of the generator
     /// crate, for `V` and `Q` as computed. Forming `sigma2_bar V - Q` in
     /// floating point rounds each entry by at most
     /// `2.01 u (|sigma2_bar V_ab| + |Q_ab|)` (`u = 2^-53`: one rounding for the
-    /// product, one for the difference), and symmetrising it (`Q` of a
-    /// periodic grid is symmetric only to rounding) by at most as much again
+    /// product, one for the difference), and symmetrising it (a no-op for
+    /// the `V` and `Q` built here from the symmetrised `K`, counted all the
+    /// same) by at most as much again
     /// plus `u` of the result, so the second test is run with `3.02 u` times
     /// the Frobenius norm of `|sigma2_bar V| + |Q|` as a radius
     /// ([`generator::verified_positive_definite_within`]): the claim holds

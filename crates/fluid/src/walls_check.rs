@@ -115,7 +115,7 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
         return (false, false);
     }
     let n = grid.n();
-    if form.w.len() != n {
+    if form.w.len() != n || coef.eta.iter().any(|e| e.len() != n) {
         return (false, false);
     }
     // node data in the grid's banded order (walls: the node order; periodic:
@@ -547,6 +547,55 @@ mod tests {
     }
 
     #[test]
+    fn random_noise_rescalings_move_the_bound_with_the_eigenvalue_on_both_boundaries() {
+        // Noise times f (not a power of two, so every entry rounds anew)
+        // multiplies Q, so the eigenvalue, by f^2: the dense eigenvalue of the
+        // rescaled pencil (nalgebra, independent of the banded code) must be
+        // f^2 times the first one, a bound 1e-6 below it must fail and the
+        // margin ladder must prove the same rung as without rescaling.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(2811);
+        let ladder = [1e-8, 3e-7, 9e-6, 2.7e-4, 8.1e-3];
+        for boundary in [Boundary::Walls, Boundary::Periodic] {
+            // the profile and two noise fields of `channel`, s = +1 and s = -1
+            for (shift, sign) in [(2.0, Sign::Positive), (-40.0, Sign::Negative)] {
+                let g = YGrid::new(boundary, 0.0, std::f64::consts::PI, 48);
+                let y = g.nodes();
+                let coef = Coefficients {
+                    u: y.iter().map(|y| 0.5 * y * y + 0.1 * y.sin()).collect(),
+                    upp: y.iter().map(|y| 1.0 - 0.1 * y.sin()).collect(),
+                    eta: vec![
+                        y.iter().map(|y| 0.4 * (2.0 * y).sin() + 3.0).collect(),
+                        y.iter().map(|y| 0.1 * y).collect(),
+                    ],
+                };
+                let w = coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + shift) / p).collect();
+                let form = Form { energy: 1.0, w, sign };
+                let k = 1.5;
+                let mode = Mode::new(&g, k);
+                let lam = dense_lambda(&mode, &form, &coef);
+                let rung = |c: &Coefficients, lam: f64| {
+                    ladder.iter().position(|e| verify_walls(&g, k, &form, c, lam * (1.0 + e)) == (true, true))
+                };
+                let base = rung(&coef, lam);
+                assert!(base.is_some(), "{boundary:?} {sign:?}");
+                for _ in 0..6 {
+                    let f = 10f64.powf(rng.random_range(-3.0..3.0));
+                    let scaled = Coefficients {
+                        eta: coef.eta.iter().map(|x| x.iter().map(|v| v * f).collect()).collect(),
+                        ..coef.clone()
+                    };
+                    let lam_f = dense_lambda(&mode, &form, &scaled);
+                    assert!((lam_f / (lam * f * f) - 1.0).abs() < 1e-9, "{boundary:?} {sign:?} f {f}");
+                    let below = verify_walls(&g, k, &form, &scaled, lam_f * (1.0 - 1e-6));
+                    assert_eq!(below, (true, false), "{boundary:?} {sign:?} f {f}");
+                    assert_eq!(rung(&scaled, lam_f), base, "{boundary:?} {sign:?} f {f}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn an_entry_whose_product_underflows_midway_proves_nothing_false() {
         // Found in review (2026-11-27): on an interval of length 1e-14
         // (weights m near 1e-15) with w near 1e277 and Sigma^2 near 3e-307,
@@ -582,6 +631,45 @@ mod tests {
         // 0.3% below: not definite, and not proved
         assert!(!definite(lam * 0.997));
         assert!(!verify_walls(&g, 1.0, &form, &coef, lam * 0.997).1, "proved a bound below the eigenvalue");
+    }
+
+    #[test]
+    fn no_dense_fallback_on_periodic_grids() {
+        // Found in review (2026-11-28): on a periodic grid the stiffness has
+        // the constants in its kernel, so at small k L the computed K is far
+        // from M L^-1 M of the stored L, and the dense check (a claim about
+        // the computed matrices) proved bounds below the stored pencil's
+        // eigenvalue (the reviewer's case: ny = 16, k L = 3.7e-6, a bound
+        // 0.12% below the eigenvalue that mpmath computed to 60 digits).
+        // Mode::verify therefore answers with the banded check alone on
+        // periodic grids: here, where the dense check proves bounds the
+        // banded one does not, the two answers must still be the banded ones.
+        let len = 5.278;
+        let g = YGrid::new(Boundary::Periodic, 0.0, len, 16);
+        let n = g.n();
+        let k = 7.03e-7;
+        let y = g.nodes();
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let eta: Vec<f64> = y.iter().map(|v| 0.3 * (two_pi * v / len).sin()).collect();
+        let w: Vec<f64> = y.iter().map(|v| 1.0 + 0.5 * (two_pi * v / len).cos()).collect();
+        let coef = Coefficients { u: vec![0.0; n], upp: vec![1.0; n], eta: vec![eta] };
+        let form = Form { energy: 1.0, w, sign: Sign::Positive };
+        let mode = Mode::new(&g, k);
+        assert!(!mode.dense_fallback());
+        let lam = mode.sigma2(&form, &coef, 1e-12).unwrap().lambda_max;
+        let mut dense_only = 0;
+        for e in [-1e-2, -1e-3, -1e-4, 0.0, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0] {
+            let bar = lam * (1.0 + e);
+            let banded = verify_walls(&g, k, &form, &coef, bar);
+            assert_eq!(mode.verify(&form, &coef, bar), banded, "e = {e}");
+            if mode.verify_dense(&form, &coef, bar).1 && !banded.1 {
+                dense_only += 1;
+            }
+        }
+        // the fallback would have changed answers here
+        assert!(dense_only > 0);
+        // and on a walls grid of the same size it is taken
+        assert!(Mode::new(&YGrid::new(Boundary::Walls, 0.0, len, 16), k).dense_fallback());
     }
 
     #[test]

@@ -281,12 +281,11 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
     }
     // The dense verified check costs about n^3/3 multiply-adds per matrix,
     // two matrices per mode: refuse work that would run for hours. It runs
-    // (incompressible, both boundaries) only as the fallback up to
+    // only as the fallback on walls grids (incompressible) up to
     // DENSE_FALLBACK_UNKNOWNS unknowns; the banded checks
     // (both boundaries, and the compressible generator) cost O(ny).
-    let unknowns = if boundary == Boundary::Walls { ny - 1 } else { ny };
-    let dense_n = match &model {
-        FluidModel::Incompressible if unknowns <= fluid::modes::DENSE_FALLBACK_UNKNOWNS => unknowns,
+    let dense_n = match (boundary, &model) {
+        (Boundary::Walls, FluidModel::Incompressible) if ny - 1 <= fluid::modes::DENSE_FALLBACK_UNKNOWNS => ny - 1,
         _ => 0,
     };
     let n = dense_n as f64;

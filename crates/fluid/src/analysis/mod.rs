@@ -403,10 +403,11 @@ pub fn first_rung(unknowns: usize) -> usize {
 /// with the check for its grid. The banded check ([`crate::walls_check`],
 /// `O(ny)`, about the exact pencil of the stored operators) climbs the
 /// ladder from [`first_rung`]; only a mode whose banded ladder proves
-/// nothing, on a grid of at most [`crate::modes::DENSE_FALLBACK_UNKNOWNS`]
-/// unknowns, climbs it again with the dense check from the bottom. Both
-/// boundaries take this path since 2026-11-28 (sixth session); periodic
-/// grids used the dense check alone before.
+/// nothing, on a walls grid of at most [`crate::modes::DENSE_FALLBACK_UNKNOWNS`]
+/// unknowns ([`Mode::dense_fallback`]), climbs it again with the dense
+/// check from the bottom. Periodic grids take the banded path since
+/// 2026-11-28 (sixth session), without the fallback; they used the dense
+/// check alone before.
 /// Returns `(sigma2_upper, form_verified)`.
 ///
 /// Until 2026-11-27 (fifth session) every rung on a grid of up to 1023 unknowns that the
@@ -426,7 +427,7 @@ pub fn verified_mode_bound(
     let banded = verified_upper(sigma2, ritz, first_rung(grid.n()), |bar| {
         crate::walls_check::verify_walls(grid, mode.k(), form, coef, bar)
     });
-    if banded.0.is_some() || grid.n() > crate::modes::DENSE_FALLBACK_UNKNOWNS {
+    if banded.0.is_some() || !mode.dense_fallback() {
         return banded;
     }
     let dense = verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar));
@@ -586,15 +587,15 @@ mod tests {
         // The banded lifting is written for the energy coefficient 1 and
         // proves nothing for another (walls_check docs); the dense check
         // takes any. A form with energy 2 therefore reaches the dense branch
-        // of verified_mode_bound, which proves the bottom rung (its own
-        // ladder starts there) on 255 (walls) and 256 (periodic) unknowns;
-        // above DENSE_FALLBACK_UNKNOWNS (walls ny = 1032: 1031) nothing is
-        // proved.
+        // of verified_mode_bound on walls grids, which proves the bottom
+        // rung (its own ladder starts there) on 255 unknowns; above
+        // DENSE_FALLBACK_UNKNOWNS (ny = 1032: 1031) and on periodic grids
+        // (no fallback, Mode::verify docs) nothing is proved.
         use crate::grid::{Boundary, YGrid};
         use crate::modes::{Coefficients, Form, Mode};
         use outcome::Sign;
         for (boundary, ny, fallback) in
-            [(Boundary::Walls, 256, true), (Boundary::Periodic, 256, true), (Boundary::Walls, 1032, false)]
+            [(Boundary::Walls, 256, true), (Boundary::Periodic, 256, false), (Boundary::Walls, 1032, false)]
         {
             let g = YGrid::new(boundary, 0.0, std::f64::consts::PI, ny);
             let y = g.nodes();
