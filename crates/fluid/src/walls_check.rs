@@ -347,7 +347,13 @@ mod tests {
     }
 
     fn channel(ny: usize, shift: f64, sign: Sign) -> (YGrid, Coefficients, Form) {
-        let g = YGrid::new(Boundary::Walls, 0.0, std::f64::consts::PI, ny);
+        channel_on(Boundary::Walls, ny, shift, sign)
+    }
+
+    /// [`channel`]'s profile, noise and form on either boundary (the data
+    /// need not be periodic: the checks are about the pencil of node values).
+    fn channel_on(boundary: Boundary, ny: usize, shift: f64, sign: Sign) -> (YGrid, Coefficients, Form) {
+        let g = YGrid::new(boundary, 0.0, std::f64::consts::PI, ny);
         let y = g.nodes();
         let coef = Coefficients {
             // U = y^2/2 + sin(y)/10, U'' = 1 - sin(y)/10 > 0
@@ -555,22 +561,14 @@ mod tests {
         // margin ladder must prove the same rung as without rescaling.
         use rand::{Rng, SeedableRng};
         let mut rng = rand::rngs::StdRng::seed_from_u64(2811);
-        let ladder = [1e-8, 3e-7, 9e-6, 2.7e-4, 8.1e-3];
+        // the analysis's ladder (constants::VERIFY_*)
+        let ladder: Vec<f64> = (0..crate::constants::VERIFY_ATTEMPTS)
+            .map(|r| crate::constants::VERIFY_MARGIN_START * crate::constants::VERIFY_MARGIN_GROWTH.powi(r as i32))
+            .collect();
         for boundary in [Boundary::Walls, Boundary::Periodic] {
-            // the profile and two noise fields of `channel`, s = +1 and s = -1
+            // s = +1 and s = -1 (the constant third noise field drops out of Q)
             for (shift, sign) in [(2.0, Sign::Positive), (-40.0, Sign::Negative)] {
-                let g = YGrid::new(boundary, 0.0, std::f64::consts::PI, 48);
-                let y = g.nodes();
-                let coef = Coefficients {
-                    u: y.iter().map(|y| 0.5 * y * y + 0.1 * y.sin()).collect(),
-                    upp: y.iter().map(|y| 1.0 - 0.1 * y.sin()).collect(),
-                    eta: vec![
-                        y.iter().map(|y| 0.4 * (2.0 * y).sin() + 3.0).collect(),
-                        y.iter().map(|y| 0.1 * y).collect(),
-                    ],
-                };
-                let w = coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + shift) / p).collect();
-                let form = Form { energy: 1.0, w, sign };
+                let (g, coef, form) = channel_on(boundary, 48, shift, sign);
                 let k = 1.5;
                 let mode = Mode::new(&g, k);
                 let lam = dense_lambda(&mode, &form, &coef);
