@@ -67,13 +67,22 @@ pub(super) fn analyse_normalised(
             Choice::Pseudomomentum { .. } => shifted_form(coef, 0.0),
         }
     };
+    // When the forced shift is 0 the paper's functional is the chosen one,
+    // built by the same call: its Sigma^2 is the chosen form's, at every
+    // resolution, and is taken from that run instead of a second Lanczos
+    // pass over every mode (until 2026-11-28 it was computed twice, at the
+    // finest grid and in each row of the convergence table).
+    let paper_is_chosen = matches!(&choice, Choice::Forced { shift, .. } if shift.abs() == 0.0);
     // Each phase of the plan (see `planned_steps`) counts as done when it
     // ends, whether or not it ran: the bar moves on at once past a part
     // this profile does not need.
     let modes = ks.len() as u64;
     let phase = progress.phase(modes);
-    let paper_choice_sigma2 =
-        paper_form_at(&fine, &coef).and_then(|f| sigma2_all_modes(&fine, &coef, &f, &ks, tol, progress));
+    let paper_at_fine = if paper_is_chosen {
+        None
+    } else {
+        paper_form_at(&fine, &coef).and_then(|f| sigma2_all_modes(&fine, &coef, &f, &ks, tol, progress))
+    };
     drop(phase);
     let phase = progress.phase(8 * modes);
     let shift_curve = match &choice {
@@ -99,22 +108,24 @@ pub(super) fn analyse_normalised(
     let (form, stable_reason) = match form_and_reason(&choice, profile, &coef, &fine, &summary) {
         Ok(x) => x,
         Err(reason) => {
+            // (no form: the paper's functional, if it is the chosen one,
+            // has none either)
             return inconclusive_or_unstable(
                 problem,
                 settings,
                 reason,
                 summary,
                 paper_bound,
-                paper_choice_sigma2,
+                paper_at_fine,
                 shift_curve,
                 progress,
-            )
+            );
         }
     };
 
     // Per mode at the finest grid: Lanczos, then the verified bound.
     let phase = progress.phase(modes);
-    let per_mode: Vec<Option<ModeResult>> = ks
+    let per_mode: Vec<Option<(ModeResult, crate::lanczos::Ritz)>> = ks
         .par_iter()
         .map(|&(m, k)| {
             mode_step(progress, || {
@@ -124,12 +135,21 @@ pub(super) fn analyse_normalised(
                 // would round towards "stable".
                 let sigma2 = s.lambda_max.max(0.0);
                 let (upper, form_verified) = verified_mode_bound(&mode, &form, &coef, sigma2, &s.ritz);
-                Some(ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations })
+                let result =
+                    ModeResult { m, k, sigma2, sigma2_upper: upper, form_verified, iterations: s.ritz.iterations };
+                Some((result, s.ritz))
             })
         })
         .collect();
     drop(phase);
-    if let Some(pos) = per_mode.iter().position(|r| r.is_none() || !r.as_ref().is_some_and(|r| r.form_verified)) {
+    // the Lanczos values of every mode, as `sigma2_all_modes` gives them
+    // (`None` if one failed)
+    let paper_choice_sigma2 = if paper_is_chosen {
+        per_mode.iter().try_fold(0.0f64, |acc, r| r.as_ref().map(|(r, _)| acc.max(r.sigma2)))
+    } else {
+        paper_at_fine
+    };
+    if let Some(pos) = per_mode.iter().position(|r| !r.as_ref().is_some_and(|(r, _)| r.form_verified)) {
         let (m, k) = ks[pos];
         let reason = format!(
             "{}; the second variation could not be shown definite for x-mode m = {m} (k = {k:.6}){}",
@@ -151,7 +171,11 @@ pub(super) fn analyse_normalised(
             progress,
         );
     }
-    let mut modes: Vec<ModeResult> = per_mode.into_iter().flatten().collect();
+    let (mut modes, ritz): (Vec<ModeResult>, Vec<crate::lanczos::Ritz>) = per_mode.into_iter().flatten().unzip();
+    // the banded check alone, as the ladder of `verified_mode_bound` climbs it
+    tighten_overall_bound(&mut modes, &ritz, first_rung(fine.n()), progress, |i, bar| {
+        crate::walls_check::verify_walls(&fine, ks[i].1, &form, &coef, bar).1
+    });
     prove_remaining_modes(&mut modes, progress, |k, bar| Mode::new(&fine, k).verify(&form, &coef, bar).1);
     let sigma2 = modes.iter().map(|r| r.sigma2).fold(0.0, f64::max);
     let sigma2_upper = modes.iter().try_fold(0.0f64, |acc, r| r.sigma2_upper.map(|u| acc.max(u)));
@@ -194,6 +218,8 @@ pub(super) fn analyse_normalised(
         let s = if ny == problem.ny { Some(sigma2) } else { sigma2_all_modes(&grid, &coef, &f, &ks, tol, progress) };
         let p = if ny == problem.ny {
             paper_choice_sigma2
+        } else if paper_is_chosen {
+            s
         } else {
             paper_form_at(&grid, &coef).and_then(|pf| sigma2_all_modes(&grid, &coef, &pf, &ks, tol, progress))
         };
