@@ -217,10 +217,17 @@ fn sigma2_matches_an_independent_sine_galerkin_computation_and_converges() {
         );
         // every mode's verified bound holds; the overall one (mode 1's,
         // narrowed: fluid::analysis::tighten_overall_bound) is within 1e-7,
-        // the others (the widest rung, 8.1e-3) lie below it
+        // the others hold the widest rung: 8.1e-3 above Sigma^2_k, plus
+        // 8.1e-6 of the Ritz scale and the residual (constants::VERIFY_*)
         let upper = m.sigma2_upper.unwrap();
         assert!(upper >= reference * (1.0 - 1e-9), "verified bound {upper} vs {reference}");
-        assert!(upper <= a.sigma2_upper.unwrap(), "{upper} above the overall bound");
+        if m.m > 1 {
+            assert!(
+                upper > reference * (1.0 + 8e-3) && upper < reference * 1.01,
+                "mode {}: {upper} vs {reference}",
+                m.m
+            );
+        }
     }
     let top = galerkin_sigma2(a.modes[0].k, 0.3, 400, false);
     assert_eq!(a.sigma2_upper, a.modes[0].sigma2_upper);

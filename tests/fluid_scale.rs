@@ -60,7 +60,8 @@ fn a_periodic_certificate_at_ny_4096_is_verified_and_agrees_with_the_fixture() {
     // with it to 1e-9: measured, the elements at ny = 4096 differ from it
     // by 1.1e-10 (the Lanczos value at this resolution; 5e-13 at ny = 256).
     assert!((s - 0.012258079762316933).abs() <= 1e-9 * s, "{s}");
-    // its bound is the first rung tried at 4096 unknowns, 9e-6 (first_rung;
+    // it sets the overall bound, so it is narrowed from the first rung at
+    // 4096 unknowns, 9e-6 (first_rung, tighten_overall_bound;
     // walls_margins shows modes 1 to 3 proving even 3e-7 here)
     let mode1 = &fine["modes"][0];
     assert!(mode1["sigma2_upper"].as_f64().unwrap() <= mode1["sigma2"].as_f64().unwrap() * (1.0 + 1e-5));

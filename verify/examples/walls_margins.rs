@@ -2,9 +2,10 @@
 //! each x-mode of a fluid spec (at the spec's or a given `ny`), the Lanczos
 //! `Sigma^2_k` and a row of `+` (proved) and `.` (not proved) for the bounds
 //! `Sigma^2_k (1 + m)`, `m` every rung of the margin ladder
-//! (`fluid::constants`: `1e-8` to `8.1e-3`; on walls grids above ny = 1024
-//! the analysis starts at `fluid::analysis::first_rung`) and then `1, 9, 29,
-//! 99` (2, 10, 30 and 100 times `Sigma^2_k`). The measurements behind
+//! (`fluid::constants`: `1e-8` to `8.1e-3`; the analysis proves the widest
+//! first and narrows the modes that set the overall bound from
+//! `fluid::analysis::first_rung`, `fluid::analysis::tighten_overall_bound`)
+//! and then `1, 9, 29, 99` (2, 10, 30 and 100 times `Sigma^2_k`). The measurements behind
 //! `fluid::analysis::prove_remaining_modes` and docs/fluids.md §2
 //! came from it.
 //!

@@ -334,7 +334,12 @@ fn held_rung(r: &ModeResult, ritz: &crate::lanczos::Ritz) -> Option<usize> {
 /// the ladder from the narrowest rung gave every mode: the mode that
 /// holds it at the end holds its narrowest proved rung, and every other
 /// mode's narrowest proved bound is at most its own bound, which is at
-/// most the overall one.
+/// most the overall one. (Without monotonicity the bounds stay proved, but
+/// a mode whose widest rung fails and a narrower one would pass is left to
+/// the dense fallback and [`prove_remaining_modes`].)
+///
+/// # Panics
+/// If `ritz` and `modes` differ in length (a programming error).
 ///
 /// ```
 /// use fluid::analysis::{tighten_overall_bound, ModeResult, Progress};
@@ -362,14 +367,17 @@ pub fn tighten_overall_bound(
     progress: &Progress,
     prove: impl Fn(usize, f64) -> bool,
 ) {
+    assert_eq!(ritz.len(), modes.len(), "one Ritz record per mode");
     let mut narrowed = vec![false; modes.len()];
     loop {
         if progress.is_cancelled() {
             return;
         }
-        let Some(j) = (0..modes.len())
-            .filter(|&i| modes[i].sigma2_upper.is_some())
-            .max_by(|&a, &b| modes[a].sigma2_upper.partial_cmp(&modes[b].sigma2_upper).expect("finite bounds"))
+        let Some((j, _)) = modes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| r.sigma2_upper.map(|u| (i, u)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
         else {
             return;
         };
@@ -379,6 +387,9 @@ pub fn tighten_overall_bound(
         narrowed[j] = true;
         let Some(held) = held_rung(&modes[j], &ritz[j]) else { return };
         for rung in narrowest..held {
+            if progress.is_cancelled() {
+                return;
+            }
             let bar = ladder_bar(modes[j].sigma2, &ritz[j], rung);
             if prove(j, bar) {
                 modes[j].sigma2_upper = Some(bar);
@@ -456,8 +467,10 @@ pub(super) fn prove_remaining_modes(
 /// 1024.
 pub const BANDED_NARROWEST_UNKNOWNS: usize = 512;
 
-/// The first rung of the margin ladder of `verified_upper` for the banded
-/// check on a walls grid with `unknowns` interior unknowns: the margin it
+/// The first rung of the margin ladder that [`tighten_overall_bound`]
+/// climbs with the banded check, on a grid with `unknowns` unknowns, for
+/// the modes that set the overall bound (every mode climbed it from here
+/// until 2026-11-28; now each first proves the widest rung): the margin it
 /// can prove grows like `h^-2` (`walls_check` docs), so rungs that cannot
 /// succeed are skipped. The bottom up to [`BANDED_NARROWEST_UNKNOWNS`],
 /// `3e-7` up to 2048 unknowns, then one rung higher per doubling (the
@@ -595,7 +608,9 @@ pub fn analyse_with(
 
 /// The steps [`analyse_with`] plans: one per x-mode solve (the paper's
 /// choice, the eight shifts, the finest grid, two per row of the
-/// convergence table and the drift residual), and for the compressible
+/// convergence table and the drift residual; when the paper's functional
+/// is the chosen one its solves are not run, and the bar settles at the
+/// end), and for the compressible
 /// model the incompressible analysis plus the shift scan (nine points and
 /// twelve golden-section steps), the finest grid, the discrete SDE and
 /// one per row.
