@@ -336,7 +336,7 @@ fn held_rung(r: &ModeResult, ritz: &crate::lanczos::Ritz) -> Option<usize> {
 /// mode's narrowest proved bound is at most its own bound, which is at
 /// most the overall one. (Without monotonicity the bounds stay proved, but
 /// a mode whose widest rung fails and a narrower one would pass is left to
-/// the dense fallback and [`prove_remaining_modes`].)
+/// the dense fallback and the continued ladder (`prove_remaining_modes`).)
 ///
 /// # Panics
 /// If `ritz` and `modes` differ in length (a programming error).
