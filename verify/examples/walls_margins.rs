@@ -12,7 +12,7 @@
 //! `cargo run --release -p verify --example walls_margins -- SPEC [NY] [FIRST_MODE]`
 
 use fluid::analysis::chosen_form;
-use fluid::constants::{VERIFY_ATTEMPTS, VERIFY_MARGIN_GROWTH, VERIFY_MARGIN_START};
+use fluid::constants::{ladder_margin, VERIFY_ATTEMPTS};
 use fluid::modes::Mode;
 use fluid::walls_check::verify_walls;
 
@@ -30,8 +30,7 @@ fn main() {
     let first: usize = args.get(3).map_or(1, |m| m.parse().expect("first mode"));
     let problem = &spec.problem;
     let (grid, coef, form) = chosen_form(problem).expect("the spec admits a form");
-    let ladder: Vec<f64> =
-        (0..VERIFY_ATTEMPTS).map(|r| VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH.powi(r as i32)).collect();
+    let ladder: Vec<f64> = (0..VERIFY_ATTEMPTS).map(ladder_margin).collect();
     let wide = [1.0, 9.0, 29.0, 99.0];
     println!("ny {} sign {:?}; margins {ladder:?} | {wide:?}", problem.ny, form.sign);
     for m in first..=problem.x_modes {

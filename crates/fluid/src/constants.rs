@@ -18,6 +18,19 @@ pub const VERIFY_MARGIN_START: f64 = 1e-8;
 pub const VERIFY_MARGIN_GROWTH: f64 = 30.0;
 /// ... at most this many times.
 pub const VERIFY_ATTEMPTS: usize = 5;
+/// The margin of rung `rung` of the ladder:
+/// `VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH^rung` (rungs from
+/// `VERIFY_ATTEMPTS` on are the continued ladder of the modes whose own
+/// ladder proved nothing).
+///
+/// ```
+/// use fluid::constants::ladder_margin;
+/// assert_eq!(ladder_margin(0), 1e-8);
+/// assert!((ladder_margin(4) - 8.1e-3).abs() < 1e-15);
+/// ```
+pub fn ladder_margin(rung: usize) -> f64 {
+    VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH.powi(rung as i32)
+}
 /// The weight of the Ritz scale `|T|` in the verified bound's slack.
 pub const VERIFY_RITZ_WEIGHT: f64 = 1e-3;
 /// A growth rate is evidence of instability only above this times

@@ -562,9 +562,7 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let mut rng = rand::rngs::StdRng::seed_from_u64(2811);
         // the analysis's ladder (constants::VERIFY_*)
-        let ladder: Vec<f64> = (0..crate::constants::VERIFY_ATTEMPTS)
-            .map(|r| crate::constants::VERIFY_MARGIN_START * crate::constants::VERIFY_MARGIN_GROWTH.powi(r as i32))
-            .collect();
+        let ladder: Vec<f64> = (0..crate::constants::VERIFY_ATTEMPTS).map(crate::constants::ladder_margin).collect();
         for boundary in [Boundary::Walls, Boundary::Periodic] {
             // s = +1 and s = -1 (the constant third noise field drops out of Q)
             for (shift, sign) in [(2.0, Sign::Positive), (-40.0, Sign::Negative)] {

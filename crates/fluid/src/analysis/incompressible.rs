@@ -60,19 +60,19 @@ pub(super) fn analyse_normalised(
     let tol = settings.lanczos_tolerance;
 
     // The paper's functional (c = 0) and the Galilean-shift curve.
-    let paper_form_at = |grid: &YGrid, coef: &Coefficients| -> Option<Form> {
-        match &choice {
-            Choice::Forced { shift, .. } if shift.abs() == 0.0 => form_for(&choice, profile, coef, grid),
-            Choice::Forced { .. } | Choice::Enstrophy | Choice::NoForm { .. } => None,
-            Choice::Pseudomomentum { .. } => shifted_form(coef, 0.0),
-        }
-    };
     // When the forced shift is 0 the paper's functional is the chosen one,
     // built by the same call: its Sigma^2 is the chosen form's, at every
     // resolution, and is taken from that run instead of a second Lanczos
     // pass over every mode (until 2026-11-28 it was computed twice, at the
     // finest grid and in each row of the convergence table).
     let paper_is_chosen = matches!(&choice, Choice::Forced { shift, .. } if shift.abs() == 0.0);
+    let paper_form_at = |grid: &YGrid, coef: &Coefficients| -> Option<Form> {
+        match &choice {
+            Choice::Forced { .. } if paper_is_chosen => form_for(&choice, profile, coef, grid),
+            Choice::Forced { .. } | Choice::Enstrophy | Choice::NoForm { .. } => None,
+            Choice::Pseudomomentum { .. } => shifted_form(coef, 0.0),
+        }
+    };
     // Each phase of the plan (see `planned_steps`) counts as done when it
     // ends, whether or not it ran: the bar moves on at once past a part
     // this profile does not need.

@@ -4,7 +4,7 @@
 //! linear-instability test, and the compressible noise-compatibility test.
 
 use crate::choice::{casimir_weight, choose, Choice};
-use crate::constants::{VERIFY_ATTEMPTS, VERIFY_MARGIN_GROWTH, VERIFY_MARGIN_START, VERIFY_RITZ_WEIGHT};
+use crate::constants::{ladder_margin, VERIFY_ATTEMPTS, VERIFY_MARGIN_GROWTH, VERIFY_RITZ_WEIGHT};
 use crate::expr::SignProof;
 use crate::grid::{Boundary, YGrid};
 use crate::interval::Interval;
@@ -274,9 +274,9 @@ pub fn wavenumbers(problem: &FluidProblem) -> Vec<(usize, f64)> {
 
 /// The bound of rung `r` of the margin ladder for a mode with Lanczos value
 /// `sigma2` and Ritz data `ritz`: `sigma2 (1 + m) + m w |T| + residual`,
-/// `m = VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH^r`.
+/// `m` = [`crate::constants::ladder_margin`]`(r)`.
 pub(super) fn ladder_bar(sigma2: f64, ritz: &crate::lanczos::Ritz, rung: usize) -> f64 {
-    let margin = VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH.powi(rung as i32);
+    let margin = ladder_margin(rung);
     sigma2 * (1.0 + margin) + margin * VERIFY_RITZ_WEIGHT * ritz.scale + ritz.residual
 }
 
@@ -434,7 +434,7 @@ pub(super) fn prove_remaining_modes(
     modes.par_iter_mut().filter(|r| r.sigma2_upper.is_none() && r.form_verified && r.sigma2 < overall).for_each(|r| {
         // no progress steps (the phase's count was fixed before): a
         // cancelled run only stops trying
-        let mut margin = VERIFY_MARGIN_START * VERIFY_MARGIN_GROWTH.powi(VERIFY_ATTEMPTS as i32);
+        let mut margin = ladder_margin(VERIFY_ATTEMPTS);
         for _ in 0..CONTINUED_RUNGS {
             let bar = r.sigma2 * (1.0 + margin);
             if progress.is_cancelled() {
@@ -653,6 +653,7 @@ fn mode_step<T>(progress: &Progress, work: impl FnOnce() -> Option<T>) -> Option
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::constants::VERIFY_MARGIN_START;
 
     fn mode(m: usize, sigma2: f64, upper: Option<f64>, form_verified: bool) -> ModeResult {
         ModeResult { m, k: m as f64, sigma2, sigma2_upper: upper, form_verified, iterations: 1 }
