@@ -308,8 +308,11 @@ def test_ctrl_c_stops_the_work_itself_and_progress_moved_before():
     (an abandoned search kept a core busy for some 8 s more). The progress
     callback was called, with counts that only grow and stay within the
     total, before the interrupt."""
+    # (SIGINT's handler installed, as in conftest's `interrupted`: a child of
+    # a shell's background job inherits SIGINT ignored)
     code = f"""
 import os, signal, threading, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
 import energy_casimir as ec
 calls = []
 threading.Timer(2.0, os.kill, (os.getpid(), signal.SIGINT)).start()
