@@ -393,22 +393,43 @@ impl SymBanded {
     }
 
     /// `A diag(w) A`, a symmetric matrix of bandwidth `2b`.
+    ///
+    /// Entry `(i, j)` is `sum_k A[i][k] w[k] A[k][j]` over `k` within `b`
+    /// of both: one forward inner product of row `i` of `A` times `w` with
+    /// row `j` of `A`, both held by full rows ([`SymBanded::rows`]'s
+    /// layout). Until 2026-11-28 each term read `A` through
+    /// [`SymBanded::get`] with its branch, and the product took a fifth of a
+    /// periodic mode's Lanczos run at ny = 1024 (`perf`, docs/fluids.md §5).
+    ///
+    /// ```
+    /// use fluid::banded::SymBanded;
+    /// // A = tridiag(-1, 2, -1) of size 3, w = (1, 2, 3): A diag(w) A by hand
+    /// let mut a = SymBanded::zeros(3, 1);
+    /// for i in 0..3 { a.add(i, i, 2.0); }
+    /// for i in 1..3 { a.add(i, i - 1, -1.0); }
+    /// let p = a.sandwich(&[1.0, 2.0, 3.0]);
+    /// assert_eq!((p.get(0, 0), p.get(1, 0), p.get(2, 0)), (6.0, -6.0, 2.0));
+    /// assert_eq!((p.get(1, 1), p.get(2, 1), p.get(2, 2)), (12.0, -10.0, 14.0));
+    /// ```
     pub fn sandwich(&self, w: &[f64]) -> Self {
-        let b = self.b;
-        let mut out = SymBanded::zeros(self.n, 2 * b);
-        for i in 0..self.n {
-            let jlo = i.saturating_sub(2 * b);
-            for j in jlo..=i {
-                // sum_k A[i][k] w[k] A[k][j], k within b of both.
-                let klo = i.saturating_sub(b).max(j.saturating_sub(b));
-                let khi = (j + b).min(self.n - 1);
-                let mut s = 0.0;
-                for k in klo..=khi {
-                    s += self.get(i, k) * w[k] * self.get(k, j);
-                }
-                if s != 0.0 {
-                    out.band[i * (2 * b + 1) + (i - j)] = s;
-                }
+        let (n, b) = (self.n, self.b);
+        let width = 2 * b + 1;
+        let rows = self.rows().rows;
+        // weighted[i * width + (k + b - i)] = A[i][k] w[k]
+        let mut weighted = rows.clone();
+        for i in 0..n {
+            for k in i.saturating_sub(b)..=(i + b).min(n - 1) {
+                weighted[i * width + (k + b - i)] *= w[k];
+            }
+        }
+        let mut out = SymBanded::zeros(n, 2 * b);
+        for i in 0..n {
+            for j in i.saturating_sub(2 * b)..=i {
+                // k from max(i - b, 0) to min(j + b, n - 1)
+                let (klo, khi) = (i.saturating_sub(b), (j + b).min(n - 1));
+                let wi = &weighted[i * width + (klo + b - i)..=i * width + (khi + b - i)];
+                let rj = &rows[j * width + (klo + b - j)..=j * width + (khi + b - j)];
+                out.band[i * (2 * b + 1) + (i - j)] = dot(wi, rj);
             }
         }
         out
@@ -560,6 +581,19 @@ impl SymBanded {
     /// assert!(!a.verified_positive_definite_within(5e-6)); // one shift for both rows
     /// ```
     pub fn verified_positive_definite_above(&self, f: &[f64]) -> bool {
+        self.verified_positive_definite_above_from(f, None)
+    }
+
+    /// [`SymBanded::verified_positive_definite_above`], first trying the
+    /// rounding shares `first` (one a row) if given. Each attempt is a
+    /// complete proof of its own, so a guess can only save work: if it
+    /// fails, the usual schedule runs after it. For `P = L |D| L^T` the
+    /// caller knows `|R^T| |R|` in advance (it is `|L| |D| |L^T|`, whose row
+    /// sums it has computed), which the first share from `|P|` misses where
+    /// `P`'s entries cancel: a second factorisation was then needed, a
+    /// fifth of a check's time (periodic modes 3 to 8 of Kolmogorov flow at
+    /// ny = 1024, 2026-11-28).
+    fn verified_positive_definite_above_from(&self, f: &[f64], first: Option<&[f64]>) -> bool {
         let (n, b) = (self.n, self.b);
         if !self.finite_with_row_bounds(f) {
             return false;
@@ -571,6 +605,31 @@ impl SymBanded {
         let u = f64::EPSILON / 2.0;
         let gamma = gamma(b + 2);
         let underflow = 4.0 * ((b + 2) as f64).powi(3) * f64::MIN_POSITIVE;
+        // One attempt: `Some(error)` if the factor completed, and whether its
+        // shifts covered their rows' rounding; `None` if it did not.
+        let attempt = |rounding: &[f64]| -> Option<(Vec<f64>, bool)> {
+            let shift: Vec<f64> = (0..n).map(|i| ((rounding[i] + f[i]) + underflow) * (1.0 + 16.0 * u)).collect();
+            if shift.iter().any(|x| !x.is_finite()) {
+                return None;
+            }
+            let error = self.shifted_cholesky_rows(&shift, gamma)?;
+            let mut enough = true;
+            for i in 0..n {
+                let needed = ((error[i] + f[i]) + underflow) * (1.0 + 16.0 * u);
+                if !needed.is_finite() {
+                    return None;
+                }
+                enough &= shift[i] > needed;
+            }
+            Some((error, enough))
+        };
+        if let Some(first) = first {
+            if first.len() == n && first.iter().all(|r| r.is_finite() && *r >= 0.0) {
+                if let Some((_, true)) = attempt(first) {
+                    return true;
+                }
+            }
+        }
         let mut rounding: Vec<f64> = (0..n)
             .map(|i| {
                 let row = (i.saturating_sub(b)..n.min(i + b + 1)).map(|j| self.get(i, j).abs()).sum::<f64>();
@@ -578,23 +637,11 @@ impl SymBanded {
             })
             .collect();
         for _ in 0..2 {
-            let shift: Vec<f64> = (0..n).map(|i| ((rounding[i] + f[i]) + underflow) * (1.0 + 16.0 * u)).collect();
-            if shift.iter().any(|x| !x.is_finite()) {
-                return false;
+            match attempt(&rounding) {
+                None => return false,
+                Some((_, true)) => return true,
+                Some((error, false)) => rounding = error.iter().map(|e| 2.0 * e).collect(),
             }
-            let Some(error) = self.shifted_cholesky_rows(&shift, gamma) else { return false };
-            let mut enough = true;
-            for i in 0..n {
-                let needed = ((error[i] + f[i]) + underflow) * (1.0 + 16.0 * u);
-                if !needed.is_finite() {
-                    return false;
-                }
-                enough &= shift[i] > needed;
-            }
-            if enough {
-                return true;
-            }
-            rounding = error.iter().map(|e| 2.0 * e).collect();
         }
         false
     }
@@ -867,6 +914,10 @@ impl SymBanded {
         // subnormal step this product's own rounding.
         let underflow = 5e-324 * (2 * b + 2) as f64 * ((b + 1) as f64 + max_lrow + max_d) * inflate + 5e-324;
         let mut shift = Vec::with_capacity(n);
+        // the first rounding shares to try for P's Cholesky (the docs of
+        // `verified_positive_definite_above_from`): twice gamma_{b+2} times
+        // the row sums r of |L| |D| |L^T|, which P's factor would repeat
+        let mut first = Vec::with_capacity(n);
         for i in 0..n {
             let mut r = 0.0;
             for d in 0..=b.min(i) {
@@ -881,9 +932,10 @@ impl SymBanded {
                 return None;
             }
             shift.push(f);
+            first.push(2.0 * gamma(b + 2) * (r * inflate));
         }
         let p = Self::abs_ldl(&l, &dg, b);
-        if !p.verified_positive_definite_above(&shift) {
+        if !p.verified_positive_definite_above_from(&shift, Some(&first)) {
             return None;
         }
         let pos = dg.iter().filter(|d| **d > 0.0).count();
@@ -1001,30 +1053,31 @@ impl SymBanded {
     }
 
     /// The banded Cholesky factor of `self - shift * other` into `c`.
+    ///
+    /// Right-looking (`eliminate` with `times = 1`), like [`SymBanded::ldl`]:
+    /// the inner-product form used until 2026-11-28 was an eighth of a
+    /// periodic mode's Lanczos run at ny = 1024 (`perf`, docs/fluids.md §5).
     fn factor_into(&self, minus: Option<(f64, &SymBanded)>, c: &mut Vec<f64>) -> Result<(), BandedError> {
         let (n, b) = (self.n, self.b);
         let b1 = b + 1;
-        // c[i * b1 + d] = C[i][i - d]
+        // c[i * b1 + d]: a[i][i - d] until pivot i - d is taken, then C[i][i - d]
         c.clear();
-        c.resize(n * b1, 0.0);
-        for i in 0..n {
-            for j in i.saturating_sub(b)..=i {
-                let at = i * b1 + (i - j);
-                let mut s = match minus {
-                    None => self.band[at],
-                    Some((shift, other)) => self.band[at] - shift * other.band[at],
-                };
-                // sum_{k = lo}^{j - 1} C[i][k] C[j][k], lo = i - b
-                let lo = i.saturating_sub(b);
-                s -= dot(&c[i * b1 + (i - j + 1)..=i * b1 + (i - lo)], &c[j * b1 + 1..=j * b1 + (j - lo)]);
-                if i == j {
-                    if s.is_nan() || s <= 0.0 || !s.is_finite() {
-                        return Err(BandedError::NonPositivePivot { index: i, value: s });
-                    }
-                    c[i * b1] = s.sqrt();
-                } else {
-                    c[i * b1 + (i - j)] = s / c[j * b1];
-                }
+        match minus {
+            None => c.extend_from_slice(&self.band),
+            Some((shift, other)) => c.extend(self.band.iter().zip(&other.band).map(|(a, o)| a - shift * o)),
+        }
+        let mut t = vec![0.0; b];
+        for k in 0..n {
+            let s = c[k * b1];
+            if s.is_nan() || s <= 0.0 || !s.is_finite() {
+                return Err(BandedError::NonPositivePivot { index: k, value: s });
+            }
+            let r = s.sqrt();
+            c[k * b1] = r;
+            if !eliminate(c, &mut t, b, k, r, 1.0) {
+                // a non-finite multiplier: the next pivot is not finite either
+                let at = (k + 1).min(n - 1);
+                return Err(BandedError::NonPositivePivot { index: at, value: f64::NAN });
             }
         }
         Ok(())

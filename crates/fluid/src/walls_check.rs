@@ -137,7 +137,6 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
         return (false, false);
     }
     let l = grid.helmholtz(k);
-    let p = l.bandwidth();
     if w.iter().chain(m).any(|x| !x.is_finite()) || (0..n).any(|i| !l.get(i, i).is_finite()) {
         return (false, false);
     }
@@ -149,23 +148,63 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
 
     // The two tests are independent: run side by side (rayon), the second
     // one's answer used only if V ≻ 0 is proved.
-    let (definite, below) = rayon::join(
-        || {
-            // V ≻ 0: [[s M w, M], [M, -s L]], unknowns (omega_a, y_a).
-            let mut v = Bounded::new(2 * n, 2 * p + 1);
-            for a in 0..n {
-                v.set(2 * a, 2 * a, s * m[a] * w[a], 1);
-                v.set(2 * a + 1, 2 * a, m[a], 0);
-                for b in a.saturating_sub(p)..=a {
-                    v.set(2 * a + 1, 2 * b + 1, -s * l.get(a, b), 0);
-                }
-            }
-            let target = if s > 0.0 { (n, n) } else { (2 * n, 0) };
-            v.inertia() == Some(target)
-        },
-        || below_bar(grid, &l, k, s, (m, w), coef, bar),
-    );
+    let (definite, below) =
+        rayon::join(|| form_definite(&l, s, (m, w)), || below_bar(grid, &l, k, s, (m, w), coef, bar));
     (definite, definite && below)
+}
+
+/// `V ≻ 0` by the lifting of the module docs: `[[s M diag(w), M], [M, -s L]]`
+/// has the inertia `(n + n [s < 0], n [s > 0])`, with `omega` eliminated
+/// exactly first as in [`below_bar`]. Its block `D = s M diag(w)` is
+/// diagonal, so by Haynsworth the inertia is `D`'s plus that of the Schur
+/// complement `-s L - M D^-1 M`, of `L`'s bandwidth `p` on the `n` nodes.
+/// Until 2026-11-28 the whole `2n x 2n` matrix (bandwidth `2p + 1`) was
+/// factored: about eight times the flops, the same pivots in exact
+/// arithmetic (its `L D L^T` took the `omega` pivots first, node by node).
+/// Each diagonal entry `(m_a / D_a) m_a` is formed with its rounding
+/// bounded as in [`below_bar`]: `D_a` a product of three doubles (two
+/// roundings, counted twice in a quotient), the quotient's and the
+/// product's own, and one more where it is subtracted; `D_a` and the
+/// quotient must be normal numbers, or nothing is proved. `m` and `w` in
+/// the banded order.
+fn form_definite(l: &crate::banded::SymBanded, s: f64, (m, w): (&[f64], &[f64])) -> bool {
+    let n = m.len();
+    let p = l.bandwidth();
+    let u = f64::EPSILON / 2.0;
+    let mut sc = Bounded::new(n, p);
+    let mut d_pos = 0;
+    for a in 0..n {
+        let Some(d) = crate::banded::product_without_early_underflow(&[s, m[a], w[a]]) else {
+            return false;
+        };
+        if !(d.is_finite() && d.abs() >= f64::MIN_POSITIVE) {
+            return false;
+        }
+        d_pos += usize::from(d > 0.0);
+        for b in a.saturating_sub(p)..a {
+            sc.set(a, b, -s * l.get(a, b), 0);
+        }
+        let ratio = m[a] / d;
+        if (ratio != 0.0 && ratio.abs() < f64::MIN_POSITIVE) || (ratio == 0.0 && m[a] != 0.0) {
+            return false;
+        }
+        let q = ratio * m[a];
+        if !q.is_finite() {
+            return false;
+        }
+        // the weights m are exact inputs: the quotient carries twice D's two
+        // roundings and its own, the product one more
+        let q_rounds = 2 * 2 + 2;
+        let lv = -s * l.get(a, a);
+        let scale = (lv.abs() + q.abs()) * (1.0 + 2.0 * u);
+        sc.set_with_error(a, a, lv - q, scale, q_rounds + 1);
+    }
+    // the target (n + n [s < 0], n [s > 0]) less D's inertia (d_pos, n - d_pos)
+    let target = if s > 0.0 { (n, n) } else { (2 * n, 0) };
+    let (Some(tp), Some(tn)) = (target.0.checked_sub(d_pos), target.1.checked_sub(n - d_pos)) else {
+        return false;
+    };
+    sc.inertia() == Some((tp, tn))
 }
 
 /// `bar V - Q ≻ 0` by the lifting of the module docs (`V ≻ 0` proved apart).
@@ -691,6 +730,49 @@ mod tests {
         assert_eq!(verify_walls(&g, 1.0, &form, &coef, 1e6), (false, false));
         form.sign = Sign::Negative;
         assert_eq!(verify_walls(&g, 1.0, &form, &coef, 1e6), (false, false));
+    }
+
+    #[test]
+    fn the_form_test_agrees_with_the_dense_eigenvalues_of_v() {
+        // Weights of both signs, so that V = s (M diag(w) + K) is definite
+        // in some cases and not in others: V ≻ 0 is claimed only where
+        // nalgebra's dense eigensolver finds lambda_min(V) > 0 (sound), and
+        // claimed wherever lambda_min exceeds 1e-8 of ||V|| (sharp), on
+        // both boundaries and both signs; both outcomes occur.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(29);
+        let (mut claimed, mut refused) = (0, 0);
+        for boundary in [Boundary::Walls, Boundary::Periodic] {
+            for case in 0..40 {
+                let ny = [24, 40][case % 2];
+                let (g, coef, mut form) = channel_on(boundary, ny, 2.0, Sign::Positive);
+                let sign = if case % 4 < 2 { Sign::Positive } else { Sign::Negative };
+                form.sign = sign;
+                let (amp, k) = (rng.random_range(0.0..0.5), rng.random_range(0.3..3.0));
+                // s = -1 needs w below -(M^-1 K)'s largest eigenvalue, at
+                // most 1/k^2 (L ⪰ k^2 M): shifts around it
+                let shift = match sign {
+                    Sign::Positive => rng.random_range(-0.3..0.6),
+                    Sign::Negative => rng.random_range(0.3..1.5) / (k * k),
+                };
+                let s = sign.as_f64();
+                for (a, y) in g.nodes().iter().enumerate() {
+                    form.w[a] = s * (shift + amp * (3.0 * y).sin());
+                }
+                let v = Mode::new(&g, k).form_matrix(&form);
+                let norm = v.iter().fold(0.0f64, |m, x| m.max(x.abs())) * v.nrows() as f64;
+                let lmin = SymmetricEigen::new(v).eigenvalues.min();
+                let definite = verify_walls(&g, k, &form, &coef, 1e6).0;
+                if definite {
+                    assert!(lmin > 0.0, "{boundary:?} case {case}: claimed with lambda_min {lmin:e}");
+                    claimed += 1;
+                } else {
+                    assert!(lmin <= 1e-8 * norm, "{boundary:?} case {case}: refused with lambda_min {lmin:e}");
+                    refused += 1;
+                }
+            }
+        }
+        assert!(claimed >= 10 && refused >= 10, "{claimed} claimed, {refused} refused");
     }
 
     #[test]
