@@ -23,10 +23,10 @@
 //! restarts). Until 2026-11-28 the periodic modes formed `V` and `Q`
 //! densely (`modes.rs`), where a dense eigensolver would also have served;
 //! now both boundaries apply banded operators. The
-//! Ritz values of the small tridiagonal matrix come from nalgebra's
-//! symmetric eigensolver.
-
-use nalgebra::{DMatrix, SymmetricEigen};
+//! top Ritz pair of the small tridiagonal matrix comes from bisection and
+//! inverse iteration on the tridiagonal itself (`top_ritz`: nalgebra's
+//! symmetric eigensolver, used until 2026-11-28, first reduces a dense
+//! matrix to tridiagonal form, `O(steps^3)` at every look).
 
 /// The converged top Ritz pair's value and its residual.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -175,15 +175,35 @@ pub fn largest_generalized_eigenvalue(
         vbasis.push(vq.clone());
         alpha.push(a);
         solve_v(&qx, &mut p);
-        // V-orthogonalise against the basis, twice
-        for _ in 0..2 {
+        // The three-term recurrence first (`p - alpha q_j - beta q_{j-1}`),
+        // then V-orthogonalisation against the whole basis, which now removes
+        // only what rounding left, and a second time only where the first
+        // removed more than half of `p`'s squared V-norm (Daniel, Gragg,
+        // Kaufman and Stewart's test; "twice is enough", Parlett). Until
+        // 2026-11-28 both passes always ran: with hundreds of steps (the high
+        // x-modes of a fine grid) they were two thirds of the run, reading
+        // the whole basis twice a step.
+        axpy(-a, &basis[j], &mut p);
+        if j > 0 {
+            axpy(-beta[j - 1], &basis[j - 1], &mut p);
+        }
+        let mut removed = 0.0;
+        for (b, vb) in basis.iter().zip(&vbasis) {
+            let c = dot(vb, &p);
+            axpy(-c, b, &mut p);
+            removed += c * c;
+        }
+        apply_v(&p, &mut vp);
+        let mut b2 = dot(&p, &vp);
+        if removed > b2 || removed.is_nan() || b2.is_nan() {
             for (b, vb) in basis.iter().zip(&vbasis) {
                 let c = dot(vb, &p);
                 axpy(-c, b, &mut p);
             }
+            apply_v(&p, &mut vp);
+            b2 = dot(&p, &vp);
         }
-        apply_v(&p, &mut vp);
-        let b = dot(&p, &vp).max(0.0).sqrt();
+        let b = b2.max(0.0).sqrt();
         let steps = j + 1;
         if !b.is_finite() {
             return Ritz::breakdown(steps);
@@ -291,30 +311,139 @@ pub fn conjugate_gradients(
 /// off-diagonal `beta`, one shorter) as `(eigenvector, theta, residual,
 /// scale)`: the residual `|b s_last|` of the Ritz pair, with `b` the next
 /// off-diagonal, and the largest Ritz value in magnitude.
+///
+/// Written here rather than taken from nalgebra: its `SymmetricEigen`
+/// takes a dense matrix, reduces it to tridiagonal form by Householder
+/// reflections (`O(steps^3)`, though this one is tridiagonal already) and
+/// returns every eigenpair. The high x-modes of a fine grid take hundreds
+/// of Lanczos steps, and there this was a third of the run (`perf`, mode
+/// 2048 of the Kolmogorov spec at ny = 4096, 2026-11-28). Here the two
+/// extreme eigenvalues come from bisection on the Sturm count
+/// ([`sturm_below`], to a few ulps of the spectrum's scale) and the top
+/// eigenvector from inverse iteration with a pivoted tridiagonal solve
+/// ([`solve_shifted`]): `O(steps)` each. Like the eigensolver before, it
+/// only steers the iteration: the reported value is the Rayleigh quotient
+/// of the Ritz vector, and every bound is proved by the verified checks.
 fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
     let steps = alpha.len();
-    let t = DMatrix::from_fn(steps, steps, |r, c| {
-        if r == c {
-            alpha[r]
-        } else if r + 1 == c || c + 1 == r {
-            beta[r.min(c)]
-        } else {
-            0.0
-        }
-    });
-    // Bounded iterations: nalgebra's `new` iterates without limit, and a NaN
-    // entry would never converge.
     let nan = (vec![f64::NAN; steps], f64::NAN, f64::INFINITY, f64::NAN);
-    if t.iter().any(|x| !x.is_finite()) || !b.is_finite() {
+    if steps == 0 || beta.len() + 1 != steps || alpha.iter().chain(beta).any(|x| !x.is_finite()) || !b.is_finite() {
         return nan;
     }
-    let Some(eig) = SymmetricEigen::try_new(t, f64::EPSILON, 1000 * (steps + 1)) else { return nan };
-    let Some((imax, &theta)) = eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) else {
+    // Gershgorin's interval holds the spectrum.
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..steps {
+        let r = if i > 0 { beta[i - 1].abs() } else { 0.0 } + if i + 1 < steps { beta[i].abs() } else { 0.0 };
+        lo = lo.min(alpha[i] - r);
+        hi = hi.max(alpha[i] + r);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
         return nan;
+    }
+    // LAPACK's dstebz: pivots below this are replaced by it
+    let pivmin = f64::MIN_POSITIVE * beta.iter().fold(1.0f64, |m, x| m.max(x * x));
+    let bisect = |top: bool| -> f64 {
+        // top: the largest x with fewer than `steps` eigenvalues below it;
+        // else the smallest x with at least one below it
+        let (mut a, mut c) = (lo, hi);
+        for _ in 0..2100 {
+            let mid = 0.5 * a + 0.5 * c;
+            if mid <= a || mid >= c || c - a <= 2.0 * f64::EPSILON * a.abs().max(c.abs()) {
+                break;
+            }
+            let below = sturm_below(alpha, beta, mid, pivmin);
+            let right = if top { below == steps } else { below >= 1 };
+            if right {
+                c = mid;
+            } else {
+                a = mid;
+            }
+        }
+        0.5 * a + 0.5 * c
     };
-    let scale = eig.eigenvalues.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-    let residual = (b * eig.eigenvectors[(steps - 1, imax)]).abs();
-    (eig.eigenvectors.column(imax).iter().copied().collect(), theta, residual, scale)
+    let theta = bisect(true);
+    let scale = theta.abs().max(bisect(false).abs());
+    // inverse iteration from a vector with a component along every
+    // eigenvector of an unreduced T (its first entry nonzero)
+    let mut v: Vec<f64> = (0..steps).map(|i| 1.0 + 0.5 * ((i as f64) * 0.7548776662).sin()).collect();
+    let tiny = f64::EPSILON * scale.max(f64::MIN_POSITIVE);
+    for _ in 0..3 {
+        solve_shifted(alpha, beta, theta, tiny, &mut v);
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(n.is_finite() && n > 0.0) {
+            return nan;
+        }
+        v.iter_mut().for_each(|x| *x /= n);
+    }
+    let residual = (b * v[steps - 1]).abs();
+    (v, theta, residual, scale)
+}
+
+/// The number of eigenvalues of the symmetric tridiagonal `T` (diagonal
+/// `alpha`, off-diagonal `beta`) below `x`: the negative pivots of the
+/// `L D L^T` of `T - x I` (Sylvester), a pivot smaller than `pivmin` in
+/// magnitude taken as `-pivmin` (LAPACK's dstebz).
+fn sturm_below(alpha: &[f64], beta: &[f64], x: f64, pivmin: f64) -> usize {
+    let mut count = 0;
+    let mut d = 1.0;
+    for (i, a) in alpha.iter().enumerate() {
+        let coupling = if i == 0 { 0.0 } else { beta[i - 1] * beta[i - 1] / d };
+        d = (a - x) - coupling;
+        if d.abs() < pivmin || d.is_nan() {
+            d = -pivmin;
+        }
+        count += usize::from(d < 0.0);
+    }
+    count
+}
+
+/// Solve `(T - theta I) y = v` in place, `T` symmetric tridiagonal, by
+/// Gaussian elimination with partial pivoting (LAPACK's dgtsv), a zero
+/// pivot replaced by `tiny`: the solve of inverse iteration, where
+/// `T - theta I` is singular to working precision on purpose.
+fn solve_shifted(alpha: &[f64], beta: &[f64], theta: f64, tiny: f64, v: &mut [f64]) {
+    let n = alpha.len();
+    let mut d: Vec<f64> = alpha.iter().map(|a| a - theta).collect();
+    if n == 1 {
+        v[0] /= if d[0] == 0.0 { tiny } else { d[0] };
+        return;
+    }
+    let mut dl = beta.to_vec();
+    let mut du = beta.to_vec();
+    let mut du2 = vec![0.0; n.saturating_sub(2)];
+    for i in 0..n - 1 {
+        if d[i].abs() >= dl[i].abs() {
+            if d[i] == 0.0 {
+                d[i] = tiny;
+            }
+            let fact = dl[i] / d[i];
+            d[i + 1] -= fact * du[i];
+            v[i + 1] -= fact * v[i];
+        } else {
+            // rows i and i + 1 interchanged
+            let fact = d[i] / dl[i];
+            d[i] = dl[i];
+            let temp = d[i + 1];
+            d[i + 1] = du[i] - fact * temp;
+            if i + 2 < n {
+                du2[i] = du[i + 1];
+                du[i + 1] = -fact * du2[i];
+            }
+            du[i] = temp;
+            let vi = v[i];
+            v[i] = v[i + 1];
+            v[i + 1] = vi - fact * v[i + 1];
+        }
+        dl[i] = 0.0;
+    }
+    if d[n - 1] == 0.0 {
+        d[n - 1] = tiny;
+    }
+    v[n - 1] /= d[n - 1];
+    v[n - 2] = (v[n - 2] - du[n - 2] * v[n - 1]) / d[n - 2];
+    for i in (0..n.saturating_sub(2)).rev() {
+        v[i] = (v[i] - du[i] * v[i + 1] - du2[i] * v[i + 2]) / d[i];
+    }
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -339,6 +468,61 @@ fn axpy(c: f64, x: &[f64], y: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{DMatrix, SymmetricEigen};
+
+    #[test]
+    fn top_ritz_agrees_with_nalgebra_on_random_tridiagonal_matrices() {
+        // The extreme eigenvalues and the top eigenvector's last component
+        // (the residual's factor) against nalgebra's dense symmetric
+        // eigensolver, which `top_ritz` used until 2026-11-28: sizes 1 to
+        // 300, entries of mixed signs and scales, and a case with a nearly
+        // double top eigenvalue (two copies of one block joined weakly).
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        for case in 0..60 {
+            let steps = [1, 2, 3, 10, 37, 120, 300][case % 7];
+            let scale = 10f64.powi(rng.random_range(-8..8));
+            let mut alpha: Vec<f64> = (0..steps).map(|_| scale * rng.random_range(-1.0..1.0)).collect();
+            let mut beta: Vec<f64> = (1..steps).map(|_| scale * rng.random_range(0.01..1.0)).collect();
+            if case % 5 == 4 && steps >= 10 {
+                let h = steps / 2;
+                for i in 0..h {
+                    alpha[steps - 1 - i] = alpha[i];
+                }
+                for i in 0..h.saturating_sub(1) {
+                    beta[steps - 2 - i] = beta[i];
+                }
+                beta[h - 1] = scale * 1e-9;
+            }
+            let b = scale * 0.3;
+            let t = DMatrix::from_fn(steps, steps, |r, c| {
+                if r == c {
+                    alpha[r]
+                } else if r + 1 == c || c + 1 == r {
+                    beta[r.min(c)]
+                } else {
+                    0.0
+                }
+            });
+            let eig = SymmetricEigen::new(t.clone());
+            let (imax, &lmax) = eig.eigenvalues.iter().enumerate().max_by(|x, y| x.1.total_cmp(y.1)).unwrap();
+            let lmin = eig.eigenvalues.min();
+            let (v, theta, residual, sc) = top_ritz(&alpha, &beta, b);
+            let norm = lmax.abs().max(lmin.abs());
+            assert!((theta - lmax).abs() <= 1e-13 * norm, "case {case}: {theta} vs {lmax}");
+            assert!((sc - norm).abs() <= 1e-13 * norm, "case {case}: scale {sc} vs {norm}");
+            // T v = theta v to rounding, v a unit vector
+            let tv = &t * nalgebra::DVector::from_column_slice(&v);
+            let res = (0..steps).map(|i| (tv[i] - theta * v[i]).powi(2)).sum::<f64>().sqrt();
+            assert!(res <= 1e-12 * norm, "case {case}: ||T v - theta v|| = {res:e}");
+            // the residual factor, where the top eigenvalue is well separated
+            let gap = eig.eigenvalues.iter().filter(|x| **x < lmax).fold(f64::NEG_INFINITY, |m, x| m.max(*x));
+            if lmax - gap > 1e-6 * norm {
+                let expect = (b * eig.eigenvectors[(steps - 1, imax)]).abs();
+                assert!((residual - expect).abs() <= 1e-9 * b, "case {case}: residual {residual:e} vs {expect:e}");
+            }
+        }
+    }
 
     #[test]
     fn agrees_with_dense_eigenvalues_on_a_random_symmetric_matrix() {
