@@ -291,6 +291,13 @@ pub enum BandedError {
     },
 }
 
+/// Multipliers below this magnitude, `2^-500`, are flushed to zero by
+/// `eliminate`: products of two unflushed multipliers and a pivot of order
+/// one stay in the normal range, and the flushed entries' backward error,
+/// at most `2^-500` times a pivot, is far below the rounding bounds of an
+/// equilibrated matrix (and counted in them).
+pub const FLUSH: f64 = f64::from_bits(((1023 - 500) as u64) << 52);
+
 /// One right-looking step at pivot `k` of a factorisation held in a lower
 /// band `c` (`c[i * (b + 1) + d]` is entry `(i, i - d)`; `n` rows): the
 /// pivot's column below the diagonal is divided by `pivot`, then row `k + m`
@@ -301,13 +308,25 @@ pub enum BandedError {
 /// rounding Higham's Lemma 8.4 bounds for any order. `t` (length `b`) is
 /// scratch: `t[b - m]` holds `fl(l_{k+m,k} times)`, reversed so that each
 /// row reads a forward slice. `false` at a non-finite quotient.
+///
+/// A multiplier below [`FLUSH`] in magnitude is stored as 0 and its row
+/// skipped: in the factors of a high x-mode's lifted matrix most entries
+/// decay far below the normal range, where every operation on a subnormal
+/// number is many times slower (docs/status.md). Where a factorisation's
+/// rounding is proved ([`SymBanded::verified_inertia_within_rows`],
+/// `shifted_cholesky_rows`), the flushed entry's backward error,
+/// `|s| <= FLUSH (1 + u) |pivot times|` for the entry `s` it stood for, is
+/// counted.
 fn eliminate(c: &mut [f64], t: &mut [f64], b: usize, k: usize, pivot: f64, times: f64) -> bool {
     let b1 = b + 1;
     let reach = b.min(c.len() / b1 - 1 - k);
     for m in 1..=reach {
-        let v = c[(k + m) * b1 + m] / pivot;
+        let mut v = c[(k + m) * b1 + m] / pivot;
         if !v.is_finite() {
             return false;
+        }
+        if v.abs() < FLUSH {
+            v = 0.0;
         }
         c[(k + m) * b1 + m] = v;
         t[b - m] = v * times;
@@ -315,6 +334,11 @@ fn eliminate(c: &mut [f64], t: &mut [f64], b: usize, k: usize, pivot: f64, times
     for m in 1..=reach {
         let i = k + m;
         let lik = c[i * b1 + m];
+        if lik == 0.0 {
+            // nothing to subtract (up to the sign of a zero entry, which
+            // no pivot test reads: a zero pivot fails either way)
+            continue;
+        }
         for (x, y) in c[i * b1..i * b1 + m].iter_mut().zip(&t[b - m..]) {
             *x -= lik * y;
         }
@@ -698,7 +722,12 @@ impl SymBanded {
         // because row j's own shift covers it many times over, but not
         // written down before).
         let max_r = (0..n).fold(0.0f64, |m, k| m.max(c[k * b1]));
-        let quotient_underflow = (b + 1) as f64 * 5e-324 * max_r * (1.0 + 2.0 * u) + 5e-324;
+        // A multiplier flushed to zero by `eliminate` leaves the entry it
+        // stood for, at most FLUSH (1 + u) r_kk, in R^T R - A': at most b
+        // such entries in row i and b in column i, counted in both rows
+        // (2b + 2 of them, rounded up).
+        let flushed = (2 * b + 2) as f64 * FLUSH * max_r * (1.0 + 4.0 * u);
+        let quotient_underflow = (b + 1) as f64 * 5e-324 * max_r * (1.0 + 2.0 * u) + 5e-324 + flushed;
         // Both sums have at most 2b + 1 terms: inflate for their rounding,
         // and the sums with the diagonal's error and the underflow (a
         // relative u each).
@@ -913,6 +942,10 @@ impl SymBanded {
         // covers the row sum's own underflow (times gamma < 1/2), and one
         // subnormal step this product's own rounding.
         let underflow = 5e-324 * (2 * b + 2) as f64 * ((b + 1) as f64 + max_lrow + max_d) * inflate + 5e-324;
+        // A multiplier flushed to zero by `eliminate` leaves the entry it
+        // stood for in A - L D L^T: at most FLUSH (1 + u) |d_k| each, b in
+        // row i and b in column i (2b + 2 counted, rounded up).
+        let underflow = underflow + (2 * b + 2) as f64 * FLUSH * max_d * inflate;
         let mut shift = Vec::with_capacity(n);
         // the first rounding shares to try for P's Cholesky (the docs of
         // `verified_positive_definite_above_from`): twice gamma_{b+2} times
@@ -992,6 +1025,10 @@ impl SymBanded {
             for m in 0..=reach {
                 let i = k + m;
                 let lik = l[i * b1 + m];
+                if lik == 0.0 {
+                    // flushed (`eliminate`): nothing to add
+                    continue;
+                }
                 for (x, y) in p.band[i * b1..=i * b1 + m].iter_mut().zip(&t[b - m..]) {
                     *x += lik * y;
                 }
@@ -1262,6 +1299,49 @@ mod tests {
         let mut a = example(10, 2);
         a.add(5, 5, -10.0);
         assert!(matches!(a.cholesky(), Err(BandedError::NonPositivePivot { index: 5, .. })));
+    }
+
+    #[test]
+    fn multipliers_below_the_flush_threshold_are_zero_and_the_inertia_still_proved() {
+        // An indefinite banded matrix whose factor decays below 2^-1022
+        // within the band: diagonal +-1 (alternating in pairs), first
+        // off-diagonal 2^-300, second 2^-540. The multipliers of size
+        // 2^-540 and the products of two 2^-300 ones (2^-600) are below
+        // FLUSH = 2^-500: they are stored as exact zeros, so no subnormal
+        // number is left in L. The eigenvalues are within 2^-299 of the
+        // diagonal (Gershgorin), so the inertia is (n/2, n/2), proved with
+        // any radius below 1 - 2^-298 and not with 1.01.
+        let n = 40;
+        let mut a = SymBanded::zeros(n, 2);
+        for i in 0..n {
+            a.add(i, i, if (i / 2) % 2 == 0 { 1.0 } else { -1.0 });
+            if i >= 1 {
+                a.add(i, i - 1, pow2(-300));
+            }
+            if i >= 2 {
+                a.add(i, i - 2, pow2(-540));
+            }
+        }
+        let (l, dg) = a.ldl().expect("nonzero pivots");
+        assert!(l.iter().all(|x| *x == 0.0 || x.abs() >= f64::MIN_POSITIVE), "a subnormal entry in L");
+        assert!((2..n).all(|i| l[i * 3 + 2] == 0.0), "the second band's multipliers are flushed");
+        assert!((1..n).all(|i| l[i * 3 + 1].abs() == pow2(-300)), "the first band's are kept (2^-300 / +-1)");
+        assert_eq!(dg.iter().filter(|d| **d > 0.0).count(), n / 2);
+        assert_eq!(a.verified_inertia_within(0.9), Some((n / 2, n / 2)));
+        assert_eq!(a.verified_inertia_within(1.01), None);
+        // the same for the verified Cholesky: diag 1 and 2, the same bands
+        let mut p = SymBanded::zeros(n, 2);
+        for i in 0..n {
+            p.add(i, i, 1.0 + (i % 2) as f64);
+            if i >= 1 {
+                p.add(i, i - 1, pow2(-300));
+            }
+            if i >= 2 {
+                p.add(i, i - 2, pow2(-540));
+            }
+        }
+        assert!(p.verified_positive_definite_within(0.99));
+        assert!(!p.verified_positive_definite_within(1.01));
     }
 
     #[test]
