@@ -203,6 +203,10 @@ pub fn largest_generalized_eigenvalue(
             apply_v(&p, &mut vp);
             b2 = dot(&p, &vp);
         }
+        if b2.is_nan() {
+            // a NaN from the solve is a breakdown, not convergence (b = 0)
+            return Ritz::breakdown(j + 1);
+        }
         let b = b2.max(0.0).sqrt();
         let steps = j + 1;
         if !b.is_finite() {
@@ -330,6 +334,19 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
     if steps == 0 || beta.len() + 1 != steps || alpha.iter().chain(beta).any(|x| !x.is_finite()) || !b.is_finite() {
         return nan;
     }
+    // Scaled by a power of two to entries of order one (exact, and the
+    // results scale back exactly): the Sturm count squares the
+    // off-diagonal, which underflows for a spectrum near 1e-160 (found in
+    // review, 2026-11-28). The eigenvector does not change.
+    let top = alpha.iter().chain(beta).fold(0.0f64, |m, x| m.max(x.abs()));
+    if top > 0.0 && !(2f64.powi(-200)..=2f64.powi(200)).contains(&top) {
+        let e = top.log2().round() as i32;
+        let (down, up) = (crate::banded::pow2(-e), crate::banded::pow2(e));
+        let a: Vec<f64> = alpha.iter().map(|x| x * down).collect();
+        let c: Vec<f64> = beta.iter().map(|x| x * down).collect();
+        let (v, theta, residual, scale) = top_ritz(&a, &c, b);
+        return (v, theta * up, residual, scale * up);
+    }
     // Gershgorin's interval holds the spectrum.
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..steps {
@@ -361,15 +378,36 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
         }
         0.5 * a + 0.5 * c
     };
+    if steps == 1 {
+        // T = [alpha_0]: its eigenvector is e_1 (and T = 0, the pencil of
+        // a noise-free or constant-noise mode, must give 0, not a solve
+        // with a zero pivot; found in review, 2026-11-28)
+        return (vec![1.0], alpha[0], b.abs(), alpha[0].abs());
+    }
     let theta = bisect(true);
     let scale = theta.abs().max(bisect(false).abs());
+    if scale == 0.0 {
+        // T = 0 (every Gershgorin disc is {0}): every vector is an eigenvector
+        let mut v = vec![0.0; steps];
+        v[steps - 1] = 1.0;
+        return (v, 0.0, b.abs(), 0.0);
+    }
     // inverse iteration from a vector with a component along every
     // eigenvector of an unreduced T (its first entry nonzero)
     let mut v: Vec<f64> = (0..steps).map(|i| 1.0 + 0.5 * ((i as f64) * 0.7548776662).sin()).collect();
     let tiny = f64::EPSILON * scale.max(f64::MIN_POSITIVE);
     for _ in 0..3 {
         solve_shifted(alpha, beta, theta, tiny, &mut v);
-        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !n.is_finite() {
+            // the squares overflowed (a spectrum below about 1e-139): scale
+            // by the largest entry first
+            let top = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            if top.is_finite() && top > 0.0 {
+                v.iter_mut().for_each(|x| *x /= top);
+                n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            }
+        }
         if !(n.is_finite() && n > 0.0) {
             return nan;
         }
@@ -522,6 +560,29 @@ mod tests {
                 assert!((residual - expect).abs() <= 1e-9 * b, "case {case}: residual {residual:e} vs {expect:e}");
             }
         }
+    }
+
+    #[test]
+    fn a_zero_operator_gives_zero_not_nan() {
+        // Q = 0 (no noise, or constant noise): the largest generalised
+        // eigenvalue is 0 (found in review: the first top_ritz divided by a
+        // zero pivot and gave NaN). Also a tiny spectrum (1e-200) whose
+        // inverse-iteration squares overflow.
+        let r = largest_generalized_eigenvalue(
+            20,
+            |_, y| y.iter_mut().for_each(|v| *v = 0.0),
+            |x, y| y.copy_from_slice(x),
+            |b, x| x.copy_from_slice(b),
+            1e-12,
+            50,
+        );
+        assert_eq!(r.value, 0.0);
+        let (_, theta, _, scale) = top_ritz(&[0.0], &[], 0.0);
+        assert_eq!((theta, scale), (0.0, 0.0));
+        let (_, theta, _, scale) = top_ritz(&[0.0, 0.0, 0.0], &[0.0, 0.0], 0.0);
+        assert_eq!((theta, scale), (0.0, 0.0));
+        let (v, theta, _, _) = top_ritz(&[1e-200, 3e-200, 2e-200], &[1e-200, 1e-200], 1e-200);
+        assert!(v.iter().all(|x| x.is_finite()) && theta > 3e-200 && theta < 5e-200, "{theta:e}");
     }
 
     #[test]
