@@ -19,9 +19,10 @@ fn cubic(ny: usize, boundary: &str) -> String {
 
 #[test]
 fn ny_4096_with_32_modes_is_accepted_on_both_boundaries_and_the_dense_fallback_keeps_its_limit() {
-    // The banded check is O(ny): no work limit applies above the dense
-    // fallback's 1023 unknowns, nor on periodic grids, which have no
-    // fallback (fluid::modes::Mode::verify). (Until 2026-11-28 periodic
+    // The banded check is O(ny): the dense work limit applies neither above
+    // the dense fallback's 1023 unknowns nor on periodic grids, which have
+    // no fallback (fluid::modes::Mode::verify); the banded limits (next
+    // test) allow these. (Until 2026-11-28 periodic
     // grids were dense and refused here: 32 * 2 * 4096^3 / 3 = 1.5e12 > 1e12
     // operations.)
     spec::parse_fluid_spec(&cubic(4096, "walls")).expect("walls at ny = 4096 are accepted");
@@ -33,6 +34,56 @@ fn ny_4096_with_32_modes_is_accepted_on_both_boundaries_and_the_dense_fallback_k
     let err = spec::parse_fluid_spec(&many).unwrap_err();
     assert_eq!(err.path, "$.fluid.x_modes", "{err}");
     assert!(err.to_string().contains("dense verified checks"), "{err}");
+}
+
+/// `cubic` (walls) or Kolmogorov flow (periodic) with `j` noise fields
+/// `0.1 sin(i y)` and `modes` x-modes, of either model.
+fn noisy(ny: usize, j: usize, modes: usize, boundary: &str, model: &str) -> String {
+    let noise: Vec<String> = (1..=j).map(|i| format!("\"0.1*sin({i}*y)\"")).collect();
+    let sound = if model == "compressible" { r#""sound_speed": 2,"# } else { "" };
+    // a periodic grid needs periodic data: Kolmogorov flow on [0, 2 pi)
+    let (interval, flow) = if boundary == "periodic" { (r#"[0, "2*pi"]"#, "sin(y)") } else { ("[-1, 1]", "y^3 + y/2") };
+    format!(
+        r#"{{"name": "noisy", "fluid": {{"model": "{model}", {sound} "x_period": "2*pi", "y_interval": {interval},
+            "boundary": "{boundary}", "shear_flow": "{flow}", "noise": [{}], "ny": {ny}, "x_modes": {modes}}}}}"#,
+        noise.join(", ")
+    )
+}
+
+#[test]
+fn many_noise_fields_on_a_fine_grid_are_refused_with_the_field_named() {
+    // The banded check of an incompressible mode factors n (J + 2) rows of
+    // bandwidth (J + 2)(p + 1) - 1 (fluid::walls_check::lifted_size; p = 8
+    // on walls, 16 on periodic grids): a copy is limited to 2^28 bytes
+    // (spec::fluid::MAX_BANDED_BYTES) and x_modes rows (bandwidth + 1)^2 to
+    // 1e12 (MAX_BANDED_WORK). Walls at ny = 4096 (4095 unknowns): J = 28
+    // gives 122850 rows of width 270, 8 * 122850 * 270 = 2.65e8 bytes, and
+    // 4 modes 4 * 122850 * 270^2 = 3.6e10: accepted (certified in 11 s,
+    // 3.18 GB, 2026-11-28). J = 29: 126945 rows of width 279, 2.83e8 bytes.
+    let parse = |text: String| spec::parse_fluid_spec(&text);
+    parse(noisy(4096, 28, 4, "walls", "incompressible")).expect("28 fields at ny = 4096 fit");
+    let err = parse(noisy(4096, 29, 4, "walls", "incompressible")).unwrap_err();
+    assert_eq!(err.path, "$.fluid.noise", "{err}");
+    assert!(err.to_string().contains("29 noise fields at ny = 4096"), "{err}");
+    // 200 modes of J = 28: 200 * 122850 * 270^2 = 1.8e12 operations
+    let err = parse(noisy(4096, 28, 200, "walls", "incompressible")).unwrap_err();
+    assert_eq!(err.path, "$.fluid.x_modes", "{err}");
+    assert!(err.to_string().contains("banded verified checks"), "{err}");
+    // Periodic at ny = 4096 (4096 unknowns, p = 16): J = 19 gives 86016
+    // rows of width 356, 8 * 86016 * 357 = 2.46e8 bytes; J = 20 90112 rows
+    // of width 373, 8 * 90112 * 374 = 2.70e8 > 2^28 = 2.68e8.
+    parse(noisy(4096, 19, 4, "periodic", "incompressible")).expect("19 fields at periodic ny = 4096 fit");
+    let err = parse(noisy(4096, 20, 4, "periodic", "incompressible")).unwrap_err();
+    assert_eq!(err.path, "$.fluid.noise", "{err}");
+    // The most fields the spec allows (256) on the coarsest grid (ny = 16,
+    // 15 unknowns: 3870 rows of width 2321, 7.2e7 bytes) with 4 modes:
+    // 4 * 3870 * 2322^2 = 8.3e10, accepted; 64 modes are 1.3e12.
+    parse(noisy(16, 256, 4, "walls", "incompressible")).expect("256 fields at ny = 16 fit");
+    assert_eq!(parse(noisy(16, 256, 64, "walls", "incompressible")).unwrap_err().path, "$.fluid.x_modes");
+    // The compressible generator sums its noise into one banded matrix of
+    // the grid's width: no such limit.
+    parse(noisy(4096, 64, 32, "walls", "compressible"))
+        .expect("the compressible generator's size does not grow with J");
 }
 
 /// Kolmogorov flow `U = sin y`, periodic on `[0, 2 pi)`, x-period `pi`

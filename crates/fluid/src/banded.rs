@@ -30,6 +30,33 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
+/// An upper bound on `x + units 2^-1074` (an underflow term), for `x >= 0`
+/// and `0 <= units <= 2^100`, computed without arithmetic on subnormal
+/// numbers when `x >= 2^-900`: then `fl(x (1 + 4u)) >= x (1 + 4u)(1 - u)
+/// >= x (1 + 2u) > x + 2^-60 x >= x + units 2^-1074` (`1 + 4u` is exact).
+/// Below that it is `x + units 2^-1074` as before. Each subnormal result costs a
+/// microcode assist of about a hundred cycles: adding the underflow terms
+/// entry by entry was 64% of `Bounded::set_with_error`, about 5% of a
+/// walls check at ny = 1024 (`perf annotate`, 2026-11-28).
+///
+/// The small case is a call the compiler cannot inline: as a plain `if`,
+/// LLVM computed both branches and selected one, so the subnormal product
+/// was formed every time.
+#[inline]
+pub fn plus_underflow(x: f64, units: f64) -> f64 {
+    debug_assert!(x >= 0.0 && (0.0..=pow2(100)).contains(&units));
+    #[cold]
+    #[inline(never)]
+    fn small(x: f64, units: f64) -> f64 {
+        x + units * 5e-324
+    }
+    if x >= pow2(-900) {
+        x * (1.0 + 2.0 * f64::EPSILON)
+    } else {
+        small(x, units)
+    }
+}
+
 /// Higham's `gamma_m = m u / (1 - m u)`, `u = 2^-53`: the relative error
 /// bound of `m` successive roundings.
 pub fn gamma(m: usize) -> f64 {
@@ -256,7 +283,7 @@ impl Bounded {
         }
         if let (Some(err), true) = (self.err.as_mut(), rounds > 0) {
             let g = gamma(rounds);
-            err.add(i, j, g * scale.abs().max(v.abs()) * (1.0 + 2.0 * g) + (rounds as f64) * 5e-324);
+            err.add(i, j, plus_underflow(g * scale.abs().max(v.abs()) * (1.0 + 2.0 * g), rounds as f64));
         }
     }
 
@@ -314,9 +341,11 @@ pub const FLUSH: f64 = f64::from_bits(((1023 - 500) as u64) << 52);
 /// decay far below the normal range, where every operation on a subnormal
 /// number is many times slower (docs/status.md). Where a factorisation's
 /// rounding is proved ([`SymBanded::verified_inertia_within_rows`],
-/// `shifted_cholesky_rows`), the flushed entry's backward error,
-/// `|s| <= FLUSH (1 + u) |pivot times|` for the entry `s` it stood for, is
-/// counted.
+/// `shifted_cholesky_rows`), the flushed entry's backward error is
+/// counted: with `v` the multiplier flushed, Higham's Lemma 8.4 bounds the
+/// residual at its position by `gamma_b` times the stored products plus
+/// `|v pivot times| (1 + gamma_b) <= FLUSH (1 + gamma_b) |pivot times|`, and
+/// only the last term is new.
 fn eliminate(c: &mut [f64], t: &mut [f64], b: usize, k: usize, pivot: f64, times: f64) -> bool {
     let b1 = b + 1;
     let reach = b.min(c.len() / b1 - 1 - k);
@@ -722,10 +751,11 @@ impl SymBanded {
         // because row j's own shift covers it many times over, but not
         // written down before).
         let max_r = (0..n).fold(0.0f64, |m, k| m.max(c[k * b1]));
-        // A multiplier flushed to zero by `eliminate` leaves the entry it
-        // stood for, at most FLUSH (1 + u) r_kk, in R^T R - A': at most b
-        // such entries in row i and b in column i, counted in both rows
-        // (2b + 2 of them, rounded up).
+        // A multiplier flushed to zero by `eliminate` leaves at most
+        // FLUSH (1 + gamma_b) r_kk in R^T R - A' at its entry (`eliminate`'s
+        // docs): at most b such entries in row i and b in column i. 2b + 2
+        // are counted, times (1 + 4u): the two spare ones cover the
+        // 2b gamma_b FLUSH max_r.
         let flushed = (2 * b + 2) as f64 * FLUSH * max_r * (1.0 + 4.0 * u);
         let quotient_underflow = (b + 1) as f64 * 5e-324 * max_r * (1.0 + 2.0 * u) + 5e-324 + flushed;
         // Both sums have at most 2b + 1 terms: inflate for their rounding,
@@ -813,12 +843,13 @@ impl SymBanded {
                 let f = d[i] * d[j];
                 let v = self.band[i * b1 + dd] * f;
                 out.band[i * b1 + dd] = v;
-                let mut e = err.band[i * b1 + dd] * f;
+                // the product d_i d_j err may itself underflow: round it up
+                // (a zero bound stays exactly zero)
+                let ev = err.band[i * b1 + dd];
+                let mut e = if ev == 0.0 { 0.0 } else { plus_underflow(ev * f, 1.0) };
                 if v != 0.0 && v.abs() < f64::MIN_POSITIVE {
                     e += f64::MIN_POSITIVE;
                 }
-                // the product d_i d_j err may itself underflow: round it up
-                e += 5e-324;
                 rows[i] += e;
                 if dd > 0 {
                     rows[j] += e;
@@ -942,9 +973,10 @@ impl SymBanded {
         // covers the row sum's own underflow (times gamma < 1/2), and one
         // subnormal step this product's own rounding.
         let underflow = 5e-324 * (2 * b + 2) as f64 * ((b + 1) as f64 + max_lrow + max_d) * inflate + 5e-324;
-        // A multiplier flushed to zero by `eliminate` leaves the entry it
-        // stood for in A - L D L^T: at most FLUSH (1 + u) |d_k| each, b in
-        // row i and b in column i (2b + 2 counted, rounded up).
+        // A multiplier flushed to zero by `eliminate` leaves at most
+        // FLUSH (1 + gamma_b) |d_k| in A - L D L^T at its entry
+        // (`eliminate`'s docs): b in row i and b in column i (2b + 2
+        // counted, times inflate >= 1 + gamma_b).
         let underflow = underflow + (2 * b + 2) as f64 * FLUSH * max_d * inflate;
         let mut shift = Vec::with_capacity(n);
         // the first rounding shares to try for P's Cholesky (the docs of
@@ -959,7 +991,7 @@ impl SymBanded {
             // The a-priori bound of the backward error in this row, and as
             // much for P's formation, plus the row's radius; each rounded
             // upwards (a relative u, or one subnormal step).
-            let per = (gamma(b + 2) * (r * inflate) + underflow) * (1.0 + 4.0 * u) + 5e-324;
+            let per = plus_underflow((gamma(b + 2) * (r * inflate) + underflow) * (1.0 + 4.0 * u), 1.0);
             let f = ((per + radii[i]) + per) * (1.0 + 4.0 * u);
             if !f.is_finite() {
                 return None;
@@ -1299,6 +1331,51 @@ mod tests {
         let mut a = example(10, 2);
         a.add(5, 5, -10.0);
         assert!(matches!(a.cholesky(), Err(BandedError::NonPositivePivot { index: 5, .. })));
+    }
+
+    #[test]
+    fn a_flushed_multiplier_cannot_hide_a_negative_eigenvalue() {
+        // A = [[d, e], [e, c]] with e / d below FLUSH = 2^-500: the multiplier
+        // is stored as 0, so the floating-point factors show two positive
+        // pivots while det A = d c - e^2 < 0 (exact in rationals below).
+        // Each case is built so that only one flush term of the verified
+        // bounds stands between these factors and a false answer; removing
+        // either term fails its case (checked 2026-11-28 by zeroing each).
+        let q = |x: f64| exact::Rational::from_float(x).unwrap();
+        let matrix = |d: f64, e: f64, c: f64| {
+            assert!(q(d) * q(c) - q(e) * q(e) < exact::Rational::from(0), "A is indefinite");
+            let mut a = SymBanded::zeros(2, 1);
+            a.add(0, 0, d);
+            a.add(1, 0, e);
+            a.add(1, 1, c);
+            let (l, dg) = a.ldl().expect("nonzero pivots");
+            assert_eq!(l[2 + 1], 0.0, "the multiplier is flushed");
+            assert!(dg.iter().all(|d| *d > 0.0), "the flushed factors show no negative pivot");
+            a
+        };
+        // The inertia test: d = 2^1016, e = 2^515 (e / d = 2^-501), c =
+        // 2^13 < e^2 / d = 2^14. P = L |D| L^T = diag(2^1016, 2^13), whose
+        // own Cholesky (flush term 4 FLUSH max r_kk = 2^10 < c) proves it
+        // definite: only the term (2b + 2) FLUSH max |d_k| = 2^518 of
+        // `verified_inertia_within_rows` refuses the false (2, 0).
+        let a = matrix(pow2(1016), pow2(515), pow2(13));
+        for radius in [0.0, 1.0] {
+            assert_ne!(a.verified_inertia_within(radius), Some((2, 0)), "radius {radius}");
+        }
+        // The Cholesky: d = 1, e = 2^-501, c = 2^-1003 < e^2 = 2^-1002,
+        // with first shares (2^-40, 2^-1040) that cover every rounding
+        // of the flushed factor (gamma c, about 2^-1050, and the underflow
+        // share, about 2^-1015) but not the flush term 4 FLUSH = 2^-498 of
+        // `shifted_cholesky_rows`. Without that term this attempt is
+        // accepted; with it, the fallback's shares from |A| (2 gamma e,
+        // about 2^-548 > c) end the factorisation at row 2.
+        let a = matrix(1.0, pow2(-501), pow2(-1003));
+        assert!(!a.verified_positive_definite_above_from(&[0.0, 0.0], Some(&[pow2(-40), pow2(-1040)])));
+        for radius in [0.0, 1e-300] {
+            assert_ne!(a.verified_inertia_within(radius), Some((2, 0)), "radius {radius}");
+            assert!(!a.verified_positive_definite_within(radius), "radius {radius}");
+            assert!(!a.verified_positive_definite_above(&[radius, radius]), "radius {radius}");
+        }
     }
 
     #[test]

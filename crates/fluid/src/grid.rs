@@ -157,6 +157,27 @@ pub fn gll_derivative(p: usize, x: &[f64]) -> DMatrix<f64> {
     })
 }
 
+/// The number of unknowns of a grid of `ny` (walls: `ny - 1` interior
+/// nodes; periodic: `ny`), without building it: for cost estimates.
+pub fn unknowns(boundary: Boundary, ny: usize) -> usize {
+    match boundary {
+        Boundary::Walls => ny.saturating_sub(1),
+        Boundary::Periodic => ny,
+    }
+}
+
+/// An upper bound on the bandwidth of the stiffness (and of
+/// [`YGrid::helmholtz`]) of a grid, without building it: an element couples
+/// nodes at most [`ELEMENT_DEGREE`] apart, which the walls' node order
+/// keeps and the periodic interleaving (`0, n-1, 1, n-2, ..`) at most
+/// doubles. Tested against the grids built.
+pub fn stiffness_bandwidth(boundary: Boundary) -> usize {
+    match boundary {
+        Boundary::Walls => ELEMENT_DEGREE,
+        Boundary::Periodic => 2 * ELEMENT_DEGREE,
+    }
+}
+
 impl YGrid {
     /// A grid with `ny` intervals' worth of resolution on `[a, b]`, `ny / ELEMENT_DEGREE`
     /// elements (`ny` must be a multiple of the degree, at least twice it):
@@ -356,6 +377,21 @@ mod tests {
         let mut out = vec![0.0; walls.n()];
         walls.helmholtz(0.0).mul_vec(&vec![1.0; walls.n()], &mut out);
         assert!(out[0].abs() > 1.0, "{out:?}");
+    }
+
+    #[test]
+    fn the_size_estimates_bound_the_grids_built() {
+        // `unknowns` and `stiffness_bandwidth` (used by the spec layer's
+        // work limits without building a grid) against the grids themselves
+        for boundary in [Boundary::Walls, Boundary::Periodic] {
+            for ny in (16..=512).step_by(8) {
+                let g = YGrid::new(boundary, -1.0, 2.0, ny);
+                assert_eq!(unknowns(boundary, ny), g.n(), "{boundary:?} ny {ny}");
+                let b = g.helmholtz(1.0).bandwidth();
+                assert!(b <= stiffness_bandwidth(boundary), "{boundary:?} ny {ny}: {b}");
+                assert!(ny <= 2 * ELEMENT_DEGREE || b == stiffness_bandwidth(boundary), "{boundary:?} ny {ny}: {b}");
+            }
+        }
     }
 
     #[test]

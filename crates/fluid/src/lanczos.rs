@@ -244,9 +244,11 @@ pub fn largest_generalized_eigenvalue(
 
 /// Whether to look at the Ritz values after `steps` steps: every step from
 /// the fourth to the 31st, then every eighth, and at the last. Each look is
-/// a dense eigenproblem of size `steps` (`O(steps^3)`): cheap beside a step
-/// while the basis is short, and the walls' modes converge within 7 to 20
-/// steps, so looking only every eighth step ran up to seven steps too many.
+/// the top eigenpair of the tridiagonal `T` ([`top_ritz`]: bisection and
+/// inverse iteration, `O(steps)` per Sturm count; until 2026-11-28 a dense
+/// eigenproblem, `O(steps^3)`), cheap beside a step, and the walls' modes
+/// converge within 7 to 20 steps, so looking only every eighth step ran up
+/// to seven steps too many.
 /// Measured 2026-11-27 (fifth session) at ny = 1024 (`fluid_mode`, mode 1 of
 /// `bench/cubic-walls.json`): 9 steps instead of 16 (docs/fluids.md §5).
 fn check_now(steps: usize, m_max: usize) -> bool {
@@ -276,10 +278,12 @@ pub fn conjugate_gradients(
     apply_a(x, &mut ax);
     let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
     // The residual is tested before the preconditioner is applied to it:
-    // the walls' V-solves converge in one step, and a preconditioned
-    // residual computed after the last step is never used (until
-    // 2026-11-28 it was, at a third of the preconditioner's work; the
-    // iterate is the same).
+    // the V-solves take few iterations (their preconditioner is V's inverse
+    // up to rounding; counted 2026-11-28 at tol = 1e-15: 2 on the walls
+    // modes of `bench/cubic-walls.json` and `channel-sin-walls` at ny = 1024
+    // and 4096, 1 or 0 on periodic ones), and a preconditioned residual
+    // computed after the last step is never used (until 2026-11-28 it was,
+    // at a third of the preconditioner's work; the iterate is the same).
     if norm(&r) <= tol * bnorm {
         return Some(0);
     }
@@ -334,6 +338,12 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
     if steps == 0 || beta.len() + 1 != steps || alpha.iter().chain(beta).any(|x| !x.is_finite()) || !b.is_finite() {
         return nan;
     }
+    if steps == 1 {
+        // T = [alpha_0]: its eigenvector is e_1 (and T = 0, the pencil of
+        // a noise-free or constant-noise mode, must give 0, not a solve
+        // with a zero pivot; found in review, 2026-11-28)
+        return (vec![1.0], alpha[0], b.abs(), alpha[0].abs());
+    }
     // Scaled by a power of two to entries of order one (exact, and the
     // results scale back exactly): the Sturm count squares the
     // off-diagonal, which underflows for a spectrum near 1e-160 (found in
@@ -359,13 +369,18 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
     }
     // LAPACK's dstebz: pivots below this are replaced by it
     let pivmin = f64::MIN_POSITIVE * beta.iter().fold(1.0f64, |m, x| m.max(x * x));
+    // Bisection stops at a few ulps of the spectrum's scale (Gershgorin's
+    // bound on it), not of the interval's ends: near a zero eigenvalue the
+    // latter would take up to about a thousand more Sturm sweeps for an
+    // accuracy the Ritz value does not need (found in review, 2026-11-28)
+    let width = 2.0 * f64::EPSILON * lo.abs().max(hi.abs());
     let bisect = |top: bool| -> f64 {
         // top: the largest x with fewer than `steps` eigenvalues below it;
         // else the smallest x with at least one below it
         let (mut a, mut c) = (lo, hi);
         for _ in 0..2100 {
             let mid = 0.5 * a + 0.5 * c;
-            if mid <= a || mid >= c || c - a <= 2.0 * f64::EPSILON * a.abs().max(c.abs()) {
+            if mid <= a || mid >= c || c - a <= width {
                 break;
             }
             let below = sturm_below(alpha, beta, mid, pivmin);
@@ -378,12 +393,6 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
         }
         0.5 * a + 0.5 * c
     };
-    if steps == 1 {
-        // T = [alpha_0]: its eigenvector is e_1 (and T = 0, the pencil of
-        // a noise-free or constant-noise mode, must give 0, not a solve
-        // with a zero pivot; found in review, 2026-11-28)
-        return (vec![1.0], alpha[0], b.abs(), alpha[0].abs());
-    }
     let theta = bisect(true);
     let scale = theta.abs().max(bisect(false).abs());
     if scale == 0.0 {
@@ -392,8 +401,12 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
         v[steps - 1] = 1.0;
         return (v, 0.0, b.abs(), 0.0);
     }
-    // inverse iteration from a vector with a component along every
-    // eigenvector of an unreduced T (its first entry nonzero)
+    // Inverse iteration from a fixed smooth positive vector. It could in
+    // principle be orthogonal to the top eigenvector (only e_1 is sure not
+    // to be, for an unreduced T); that would only slow the steering, since
+    // the value reported is the Rayleigh quotient of the Ritz vector and
+    // every bound is proved by the verified checks. Each step multiplies
+    // the top component by the gap over theta's error, a few ulps.
     let mut v: Vec<f64> = (0..steps).map(|i| 1.0 + 0.5 * ((i as f64) * 0.7548776662).sin()).collect();
     let tiny = f64::EPSILON * scale.max(f64::MIN_POSITIVE);
     for _ in 0..3 {

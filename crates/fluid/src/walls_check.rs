@@ -96,6 +96,24 @@ use crate::banded::Bounded;
 use crate::grid::YGrid;
 use crate::modes::{Coefficients, Form};
 
+/// The matrix the check factors for `noise_fields` non-constant noise
+/// fields on a grid of `n` unknowns whose stiffness has bandwidth `p`:
+/// `(rows, bandwidth) = (n g, g (p + 1) - 1)` with `g = J + 2` Grams per
+/// node (one without noise; module docs). Each of its factorisations costs
+/// about `rows (bandwidth + 1)^2` flops and stores `rows (bandwidth + 1)`
+/// doubles, so a check grows like `J^3` in time and `J^2` in memory: the
+/// spec layer's limits (`spec::fluid`) are computed from this size.
+///
+/// ```
+/// use fluid::walls_check::lifted_size;
+/// assert_eq!(lifted_size(1023, 8, 2), (4092, 35));
+/// assert_eq!(lifted_size(1023, 8, 0), (1023, 8));
+/// ```
+pub fn lifted_size(n: usize, p: usize, noise_fields: usize) -> (usize, usize) {
+    let grams = if noise_fields > 0 { noise_fields + 2 } else { 1 };
+    (n * grams, grams * (p + 1) - 1)
+}
+
 /// `(V ≻ 0, bar V - Q ≻ 0)` for mode `k` of a walls grid, proved as the
 /// module docs say; `(false, false)` when nothing could be proved.
 ///
@@ -253,13 +271,14 @@ fn below_bar(
     // omega is eliminated exactly first (its block D is diagonal), so the
     // matrix factored is the Schur complement S = lower - U D^-1 U^T
     // (module docs), of bandwidth (J + 2)(p + 1) - 1.
-    let grams = if nj > 0 { 2 + nj } else { 1 };
+    let (rows, width) = lifted_size(n, p, nj);
+    let grams = rows / n;
     let idx = |a: usize, c: usize| a * grams + c;
     // U's entries at node a, Gram c: (value, scale, rounds) with
     // |exact - value| <= gamma_rounds scale (the counts of the lifting
     // above); a nonzero value below the normal range proves nothing.
     let mut u_vals: Vec<(f64, f64, usize)> = Vec::with_capacity(grams);
-    let mut sc = Bounded::new(n * grams, grams * (p + 1) - 1);
+    let mut sc = Bounded::new(rows, width);
     let mut d_pos = 0;
     for a in 0..n {
         // D_a = s rho m w (two roundings): normal and nonzero, so that its

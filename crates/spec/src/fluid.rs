@@ -66,6 +66,20 @@ pub const MAX_X_MODES: usize = 2048;
 /// Largest accepted work of the dense verified checks (`2 x_modes ny^3 / 3`).
 pub const MAX_DENSE_FLOPS: f64 = 1e12;
 
+/// Largest accepted size of one copy of the matrix the banded verified
+/// check of an incompressible mode factors (`rows (bandwidth + 1)` doubles,
+/// [`fluid::walls_check::lifted_size`]), in bytes: 256 MiB. A check keeps
+/// about six such copies and two modes run at once, so the peak is about
+/// 3 GiB (measured 2026-11-28: 28 noise fields at `ny = 4096`, 265 MB a
+/// copy, peak 3.18 GB).
+pub const MAX_BANDED_BYTES: f64 = 268_435_456.0;
+
+/// Largest accepted work of the banded verified checks, `x_modes rows
+/// (bandwidth + 1)^2` ([`fluid::walls_check::lifted_size`]): about four
+/// minutes on two cores (measured 2026-11-28: 4 modes of 28 noise fields
+/// at `ny = 4096`, work 3.6e10, took 11 s).
+pub const MAX_BANDED_WORK: f64 = 1e12;
+
 /// A parsed fluid spec.
 #[derive(Clone, Debug)]
 pub struct FluidSpec {
@@ -298,6 +312,43 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
                 flops
             ),
         ));
+    }
+    // The banded checks of an incompressible mode factor a matrix of
+    // J + 2 unknowns per node (`fluid::walls_check::lifted_size`): time
+    // grows like J^3 and memory like J^2, so many noise fields on a fine
+    // grid are refused here rather than run out of memory. J counts every
+    // field given (constant ones are dropped when the modes are built: the
+    // estimate is an upper bound). The compressible generator sums its
+    // noise into one banded matrix, whatever J.
+    if matches!(model, FluidModel::Incompressible) {
+        let (rows, width) = fluid::walls_check::lifted_size(
+            fluid::grid::unknowns(boundary, ny),
+            fluid::grid::stiffness_bandwidth(boundary),
+            noise.len(),
+        );
+        let copy = rows as f64 * (width + 1) as f64;
+        let bytes = 8.0 * copy;
+        if bytes > MAX_BANDED_BYTES {
+            return Err(SpecError::new(
+                npath,
+                format!(
+                    "{} noise fields at ny = {ny} make the banded verified check factor a matrix of {rows} rows and bandwidth {width}: {:.0} MiB a copy, about a dozen copies at once (limit {:.0} MiB a copy): give fewer noise fields or a smaller ny",
+                    noise.len(),
+                    bytes / 1048576.0,
+                    MAX_BANDED_BYTES / 1048576.0
+                ),
+            ));
+        }
+        let work = x_modes as f64 * copy * (width + 1) as f64;
+        if work > MAX_BANDED_WORK {
+            return Err(SpecError::new(
+                kpath,
+                format!(
+                    "x_modes = {x_modes} with {} noise fields at ny = {ny} needs about {work:.1e} floating-point operations for the banded verified checks (limit {MAX_BANDED_WORK:.0e}, a few minutes on two cores): reduce x_modes, the noise fields or ny",
+                    noise.len()
+                ),
+            ));
+        }
     }
     let profile = Profile::new(u, noise, (a, b), boundary).with_potentials(potentials);
     // Profile checks up front so the error names the spec field.
