@@ -75,15 +75,54 @@ fn many_noise_fields_on_a_fine_grid_are_refused_with_the_field_named() {
     parse(noisy(4096, 19, 4, "periodic", "incompressible")).expect("19 fields at periodic ny = 4096 fit");
     let err = parse(noisy(4096, 20, 4, "periodic", "incompressible")).unwrap_err();
     assert_eq!(err.path, "$.fluid.noise", "{err}");
-    // The most fields the spec allows (256) on the coarsest grid (ny = 16,
-    // 15 unknowns: 3870 rows of width 2321, 7.2e7 bytes) with 4 modes:
-    // 4 * 3870 * 2322^2 = 8.3e10, accepted; 64 modes are 1.3e12.
-    parse(noisy(16, 256, 4, "walls", "incompressible")).expect("256 fields at ny = 16 fit");
-    assert_eq!(parse(noisy(16, 256, 64, "walls", "incompressible")).unwrap_err().path, "$.fluid.x_modes");
-    // The compressible generator sums its noise into one banded matrix of
-    // the grid's width: no such limit.
-    parse(noisy(4096, 64, 32, "walls", "compressible"))
-        .expect("the compressible generator's size does not grow with J");
+    // Many fields on a walls grid of at most 1023 unknowns go to the dense
+    // check alone where the banded one would cost more
+    // (fluid::modes::dense_check_preferred), and the dense work limit
+    // applies instead: 256 fields at ny = 16 with 64 modes (banded
+    // 64 * 3870 * 2322^2 = 1.3e12) and 100 fields at ny = 1024 (a banded
+    // copy of 8 * 104346 * 918 = 7.7e8 bytes) are accepted.
+    parse(noisy(16, 256, 64, "walls", "incompressible")).expect("the dense check at ny = 16");
+    parse(noisy(1024, 100, 4, "walls", "incompressible")).expect("the dense check at ny = 1024");
+    // The compressible model runs the incompressible analysis first (its
+    // checks included), so the same limits hold (found in review,
+    // 2026-11-28: 64 fields at ny = 4096 were accepted).
+    let err = parse(noisy(4096, 64, 32, "walls", "compressible")).unwrap_err();
+    assert_eq!(err.path, "$.fluid.noise", "{err}");
+    parse(noisy(4096, 28, 4, "walls", "compressible")).expect("28 fields at ny = 4096 fit");
+}
+
+#[test]
+fn simulating_at_another_ny_keeps_the_work_limits() {
+    // `verify simulate --ny` re-runs the analysis at its own grid (found in
+    // review, 2026-11-28: it did not re-check the limits). Periodic grids
+    // have no dense check: 61 fields at ny = 16 (1008 rows of bandwidth
+    // 1070, 8.6e6 bytes a copy) are accepted, but at ny = 512 they make
+    // 32256 rows, 8 * 32256 * 1071 = 2.76e8 bytes > 2^28 = 2.68e8; at
+    // ny = 256 16128 rows, 1.4e8 bytes, and 8 modes 8 * 16128 * 1071^2 =
+    // 1.5e11 operations: within the limits, so that run starts (and stops
+    // at once: its progress is cancelled).
+    let spec = spec::parse_fluid_spec(&noisy(16, 61, 8, "periodic", "incompressible")).expect("accepted at ny = 16");
+    let options = |ny: usize| spec::FluidSimulationOptions {
+        mode: None,
+        ny: Some(ny),
+        paths: Some(2),
+        dt: 0.01,
+        t_end: None,
+        outputs: 10,
+        seed: 1,
+        force: false,
+        threads: 2.0,
+    };
+    let progress = fluid::analysis::Progress::new();
+    progress.cancel();
+    let at = |ny: usize| spec::simulate_fluid_with(&spec, &options(ny), &progress, &mut |_| {});
+    match at(512) {
+        Err(spec::FluidSimulationError::Invalid { field: "ny", message }) => {
+            assert!(message.contains("61 noise fields at ny = 512"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(at(256), Err(spec::FluidSimulationError::Cancelled)), "{:?}", at(256));
 }
 
 /// Kolmogorov flow `U = sin y`, periodic on `[0, 2 pi)`, x-period `pi`

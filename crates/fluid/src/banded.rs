@@ -34,7 +34,13 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// and `0 <= units <= 2^100`, computed without arithmetic on subnormal
 /// numbers when `x >= 2^-900`: then `fl(x (1 + 4u)) >= x (1 + 4u)(1 - u)
 /// >= x (1 + 2u) > x + 2^-60 x >= x + units 2^-1074` (`1 + 4u` is exact).
-/// Below that it is `x + units 2^-1074` as before. Each subnormal result costs a
+/// Below that it is `fl(fl(x + units 2^-1074) (1 + 4u))`: `units 2^-1074`
+/// is exact, the sum is exact while it is subnormal (and then the product
+/// rounds back to it at worst), and otherwise each rounding loses at most
+/// a relative `u`, which `1 + 4u` more than restores. (Until review,
+/// 2026-11-28, this case was the plain sum, which for `x` above `2^-1021`
+/// can round back down to `x`; the callers' relative inflations covered
+/// that, as they did before this function.) Each subnormal result costs a
 /// microcode assist of about a hundred cycles: adding the underflow terms
 /// entry by entry was 64% of `Bounded::set_with_error`, about 5% of a
 /// walls check at ny = 1024 (`perf annotate`, 2026-11-28).
@@ -48,7 +54,7 @@ pub fn plus_underflow(x: f64, units: f64) -> f64 {
     #[cold]
     #[inline(never)]
     fn small(x: f64, units: f64) -> f64 {
-        x + units * 5e-324
+        (x + units * 5e-324) * (1.0 + 2.0 * f64::EPSILON)
     }
     if x >= pow2(-900) {
         x * (1.0 + 2.0 * f64::EPSILON)
@@ -342,10 +348,11 @@ pub const FLUSH: f64 = f64::from_bits(((1023 - 500) as u64) << 52);
 /// number is many times slower (docs/status.md). Where a factorisation's
 /// rounding is proved ([`SymBanded::verified_inertia_within_rows`],
 /// `shifted_cholesky_rows`), the flushed entry's backward error is
-/// counted: with `v` the multiplier flushed, Higham's Lemma 8.4 bounds the
-/// residual at its position by `gamma_b` times the stored products plus
-/// `|v pivot times| (1 + gamma_b) <= FLUSH (1 + gamma_b) |pivot times|`, and
-/// only the last term is new.
+/// counted: with `v` the multiplier flushed and `s = v pivot` (up to one
+/// rounding) the entry it stood for, Higham's Lemma 8.4 bounds the residual
+/// at its position by `gamma_b` times the stored products plus `|s| (1 +
+/// gamma_b) <= FLUSH (1 + gamma_b) |pivot|` (`pivot` is `d_k` for
+/// `L D L^T`, `r_kk` for Cholesky), and only the last term is new.
 fn eliminate(c: &mut [f64], t: &mut [f64], b: usize, k: usize, pivot: f64, times: f64) -> bool {
     let b1 = b + 1;
     let reach = b.min(c.len() / b1 - 1 - k);
@@ -844,10 +851,14 @@ impl SymBanded {
                 let v = self.band[i * b1 + dd] * f;
                 out.band[i * b1 + dd] = v;
                 // the product d_i d_j err may itself underflow: round it up
-                // (a zero bound stays exactly zero)
+                // (a zero bound stays exactly zero: 0 f = 0)
                 let ev = err.band[i * b1 + dd];
                 let mut e = if ev == 0.0 { 0.0 } else { plus_underflow(ev * f, 1.0) };
-                if v != 0.0 && v.abs() < f64::MIN_POSITIVE {
+                // and so may the scaled entry, to a subnormal number or to
+                // zero (found in review, 2026-11-28: an entry whose own
+                // bound is zero, such as a stored L_ab, underflowing to 0
+                // was no longer counted)
+                if v.abs() < f64::MIN_POSITIVE && self.band[i * b1 + dd] != 0.0 {
                     e += f64::MIN_POSITIVE;
                 }
                 rows[i] += e;
@@ -1364,11 +1375,13 @@ mod tests {
         }
         // The Cholesky: d = 1, e = 2^-501, c = 2^-1003 < e^2 = 2^-1002,
         // with first shares (2^-40, 2^-1040) that cover every rounding
-        // of the flushed factor (gamma c, about 2^-1050, and the underflow
+        // of the flushed factor (gamma c, about 2^-1054, and the underflow
         // share, about 2^-1015) but not the flush term 4 FLUSH = 2^-498 of
         // `shifted_cholesky_rows`. Without that term this attempt is
         // accepted; with it, the fallback's shares from |A| (2 gamma e,
-        // about 2^-548 > c) end the factorisation at row 2.
+        // about 2^-551 > c) end the factorisation at row 2. The loop after
+        // it tries the public entry points, which refuse A for other
+        // reasons too (the radius, or shares from |A| above c).
         let a = matrix(1.0, pow2(-501), pow2(-1003));
         assert!(!a.verified_positive_definite_above_from(&[0.0, 0.0], Some(&[pow2(-40), pow2(-1040)])));
         for radius in [0.0, 1e-300] {

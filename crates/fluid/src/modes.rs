@@ -41,6 +41,49 @@ use outcome::Sign;
 /// [`crate::analysis::verified_mode_bound`], [`Mode::verify`]).
 pub const DENSE_FALLBACK_UNKNOWNS: usize = 1023;
 
+/// Where the dense fallback is allowed, the dense check is run alone when
+/// the banded check's work `rows (bandwidth + 1)^2`
+/// ([`crate::walls_check::lifted_size`]) exceeds this multiple of `n^3`
+/// and [`DENSE_PREFERRED_FLOOR`]. Measured 2026-11-28 at `n = 1023`
+/// (`fluid_mode`, the cubic profile with `J` fields `0.1 sin(j y + j/7)`,
+/// mode 1, a CI run beside it): the banded bound took 99 ms at `J = 12`
+/// (work `0.21 n^3`) and 412 ms at `J = 16` (`0.45 n^3`), the dense check
+/// 250 to 440 ms whatever `J`.
+pub const DENSE_PREFERRED_RATIO: f64 = 0.3;
+
+/// The banded work below which the banded check is kept however the dense
+/// one compares (`1e8`, about 50 ms of checking): its claim is about the
+/// exact pencil of the stored operators, the dense one's about `K` as
+/// computed (docs/fluids.md §5b), so it is given up only where it costs.
+pub const DENSE_PREFERRED_FLOOR: f64 = 1e8;
+
+/// Whether a walls mode's bounds are proved by the dense check alone,
+/// without the banded one: the dense fallback is allowed there
+/// (walls, at most [`DENSE_FALLBACK_UNKNOWNS`] unknowns) and the banded
+/// check's matrix for `noise_fields` non-constant noise fields, `J + 2`
+/// unknowns per node, would cost more (its time grows like `J^3`, the
+/// dense check's hardly with `J`). Increasing in `noise_fields`, so the
+/// spec layer's estimate from every field given is the safe side. At
+/// `n = 1023` the dense check takes over from `J = 14` fields.
+///
+/// ```
+/// use fluid::grid::Boundary;
+/// use fluid::modes::dense_check_preferred;
+/// assert!(!dense_check_preferred(Boundary::Walls, 1023, 13));
+/// assert!(dense_check_preferred(Boundary::Walls, 1023, 14));
+/// assert!(!dense_check_preferred(Boundary::Walls, 255, 5)); // both cheap: the stronger claim kept
+/// assert!(!dense_check_preferred(Boundary::Periodic, 1024, 64)); // no dense check on periodic grids
+/// assert!(!dense_check_preferred(Boundary::Walls, 2047, 64)); // nor above 1023 unknowns
+/// ```
+pub fn dense_check_preferred(boundary: crate::grid::Boundary, n: usize, noise_fields: usize) -> bool {
+    if boundary != crate::grid::Boundary::Walls || n > DENSE_FALLBACK_UNKNOWNS {
+        return false;
+    }
+    let (rows, width) = crate::walls_check::lifted_size(n, crate::grid::stiffness_bandwidth(boundary), noise_fields);
+    let banded = rows as f64 * ((width + 1) as f64).powi(2);
+    banded > DENSE_PREFERRED_FLOOR && banded > DENSE_PREFERRED_RATIO * (n as f64).powi(3)
+}
+
 /// The profile and the noise at the grid nodes.
 #[derive(Clone, Debug)]
 pub struct Coefficients {
@@ -225,7 +268,12 @@ impl<'g> Mode<'g> {
     /// 2026-11-28: ny = 16, `k = 7e-7`, a bound 0.12% below the stored
     /// pencil's eigenvalue proved; test
     /// `walls_check::tests::no_dense_fallback_on_periodic_grids`).
+    ///
+    /// Where [`Mode::prefers_dense`] says so, the dense check runs alone.
     pub fn verify(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
+        if self.prefers_dense(coef) {
+            return self.verify_dense(form, coef, sigma2_bar);
+        }
         let banded = crate::walls_check::verify_walls(self.grid, self.k, form, coef, sigma2_bar);
         if banded.1 || !self.dense_fallback() {
             banded
@@ -241,6 +289,13 @@ impl<'g> Mode<'g> {
     /// grids of at most [`DENSE_FALLBACK_UNKNOWNS`] unknowns.
     pub fn dense_fallback(&self) -> bool {
         self.grid.boundary() == crate::grid::Boundary::Walls && self.grid.n() <= DENSE_FALLBACK_UNKNOWNS
+    }
+
+    /// [`dense_check_preferred`] for this mode's grid and the noise fields
+    /// of `coef` that are not constant (those the banded check lifts).
+    pub fn prefers_dense(&self, coef: &Coefficients) -> bool {
+        let fields = coef.eta.iter().filter(|e| e.iter().any(|x| *x != e[0])).count();
+        dense_check_preferred(self.grid.boundary(), self.grid.n(), fields)
     }
 
     /// The dense check at this grid: `V ≻ 0` and `sigma2_bar V - Q ≻ 0`,

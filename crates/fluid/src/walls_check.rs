@@ -688,6 +688,44 @@ mod tests {
     }
 
     #[test]
+    fn many_noise_fields_on_a_coarse_walls_grid_use_the_dense_check_alone() {
+        // 20 fields at ny = 256 (255 unknowns): the banded check would
+        // factor 255 * 22 rows of bandwidth 197, work 255 * 22 * 198^2 =
+        // 2.2e8 > 1e8 and 13 n^3 (crate::modes::dense_check_preferred), so
+        // the mode goes to the dense check alone; with 2 fields it keeps
+        // the banded one. The bound proved is the narrowest rung's, above
+        // nalgebra's dense eigenvalue of the formed pencil.
+        let g = YGrid::new(Boundary::Walls, 0.0, std::f64::consts::PI, 256);
+        let y = g.nodes();
+        let many: Vec<Vec<f64>> =
+            (1..=20).map(|j| y.iter().map(|y| 0.1 * (j as f64 * y + j as f64 / 7.0).sin()).collect()).collect();
+        let coef = Coefficients {
+            u: y.iter().map(|y| 0.5 * y * y + 0.1 * y.sin()).collect(),
+            upp: y.iter().map(|y| 1.0 - 0.1 * y.sin()).collect(),
+            eta: many.clone(),
+        };
+        let form = Form {
+            energy: 1.0,
+            w: coef.u.iter().zip(&coef.upp).map(|(u, p)| (u + 2.0) / p).collect(),
+            sign: Sign::Positive,
+        };
+        let few = Coefficients { eta: many[..2].to_vec(), ..coef.clone() };
+        let mode = Mode::new(&g, 1.5);
+        assert!(mode.prefers_dense(&coef));
+        assert!(!mode.prefers_dense(&few));
+        let s = mode.sigma2(&form, &coef, 1e-12).unwrap();
+        let exact = dense_lambda(&mode, &form, &coef);
+        assert!((s.lambda_max - exact).abs() <= 1e-9 * exact, "{} {exact}", s.lambda_max);
+        let (bound, definite) = crate::analysis::verified_mode_bound(&mode, &form, &coef, s.lambda_max, &s.ritz);
+        let bound = bound.expect("the dense check proves the narrowest rung");
+        assert!(definite && bound >= exact && bound <= exact * (1.0 + 1e-7), "{bound} {exact}");
+        for bar in [exact * (1.0 - 1e-6), bound] {
+            assert_eq!(mode.verify(&form, &coef, bar), mode.verify_dense(&form, &coef, bar), "{bar}");
+        }
+        assert_eq!(mode.verify(&form, &coef, exact * (1.0 - 1e-6)), (true, false));
+    }
+
+    #[test]
     fn no_dense_fallback_on_periodic_grids() {
         // Found in review (2026-11-28): on a periodic grid the stiffness has
         // the constants in its kernel, so at small k L the computed K is far

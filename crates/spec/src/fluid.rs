@@ -67,11 +67,13 @@ pub const MAX_X_MODES: usize = 2048;
 pub const MAX_DENSE_FLOPS: f64 = 1e12;
 
 /// Largest accepted size of one copy of the matrix the banded verified
-/// check of an incompressible mode factors (`rows (bandwidth + 1)` doubles,
+/// check of a mode factors (`rows (bandwidth + 1)` doubles; both models:
+/// the compressible one runs the incompressible analysis first;
 /// [`fluid::walls_check::lifted_size`]), in bytes: 256 MiB. A check keeps
-/// about six such copies and two modes run at once, so the peak is about
-/// 3 GiB (measured 2026-11-28: 28 noise fields at `ny = 4096`, 265 MB a
-/// copy, peak 3.18 GB).
+/// about six such copies and two modes ran at once on the 2-core machine,
+/// so the peak was about 3 GiB (measured 2026-11-28: 28 noise fields at
+/// `ny = 4096`, 265 MB a copy, peak 3.18 GB); on more cores
+/// `fluid::analysis::check_threads` keeps the modes at once within 4 GiB.
 pub const MAX_BANDED_BYTES: f64 = 268_435_456.0;
 
 /// Largest accepted work of the banded verified checks, `x_modes rows
@@ -79,6 +81,82 @@ pub const MAX_BANDED_BYTES: f64 = 268_435_456.0;
 /// minutes on two cores (measured 2026-11-28: 4 modes of 28 noise fields
 /// at `ny = 4096`, work 3.6e10, took 11 s).
 pub const MAX_BANDED_WORK: f64 = 1e12;
+
+/// The spec field a work limit names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LimitedField {
+    /// `fluid.x_modes`.
+    XModes,
+    /// `fluid.noise`.
+    Noise,
+}
+
+/// The work limits of the verified checks for `x_modes` modes of a grid of
+/// `ny` with `noise_fields` noise fields, both models (the compressible one
+/// runs the incompressible analysis first, `fluid::analysis::analyse_with`):
+/// the field to name and the message when one is passed. Also called by
+/// `verify simulate`, whose `--ny` re-runs the analysis at another grid.
+///
+/// * The dense verified check costs about `n^3/3` multiply-adds per matrix,
+///   two matrices per mode: work that would run for hours is refused. It
+///   runs as the fallback on walls grids up to `DENSE_FALLBACK_UNKNOWNS`
+///   unknowns, and alone where `fluid::modes::dense_check_preferred`.
+/// * The banded check of a mode factors a matrix of `J + 2` unknowns per
+///   node (`fluid::walls_check::lifted_size`): its time grows like `J^3`
+///   and its memory like `J^2`, so many noise fields on a fine grid are
+///   refused rather than run out of memory. `J` counts every field given
+///   (constant ones are dropped when the modes are built: an upper bound;
+///   with fewer fields a mode may run the banded check where this assumed
+///   the dense one, at a cost below the dense one's by that choice's
+///   definition). Where the dense check is preferred the banded one does
+///   not run.
+pub(crate) fn work_limits(
+    boundary: Boundary,
+    ny: usize,
+    x_modes: usize,
+    noise_fields: usize,
+) -> std::result::Result<(), (LimitedField, String)> {
+    let unknowns = fluid::grid::unknowns(boundary, ny);
+    let dense_n =
+        if boundary == Boundary::Walls && unknowns <= fluid::modes::DENSE_FALLBACK_UNKNOWNS { unknowns } else { 0 };
+    let n = dense_n as f64;
+    let flops = 2.0 * x_modes as f64 * n * n * n / 3.0;
+    if flops > MAX_DENSE_FLOPS {
+        return Err((
+            LimitedField::XModes,
+            format!(
+                "x_modes = {x_modes} at ny = {ny} needs about {flops:.0e} floating-point operations for the dense verified checks (limit {MAX_DENSE_FLOPS:.0e}, roughly ten minutes on two cores): reduce x_modes or ny"
+            ),
+        ));
+    }
+    if fluid::modes::dense_check_preferred(boundary, unknowns, noise_fields) {
+        return Ok(());
+    }
+    let (rows, width) =
+        fluid::walls_check::lifted_size(unknowns, fluid::grid::stiffness_bandwidth(boundary), noise_fields);
+    let copy = rows as f64 * (width + 1) as f64;
+    let bytes = 8.0 * copy;
+    if bytes > MAX_BANDED_BYTES {
+        return Err((
+            LimitedField::Noise,
+            format!(
+                "{noise_fields} noise fields at ny = {ny} make the banded verified check factor a matrix of {rows} rows and bandwidth {width}: {:.0} MiB a copy, and a check holds about six (limit {:.0} MiB a copy): give fewer noise fields or a smaller ny",
+                bytes / 1048576.0,
+                MAX_BANDED_BYTES / 1048576.0
+            ),
+        ));
+    }
+    let work = x_modes as f64 * copy * (width + 1) as f64;
+    if work > MAX_BANDED_WORK {
+        return Err((
+            LimitedField::XModes,
+            format!(
+                "x_modes = {x_modes} with {noise_fields} noise fields at ny = {ny} needs about {work:.1e} floating-point operations for the banded verified checks (limit {MAX_BANDED_WORK:.0e}, a few minutes on two cores): reduce x_modes, the noise fields or ny"
+            ),
+        ));
+    }
+    Ok(())
+}
 
 /// A parsed fluid spec.
 #[derive(Clone, Debug)]
@@ -293,63 +371,15 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
             ),
         ));
     }
-    // The dense verified check costs about n^3/3 multiply-adds per matrix,
-    // two matrices per mode: refuse work that would run for hours. It runs
-    // only as the fallback on walls grids (incompressible) up to
-    // DENSE_FALLBACK_UNKNOWNS unknowns; the banded checks
-    // (both boundaries, and the compressible generator) cost O(ny).
-    let dense_n = match (boundary, &model) {
-        (Boundary::Walls, FluidModel::Incompressible) if ny - 1 <= fluid::modes::DENSE_FALLBACK_UNKNOWNS => ny - 1,
-        _ => 0,
-    };
-    let n = dense_n as f64;
-    let flops = 2.0 * x_modes as f64 * n * n * n / 3.0;
-    if flops > MAX_DENSE_FLOPS {
-        return Err(SpecError::new(
-            kpath,
-            format!(
-                "x_modes = {x_modes} at ny = {ny} needs about {:.0e} floating-point operations for the dense verified checks (limit {MAX_DENSE_FLOPS:.0e}, roughly ten minutes on two cores): reduce x_modes or ny",
-                flops
-            ),
-        ));
-    }
-    // The banded checks of an incompressible mode factor a matrix of
-    // J + 2 unknowns per node (`fluid::walls_check::lifted_size`): time
-    // grows like J^3 and memory like J^2, so many noise fields on a fine
-    // grid are refused here rather than run out of memory. J counts every
-    // field given (constant ones are dropped when the modes are built: the
-    // estimate is an upper bound). The compressible generator sums its
-    // noise into one banded matrix, whatever J.
-    if matches!(model, FluidModel::Incompressible) {
-        let (rows, width) = fluid::walls_check::lifted_size(
-            fluid::grid::unknowns(boundary, ny),
-            fluid::grid::stiffness_bandwidth(boundary),
-            noise.len(),
-        );
-        let copy = rows as f64 * (width + 1) as f64;
-        let bytes = 8.0 * copy;
-        if bytes > MAX_BANDED_BYTES {
-            return Err(SpecError::new(
-                npath,
-                format!(
-                    "{} noise fields at ny = {ny} make the banded verified check factor a matrix of {rows} rows and bandwidth {width}: {:.0} MiB a copy, about a dozen copies at once (limit {:.0} MiB a copy): give fewer noise fields or a smaller ny",
-                    noise.len(),
-                    bytes / 1048576.0,
-                    MAX_BANDED_BYTES / 1048576.0
-                ),
-            ));
-        }
-        let work = x_modes as f64 * copy * (width + 1) as f64;
-        if work > MAX_BANDED_WORK {
-            return Err(SpecError::new(
-                kpath,
-                format!(
-                    "x_modes = {x_modes} with {} noise fields at ny = {ny} needs about {work:.1e} floating-point operations for the banded verified checks (limit {MAX_BANDED_WORK:.0e}, a few minutes on two cores): reduce x_modes, the noise fields or ny",
-                    noise.len()
-                ),
-            ));
-        }
-    }
+    work_limits(boundary, ny, x_modes, noise.len()).map_err(|(field, message)| {
+        SpecError::new(
+            match field {
+                LimitedField::XModes => &kpath,
+                LimitedField::Noise => &npath,
+            },
+            message,
+        )
+    })?;
     let profile = Profile::new(u, noise, (a, b), boundary).with_potentials(potentials);
     // Profile checks up front so the error names the spec field.
     profile.check(&[]).map_err(|e| profile_error(e, &fpath))?;

@@ -283,6 +283,11 @@ pub fn simulate_fluid_with(
     if options.outputs == 0 {
         return Err(invalid("outputs", "need at least one output time".into()));
     }
+    // the analysis at this grid has the spec's work limits (they depend on
+    // ny: a spec accepted at ny = 16 may not be at 512)
+    let fields = spec.problem.profile.eta.len();
+    crate::fluid::work_limits(spec.problem.profile.boundary, ny, spec.problem.x_modes, fields)
+        .map_err(|(_, message)| invalid("ny", format!("at ny = {ny}: {message}")))?;
     let problem = FluidProblem { ny, ..spec.problem.clone() };
     let analysis =
         with_cancel_of(progress, |inner| analyse_with(&problem, &spec.settings, inner)).map_err(|e| match e {

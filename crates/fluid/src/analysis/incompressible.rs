@@ -172,9 +172,17 @@ pub(super) fn analyse_normalised(
         );
     }
     let (mut modes, ritz): (Vec<ModeResult>, Vec<crate::lanczos::Ritz>) = per_mode.into_iter().flatten().unzip();
-    // the banded check alone, as the ladder of `verified_mode_bound` climbs it
-    tighten_overall_bound(&mut modes, &ritz, first_rung(fine.n()), progress, |i, bar| {
-        crate::walls_check::verify_walls(&fine, ks[i].1, &form, &coef, bar).1
+    // the banded check alone, as the ladder of `verified_mode_bound` climbs
+    // it (or the dense one alone where it is preferred, from the narrowest
+    // rung: `crate::modes::dense_check_preferred`)
+    let dense_only = Mode::new(&fine, ks[0].1).prefers_dense(&coef);
+    let narrowest = if dense_only { 0 } else { first_rung(fine.n()) };
+    tighten_overall_bound(&mut modes, &ritz, narrowest, progress, |i, bar| {
+        if dense_only {
+            Mode::new(&fine, ks[i].1).verify_dense(&form, &coef, bar).1
+        } else {
+            crate::walls_check::verify_walls(&fine, ks[i].1, &form, &coef, bar).1
+        }
     });
     prove_remaining_modes(&mut modes, progress, |k, bar| Mode::new(&fine, k).verify(&form, &coef, bar).1);
     let sigma2 = modes.iter().map(|r| r.sigma2).fold(0.0, f64::max);

@@ -526,6 +526,11 @@ pub fn verified_mode_bound(
     ritz: &crate::lanczos::Ritz,
 ) -> (Option<f64>, bool) {
     let grid = mode.grid();
+    if mode.prefers_dense(coef) {
+        // many noise fields on a coarse walls grid: the dense check alone,
+        // from the narrowest rung (`crate::modes::dense_check_preferred`)
+        return verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar));
+    }
     let banded = verified_upper(sigma2, ritz, VERIFY_ATTEMPTS - 1, |bar| {
         crate::walls_check::verify_walls(grid, mode.k(), form, coef, bar)
     });
@@ -599,11 +604,42 @@ pub fn analyse_with(
     progress: &Progress,
 ) -> Result<FluidAnalysis, FluidError> {
     progress.plan(planned_steps(problem, settings));
-    let a = analyse_steps(problem, settings, progress)?;
+    let threads = check_threads(problem);
+    let limited = (threads < rayon::current_num_threads())
+        .then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok())
+        .flatten();
+    let a = match limited {
+        Some(pool) => pool.install(|| analyse_steps(problem, settings, progress))?,
+        None => analyse_steps(problem, settings, progress)?,
+    };
     // A cancelled run ends early with meaningless values: never a result.
     progress.check()?;
     progress.settle();
     Ok(a)
+}
+
+/// Memory the banded checks of the modes running at once may hold, in
+/// bytes: 4 GiB.
+pub const CHECK_MEMORY_BUDGET: f64 = 4_294_967_296.0;
+
+/// How many modes [`analyse_with`] runs at once: as many as rayon has
+/// threads, unless their banded checks would hold more than
+/// [`CHECK_MEMORY_BUDGET`] together (a check holds about six copies of its
+/// matrix, [`crate::walls_check::lifted_size`], for every noise field
+/// given). With two or three noise fields this never binds (4.7 MB a copy
+/// at `ny = 4096`); with 28 at `ny = 4096` (265 MB a copy, the most the
+/// spec layer accepts) it allows two, so a machine with many cores runs
+/// such a spec in about 3 GiB instead of 1.6 GB a core. The compressible
+/// model runs the incompressible analysis first, so it counts the same.
+pub fn check_threads(problem: &FluidProblem) -> usize {
+    let boundary = problem.profile.boundary;
+    let (rows, width) = crate::walls_check::lifted_size(
+        crate::grid::unknowns(boundary, problem.ny),
+        crate::grid::stiffness_bandwidth(boundary),
+        problem.profile.eta.len(),
+    );
+    let per_mode = 6.0 * 8.0 * rows as f64 * (width + 1) as f64;
+    (CHECK_MEMORY_BUDGET / per_mode).floor().clamp(1.0, 4096.0) as usize
 }
 
 /// The steps [`analyse_with`] plans: one per x-mode solve (the paper's
