@@ -50,7 +50,9 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// was formed every time.
 #[inline]
 pub fn plus_underflow(x: f64, units: f64) -> f64 {
-    debug_assert!(x >= 0.0 && (0.0..=pow2(100)).contains(&units));
+    // (a NaN `x` passes and propagates, as it did before this function:
+    // the callers' finiteness tests refuse it; never a panic)
+    debug_assert!((x.is_nan() || x >= 0.0) && (0.0..=pow2(100)).contains(&units));
     #[cold]
     #[inline(never)]
     fn small(x: f64, units: f64) -> f64 {

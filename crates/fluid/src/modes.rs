@@ -105,9 +105,7 @@ impl Coefficients {
     pub fn centred_noise(&self) -> (Vec<Vec<f64>>, Vec<f64>) {
         let n = self.u.len();
         let eta: Vec<Vec<f64>> = self
-            .eta
-            .iter()
-            .filter(|e| e.iter().any(|x| *x != e[0]))
+            .varying_noise()
             .map(|e| {
                 let mean = e.iter().sum::<f64>() / n as f64;
                 e.iter().map(|x| x - mean).collect()
@@ -115,6 +113,12 @@ impl Coefficients {
             .collect();
         let s2 = (0..n).map(|a| eta.iter().map(|e| e[a] * e[a]).sum()).collect();
         (eta, s2)
+    }
+
+    /// The noise fields that are not constant at the nodes: those
+    /// [`Coefficients::centred_noise`] keeps and the banded check lifts.
+    pub fn varying_noise(&self) -> impl Iterator<Item = &Vec<f64>> {
+        self.eta.iter().filter(|e| e.iter().any(|x| *x != e[0]))
     }
 }
 
@@ -269,13 +273,11 @@ impl<'g> Mode<'g> {
     /// pencil's eigenvalue proved; test
     /// `walls_check::tests::no_dense_fallback_on_periodic_grids`).
     ///
-    /// Where [`Mode::prefers_dense`] says so, the dense check runs alone.
+    /// Where [`Mode::prefers_dense`] says so, the dense check runs alone
+    /// ([`Mode::ladder_check`]).
     pub fn verify(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
-        if self.prefers_dense(coef) {
-            return self.verify_dense(form, coef, sigma2_bar);
-        }
-        let banded = crate::walls_check::verify_walls(self.grid, self.k, form, coef, sigma2_bar);
-        if banded.1 || !self.dense_fallback() {
+        let banded = self.ladder_check(form, coef, sigma2_bar);
+        if banded.1 || !self.dense_fallback() || self.prefers_dense(coef) {
             banded
         } else {
             // The banded check proves only wider margins (walls_check
@@ -292,10 +294,22 @@ impl<'g> Mode<'g> {
     }
 
     /// [`dense_check_preferred`] for this mode's grid and the noise fields
-    /// of `coef` that are not constant (those the banded check lifts).
+    /// of `coef` that are not constant ([`Coefficients::varying_noise`]).
     pub fn prefers_dense(&self, coef: &Coefficients) -> bool {
-        let fields = coef.eta.iter().filter(|e| e.iter().any(|x| *x != e[0])).count();
-        dense_check_preferred(self.grid.boundary(), self.grid.n(), fields)
+        dense_check_preferred(self.grid.boundary(), self.grid.n(), coef.varying_noise().count())
+    }
+
+    /// The one check the margin ladder climbs for this mode
+    /// ([`crate::analysis::verified_mode_bound`], the narrowing of the
+    /// overall bound, [`Mode::verify`]): the dense one where
+    /// [`Mode::prefers_dense`], the banded one of [`crate::walls_check`]
+    /// otherwise.
+    pub fn ladder_check(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
+        if self.prefers_dense(coef) {
+            self.verify_dense(form, coef, sigma2_bar)
+        } else {
+            crate::walls_check::verify_walls(self.grid, self.k, form, coef, sigma2_bar)
+        }
     }
 
     /// The dense check at this grid: `V ≻ 0` and `sigma2_bar V - Q ≻ 0`,

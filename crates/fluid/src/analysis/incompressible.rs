@@ -178,11 +178,7 @@ pub(super) fn analyse_normalised(
     let dense_only = Mode::new(&fine, ks[0].1).prefers_dense(&coef);
     let narrowest = if dense_only { 0 } else { first_rung(fine.n()) };
     tighten_overall_bound(&mut modes, &ritz, narrowest, progress, |i, bar| {
-        if dense_only {
-            Mode::new(&fine, ks[i].1).verify_dense(&form, &coef, bar).1
-        } else {
-            crate::walls_check::verify_walls(&fine, ks[i].1, &form, &coef, bar).1
-        }
+        Mode::new(&fine, ks[i].1).ladder_check(&form, &coef, bar).1
     });
     prove_remaining_modes(&mut modes, progress, |k, bar| Mode::new(&fine, k).verify(&form, &coef, bar).1);
     let sigma2 = modes.iter().map(|r| r.sigma2).fold(0.0, f64::max);

@@ -525,16 +525,12 @@ pub fn verified_mode_bound(
     sigma2: f64,
     ritz: &crate::lanczos::Ritz,
 ) -> (Option<f64>, bool) {
-    let grid = mode.grid();
-    if mode.prefers_dense(coef) {
-        // many noise fields on a coarse walls grid: the dense check alone,
-        // from the narrowest rung (`crate::modes::dense_check_preferred`)
-        return verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar));
-    }
-    let banded = verified_upper(sigma2, ritz, VERIFY_ATTEMPTS - 1, |bar| {
-        crate::walls_check::verify_walls(grid, mode.k(), form, coef, bar)
-    });
-    if banded.0.is_some() || !mode.dense_fallback() {
+    // many noise fields on a coarse walls grid: the dense check alone,
+    // from the narrowest rung (`crate::modes::dense_check_preferred`)
+    let dense_only = mode.prefers_dense(coef);
+    let first = if dense_only { 0 } else { VERIFY_ATTEMPTS - 1 };
+    let banded = verified_upper(sigma2, ritz, first, |bar| mode.ladder_check(form, coef, bar));
+    if banded.0.is_some() || dense_only || !mode.dense_fallback() {
         return banded;
     }
     let dense = verified_upper(sigma2, ritz, 0, |bar| mode.verify_dense(form, coef, bar));
@@ -629,18 +625,24 @@ pub const CHECK_MEMORY_BUDGET: f64 = 4_294_967_296.0;
 /// given). With two or three noise fields this never binds (4.7 MB a copy
 /// at `ny = 4096`); with 28 at `ny = 4096` (265 MB a copy, the most the
 /// spec layer accepts) it allows two, so a machine with many cores runs
-/// such a spec in about 3 GiB instead of 1.6 GB a core. The compressible
-/// model runs the incompressible analysis first, so it counts the same.
+/// such a spec in about 3 GiB instead of 1.6 GB a core. Where the dense
+/// check runs instead (`crate::modes::dense_check_preferred`) nothing
+/// binds. The compressible model runs the incompressible analysis first,
+/// so it counts the same.
 pub fn check_threads(problem: &FluidProblem) -> usize {
     let boundary = problem.profile.boundary;
-    let (rows, width) = crate::walls_check::lifted_size(
-        crate::grid::unknowns(boundary, problem.ny),
-        crate::grid::stiffness_bandwidth(boundary),
-        problem.profile.eta.len(),
-    );
+    let (n, fields) = (crate::grid::unknowns(boundary, problem.ny), problem.profile.eta.len());
+    if crate::modes::dense_check_preferred(boundary, n, fields) {
+        // no banded check runs (the dense one holds a few n x n matrices)
+        return CHECK_THREADS_MAX;
+    }
+    let (rows, width) = crate::walls_check::lifted_size(n, crate::grid::stiffness_bandwidth(boundary), fields);
     let per_mode = 6.0 * 8.0 * rows as f64 * (width + 1) as f64;
-    (CHECK_MEMORY_BUDGET / per_mode).floor().clamp(1.0, 4096.0) as usize
+    (CHECK_MEMORY_BUDGET / per_mode).floor().clamp(1.0, CHECK_THREADS_MAX as f64) as usize
 }
+
+/// [`check_threads`] when nothing binds.
+const CHECK_THREADS_MAX: usize = 4096;
 
 /// The steps [`analyse_with`] plans: one per x-mode solve (the paper's
 /// choice, the eight shifts, the finest grid, two per row of the
@@ -693,6 +695,32 @@ mod tests {
 
     fn mode(m: usize, sigma2: f64, upper: Option<f64>, form_verified: bool) -> ModeResult {
         ModeResult { m, k: m as f64, sigma2, sigma2_upper: upper, form_verified, iterations: 1 }
+    }
+
+    #[test]
+    fn the_modes_at_once_keep_their_checks_within_the_budget() {
+        // check_threads = floor(4 GiB / (6 * 8 * rows * (bandwidth + 1))),
+        // rows and bandwidth from walls_check::lifted_size (walls: p = 8).
+        // J = 2 at ny = 4096: 4095 * 4 rows, bandwidth 35: 2^32 / (48 *
+        // 16380 * 36) = 151.7. J = 28: 4095 * 30 rows, bandwidth 269:
+        // 2^32 / (48 * 122850 * 270) = 2.70. J = 64 at ny = 1024: the dense
+        // check runs instead (modes::dense_check_preferred), nothing binds.
+        let p = |s: &str| crate::expr::parse(s, &Default::default()).unwrap();
+        let problem = |ny: usize, fields: usize| FluidProblem {
+            model: FluidModel::Incompressible,
+            profile: Profile::new(
+                p("y^3"),
+                (1..=fields).map(|j| p(&format!("sin({j}*y)"))).collect(),
+                (-1.0, 1.0),
+                Boundary::Walls,
+            ),
+            x_period: 6.0,
+            ny,
+            x_modes: 4,
+        };
+        assert_eq!(check_threads(&problem(4096, 2)), 151);
+        assert_eq!(check_threads(&problem(4096, 28)), 2);
+        assert_eq!(check_threads(&problem(1024, 64)), CHECK_THREADS_MAX);
     }
 
     #[test]
