@@ -259,32 +259,152 @@ fn a_box_from_i2_equal_i1_upwards_is_partly_unstable() {
     assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Inconclusive);
 }
 
-/// An equilibrium that holds only at one parameter value: the box is
-/// `not_an_equilibrium` with a witness where the residual is not zero;
-/// noise that moves it: `noise_incompatible`.
+/// The closed sub-box `sub` (one parameter) as `(lo, hi)`.
+fn side(sub: &Value) -> (f64, f64) {
+    (q(sub["lo"][0].as_str().unwrap()), q(sub["hi"][0].as_str().unwrap()))
+}
+
+/// A residual that vanishes at one parameter of the box: the verdict is
+/// about part of the box, never stated for all of it from one witness (a
+/// box certificate once said `not_an_equilibrium (for every parameter in
+/// the box)` for `mu_e = (1, I2 - 2, 0)` on `I2` in [3/2, 5/2], where
+/// `I2 = 2`, the spec's own value, is a stable equilibrium). The residual
+/// `Pi x Omega` at `(1, I2 - 2, 0)` has third component
+/// `(I2 - 2) (1/I1 - 1/I2)`, zero only at `I2 = 2` in the box (I1 = 3):
+/// every sub-box proved is off `I2 = 2`, every undecided one touches it.
 #[test]
-fn witnesses_for_a_failing_equilibrium_and_noise() {
+fn a_box_verdict_is_never_stated_for_the_whole_box_from_one_witness() {
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["equilibrium"] = json!([1, "I2-2", 0]);
+    v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    let cert = certify(v.clone());
+    assert_eq!(cert["verdict"], "partly_not_an_equilibrium", "{}", cert["reason"]);
+    let reason = cert["reason"].as_str().unwrap();
+    assert!(reason.contains("nothing is claimed there") && !reason.contains("every parameter in the box"), "{reason}");
+    let (mut proved, mut open) = (0, 0);
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        let (lo, hi) = side(sub);
+        match sub["verdict"].as_str().unwrap() {
+            "not_an_equilibrium" => {
+                assert!(lo > 2.0 || hi < 2.0, "proved across I2 = 2: {sub}");
+                proved += 1;
+            }
+            "undecided" => {
+                assert!(lo <= 2.0 && 2.0 <= hi, "undecided away from I2 = 2: {sub}");
+                open += 1;
+            }
+            other => panic!("{other}: {sub}"),
+        }
+    }
+    // depth 12 by default: the two sub-boxes touching I2 = 2 are 2^-12 of
+    // the box each
+    assert_eq!((open, cert["undecided_fraction"].as_f64().unwrap()), (2, 2.0 / 4096.0));
+    assert_eq!(cert["excluded_fraction"].as_f64().unwrap(), 1.0 - 2.0 / 4096.0);
+    assert_eq!(cert["limit"], "max_depth");
+    assert!(proved > 0);
+    // check names nothing for the spec's own point, which is stable
+    assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Inconclusive);
+    let own = spec::certify(&spec::spec_from_value(fixture("rigid-body-major-axis.json")).unwrap());
+    let mut at_own = v.clone();
+    at_own.as_object_mut().unwrap().remove("box");
+    assert_eq!(spec::certify(&spec::spec_from_value(at_own).unwrap()).analysis.verdict, own.analysis.verdict);
+    // forged: the whole box called not an equilibrium; an undecided
+    // sub-box (it holds I2 = 2) called proved; the reason replaced
+    let mut forged = cert.clone();
+    forged["verdict"] = json!("not_an_equilibrium");
+    assert!(spec::check_certificate_value(&forged).is_err());
+    let mut forged = cert.clone();
+    let k = cert["sub_boxes"].as_array().unwrap().iter().position(|s| s["verdict"] == "undecided").unwrap();
+    forged["sub_boxes"][k]["verdict"] = json!("not_an_equilibrium");
+    forged["sub_boxes"][k]["reason"] = cert["sub_boxes"][0]["reason"].clone();
+    assert!(spec::check_certificate_value(&forged).is_err());
+    let mut forged = cert.clone();
+    forged["reason"] = json!(
+        "ad*_{Dh(mu_e)} mu_e is proved nonzero on every sub-box: mu_e is an equilibrium for no parameter in the box"
+    );
+    assert!(spec::check_certificate_value(&forged).is_err());
+
+    // The same residual on a box that misses its zeros I2 = 2 and I2 = I1
+    // = 3: not an equilibrium for every parameter, and the spec's own
+    // point agrees.
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["equilibrium"] = json!([1, "I2-2", 0]);
+    v["parameters"]["I2"] = json!("5/2");
+    v["box"] = json!({"parameters": {"I2": ["9/4", "11/4"]}});
+    let cert = certify(v.clone());
+    assert_eq!(cert["verdict"], "not_an_equilibrium", "{}", cert["reason"]);
+    assert_eq!(cert["excluded_fraction"], 1.0);
+    assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::NotAnEquilibrium);
+    v.as_object_mut().unwrap().remove("box");
+    assert_eq!(spec::certify(&spec::spec_from_value(v).unwrap()).analysis.verdict, spec::Verdict::NotAnEquilibrium);
+
+    // Noise (sigma, I2 - 2, 0) keeps (1, 0, 0) only at I2 = 2.
+    let mut v = fixture("rigid-body-major-axis.json");
+    v["noise"] = json!([["sigma", "I2-2", 0]]);
+    v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    let cert = certify(v);
+    assert_eq!(cert["verdict"], "partly_noise_incompatible", "{}", cert["reason"]);
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        let (lo, hi) = side(sub);
+        assert_eq!(sub["verdict"] == "undecided", lo <= 2.0 && 2.0 <= hi, "{sub}");
+    }
+    assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Inconclusive);
+    let mut forged = cert.clone();
+    forged["verdict"] = json!("noise_incompatible");
+    assert!(spec::check_certificate_value(&forged).is_err());
+
+    // A zero at a corner of the box (e = 0 in [0, 1/10]).
     let mut v = fixture("rigid-body-major-axis.json");
     v["parameters"]["e"] = json!(0);
     v["equilibrium"] = json!([1, "e", 0]);
     v["box"] = json!({"parameters": {"e": ["0", "1/10"]}});
     let cert = certify(v);
-    assert_eq!(cert["verdict"], "not_an_equilibrium", "{}", cert["reason"]);
-    assert_eq!(cert["witness"], json!(["1/20"]));
+    assert_eq!(cert["verdict"], "partly_not_an_equilibrium", "{}", cert["reason"]);
+    assert_eq!(cert["undecided_fraction"].as_f64().unwrap(), 1.0 / 4096.0);
     assert!(spec::check_certificate_value(&cert).is_ok());
-    let mut forged = cert.clone();
-    forged["witness"] = json!(["0"]); // an equilibrium there
-    assert!(spec::check_certificate_value(&forged).is_err());
+}
 
-    let mut v = fixture("rigid-body-major-axis.json");
-    v["parameters"]["s"] = json!(0);
-    v["noise"] = json!([["sigma", "s", 0]]);
-    v["box"] = json!({"parameters": {"s": ["-1/10", "1/10"]}});
-    let cert = certify(v);
-    // the centre s = 0 is compatible: the witness is a corner
-    assert_eq!(cert["verdict"], "noise_incompatible", "{}", cert["reason"]);
-    assert_eq!(cert["witness"], json!(["-1/10"]));
-    assert!(spec::check_certificate_value(&cert).is_ok());
+/// What `check` reports under the spec's name holds for the spec itself:
+/// for every box certificate here whose verdict covers the whole box, the
+/// pointwise pipeline at the spec's own values (a point of the box) gives
+/// the same verdict, and a stable one a `Sigma^2` within the box's bound.
+#[test]
+fn what_check_reports_under_the_spec_name_holds_for_the_spec_itself() {
+    let mut certs: Vec<Value> =
+        ["rigid-body-inertia-box", "lagrange-top-fluctuating-gravity-box", "lagrange-top-stability-map"]
+            .iter()
+            .map(|n| fixture(&format!("boxes/{n}.cert.json")))
+            .collect();
+    let mut intermediate = fixture("rigid-body-intermediate-axis.json");
+    intermediate["box"] = json!({"parameters": {"I2": ["5/2", "7/2"]}});
+    certs.push(certify(intermediate));
+    let mut nowhere = fixture("rigid-body-major-axis.json");
+    nowhere["equilibrium"] = json!([1, 1, 0]);
+    nowhere["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    certs.push(certify(nowhere));
+    let mut moved = fixture("rigid-body-major-axis.json");
+    moved["noise"] = json!([["sigma", "I2", 0]]);
+    moved["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
+    certs.push(certify(moved));
+    let mut seen = std::collections::BTreeSet::new();
+    for cert in &certs {
+        let report = spec::check_certificate_value(cert).unwrap();
+        let mut own = cert["spec"].clone();
+        own.as_object_mut().unwrap().remove("box");
+        let point = spec::certify(&spec::spec_from_value(own).unwrap());
+        seen.insert(format!("{:?}", report.verdict));
+        if report.verdict == spec::Verdict::Inconclusive {
+            continue;
+        }
+        assert_eq!(point.analysis.verdict, report.verdict, "{}", cert["name"]);
+        if let Some(s) = report.sigma2 {
+            assert!(point.analysis.sigma2().unwrap() <= s, "{}", cert["name"]);
+        }
+    }
+    // every whole-box verdict was tried
+    for v in ["Stable", "LinearlyUnstable", "NotAnEquilibrium", "NoiseIncompatible", "Inconclusive"] {
+        assert!(seen.contains(v), "{v} not tried: {seen:?}");
+    }
 }
 
 /// A Casimir that is one only at the spec's value of a box parameter: the
@@ -366,8 +486,8 @@ fn bad_box_input_names_the_field() {
 
 /// The review's cases: the spec's own value must lie in its box (the CLI
 /// moves it to the centre); a divisor that cancels (`q/q`) still makes the
-/// system undefined where it vanishes; a witness is never where the system
-/// is undefined; a refused system's `undecided` certificate checks; at most
+/// system undefined where it vanishes; a sub-box is never proved where
+/// the system is undefined; a refused system's `undecided` certificate checks; at most
 /// 8 box parameters.
 #[test]
 fn a_box_is_about_its_spec_and_never_where_it_is_undefined() {
@@ -410,10 +530,17 @@ fn a_box_is_about_its_spec_and_never_where_it_is_undefined() {
     v["parameters"]["I2"] = json!("9/4");
     v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
     let cert = certify(v);
-    assert_eq!(cert["verdict"], "not_an_equilibrium");
-    assert_ne!(cert["witness"], json!(["2"]));
+    assert_eq!(cert["verdict"], "partly_not_an_equilibrium", "{}", cert["reason"]);
+    for sub in cert["sub_boxes"].as_array().unwrap() {
+        let (lo, hi) = side(sub);
+        assert_eq!(sub["verdict"] == "undecided", lo <= 2.0 && 2.0 <= hi, "{sub}");
+    }
+    assert!(spec::check_certificate_value(&cert).is_ok());
+    // a sub-box across I2 = 2, where the system is undefined, called proved
     let mut forged = cert.clone();
-    forged["witness"] = json!(["2"]);
+    let k = cert["sub_boxes"].as_array().unwrap().iter().position(|s| s["verdict"] == "undecided").unwrap();
+    forged["sub_boxes"][k]["verdict"] = json!("not_an_equilibrium");
+    forged["sub_boxes"][k]["reason"] = cert["sub_boxes"][0]["reason"].clone();
     assert!(spec::check_certificate_value(&forged).is_err());
 
     // a refused system: undecided, and that certificate checks

@@ -59,6 +59,21 @@ pub enum LeafOutcome {
         /// Which sign condition proves it.
         criterion: String,
     },
+    /// `ad*_{Dh(mu_e)} mu_e` has a component of one strict sign on the
+    /// whole sub-box ([`prove_excluded`]): `mu_e` is an equilibrium for no
+    /// parameter in it.
+    NotAnEquilibrium {
+        /// Which component, and its sign.
+        criterion: String,
+    },
+    /// `mu_e` is an equilibrium for every parameter, and some
+    /// `ad*_{sigma_i} mu_e` has a component of one strict sign on the whole
+    /// sub-box ([`prove_excluded`]): the noise moves `mu_e` at every
+    /// parameter in it.
+    NoiseIncompatible {
+        /// Which field and component, and its sign.
+        criterion: String,
+    },
     /// Nothing is claimed.
     Undecided {
         /// Why.
@@ -93,10 +108,17 @@ pub enum BoxVerdict {
     PartlyUnstable,
     /// Nothing is proved on any sub-box.
     Undecided,
-    /// `mu_e` is not an equilibrium at the witness point.
+    /// `mu_e` is proved not an equilibrium on every sub-box: for no
+    /// parameter in the box.
     NotAnEquilibrium,
-    /// The noise moves `mu_e` at the witness point.
+    /// Some sub-boxes are proved not to hold an equilibrium, the others
+    /// are undecided (they contain the parameters where `mu_e` may be one).
+    PartlyNotAnEquilibrium,
+    /// `mu_e` is an equilibrium for every parameter and the noise is
+    /// proved to move it on every sub-box.
     NoiseIncompatible,
+    /// Some sub-boxes are proved noise-incompatible, the others undecided.
+    PartlyNoiseIncompatible,
 }
 
 impl BoxVerdict {
@@ -109,7 +131,40 @@ impl BoxVerdict {
             BoxVerdict::PartlyUnstable => "partly_unstable",
             BoxVerdict::Undecided => "undecided",
             BoxVerdict::NotAnEquilibrium => "not_an_equilibrium",
+            BoxVerdict::PartlyNotAnEquilibrium => "partly_not_an_equilibrium",
             BoxVerdict::NoiseIncompatible => "noise_incompatible",
+            BoxVerdict::PartlyNoiseIncompatible => "partly_noise_incompatible",
+        }
+    }
+
+    /// Every verdict, for parsing and tests.
+    pub const ALL: [BoxVerdict; 9] = [
+        BoxVerdict::Stable,
+        BoxVerdict::PartlyStable,
+        BoxVerdict::LinearlyUnstable,
+        BoxVerdict::PartlyUnstable,
+        BoxVerdict::Undecided,
+        BoxVerdict::NotAnEquilibrium,
+        BoxVerdict::PartlyNotAnEquilibrium,
+        BoxVerdict::NoiseIncompatible,
+        BoxVerdict::PartlyNoiseIncompatible,
+    ];
+
+    /// The verdict named `name` in a certificate.
+    pub fn parse(name: &str) -> Option<BoxVerdict> {
+        BoxVerdict::ALL.into_iter().find(|v| v.as_str() == name)
+    }
+
+    /// What the verdict claims of the spec's own parameter point (which
+    /// lies in the box): the pointwise verdict it implies, or `None` when
+    /// it implies none (only part of the box is proved).
+    pub fn at_every_point(self) -> Option<Verdict> {
+        match self {
+            BoxVerdict::Stable => Some(Verdict::Stable),
+            BoxVerdict::LinearlyUnstable => Some(Verdict::LinearlyUnstable),
+            BoxVerdict::NotAnEquilibrium => Some(Verdict::NotAnEquilibrium),
+            BoxVerdict::NoiseIncompatible => Some(Verdict::NoiseIncompatible),
+            _ => None,
         }
     }
 }
@@ -121,10 +176,8 @@ pub struct BoxReport {
     pub verdict: BoxVerdict,
     /// One sentence.
     pub reason: String,
-    /// The partition (empty for the two verdicts with a witness).
+    /// The partition (empty only when the system is refused).
     pub leaves: Vec<Leaf>,
-    /// Where the equilibrium or the noise fails.
-    pub witness: Option<Vec<Rational>>,
     /// Which bound stopped the bisection, if one did.
     pub limit: Option<&'static str>,
 }
@@ -155,6 +208,30 @@ impl BoxReport {
             .iter()
             .filter(|l| matches!(l.outcome, LeafOutcome::LinearlyUnstable { .. }))
             .fold(Rational::zero(), |acc, l| acc + l.range.volume())
+    }
+
+    /// The volume of the sub-boxes proved not to hold an equilibrium or
+    /// proved noise-incompatible.
+    pub fn excluded_volume(&self) -> Rational {
+        self.leaves.iter().filter(|l| l.outcome.is_excluded()).fold(Rational::zero(), |acc, l| acc + l.range.volume())
+    }
+}
+
+impl LeafOutcome {
+    /// Proved not an equilibrium or noise-incompatible.
+    pub fn is_excluded(&self) -> bool {
+        matches!(self, LeafOutcome::NotAnEquilibrium { .. } | LeafOutcome::NoiseIncompatible { .. })
+    }
+
+    /// The certificate's name for the sub-box's verdict.
+    pub fn verdict_name(&self) -> &'static str {
+        match self {
+            LeafOutcome::Stable { .. } => "stable",
+            LeafOutcome::LinearlyUnstable { .. } => "linearly_unstable",
+            LeafOutcome::NotAnEquilibrium { .. } => "not_an_equilibrium",
+            LeafOutcome::NoiseIncompatible { .. } => "noise_incompatible",
+            LeafOutcome::Undecided { .. } => "undecided",
+        }
     }
 }
 
@@ -383,32 +460,6 @@ pub fn sampled_bound(
     Some((s, best.0.max(0.0), best.1))
 }
 
-/// Look for a point where `residual` is defined and not zero: the
-/// centre, the corners, then a 5-point grid per parameter.
-fn witness(sym: &Symbolic, residual: &[Frac], range: &ParamBox) -> Option<Vec<Rational>> {
-    let n = sym.dim();
-    let mut points = vec![range.centre()];
-    points.extend(range.corners());
-    let p = range.dim();
-    let steps = 5usize;
-    let total = steps.checked_pow(p as u32).unwrap_or(usize::MAX).min(4096);
-    for flat in 0..total {
-        let mut rest = flat;
-        let point = (0..p)
-            .map(|i| {
-                let k = rest % steps;
-                rest /= steps;
-                let t = Rational::new(((2 * k + 1) as i64).into(), ((2 * steps) as i64).into());
-                &range.lo[i] + t * (&range.hi[i] - &range.lo[i])
-            })
-            .collect();
-        points.push(point);
-    }
-    points
-        .into_iter()
-        .find(|x| defined_at(sym, x) && residual.iter().any(|r| value_at(r, n, x).is_some_and(|v| !v.is_zero())))
-}
-
 /// Whether the system is defined at `x`: no input denominator or divisor
 /// vanishes there.
 pub fn defined_at(sym: &Symbolic, x: &[Rational]) -> bool {
@@ -418,43 +469,76 @@ pub fn defined_at(sym: &Symbolic, x: &[Rational]) -> bool {
     sym.input_denominators().iter().all(|(f, _)| !f.eval(&point).is_zero())
 }
 
-/// Certify the box: the equilibrium and the noise for every parameter,
-/// then bisection until every sub-box is proved stable or undecided at the
-/// depth or box limit.
-pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings) -> Result<BoxReport, BoxSystemError> {
-    let sym = system.symbolic()?;
+fn sign_name(s: Sign) -> &'static str {
+    if s == Sign::Positive {
+        "positive"
+    } else {
+        "negative"
+    }
+}
+
+/// Prove, exactly, that for every parameter in `range` the equilibrium
+/// fails or (when `mu_e` is an equilibrium for every parameter) the noise
+/// moves it: the system is defined on the whole sub-box (every input
+/// denominator keeps one strict sign), and one component of
+/// `ad*_{Dh(mu_e)} mu_e` (or of some `ad*_{sigma_i} mu_e`) keeps one strict
+/// sign there, by the Bernstein coefficients of its numerator and
+/// denominator factors. `None`: not proved (or the residuals vanish
+/// identically). A residual that is not identically zero vanishes only on
+/// a set of measure zero, so bisection proves this on all of the box but
+/// a neighbourhood of that set, which stays undecided.
+pub fn prove_excluded(sym: &Symbolic, range: &ParamBox) -> Option<LeafOutcome> {
+    let n = sym.dim();
+    for (f, _) in sym.input_denominators() {
+        sign_on_box(f, n, range)?;
+    }
     if !sym.equilibrium_holds() {
-        let w = witness(&sym, &sym.equilibrium_residual, range);
-        return Ok(match w {
-            Some(w) => BoxReport {
-                verdict: BoxVerdict::NotAnEquilibrium,
-                reason: "ad*_{Dh(mu_e)} mu_e is not zero at the witness point: mu_e is not an equilibrium there".into(),
-                leaves: vec![],
-                witness: Some(w),
-                limit: None,
-            },
-            None => BoxReport {
-                verdict: BoxVerdict::Undecided,
-                reason: "ad*_{Dh(mu_e)} mu_e is not identically zero on the box, and no sampled point shows where"
-                    .into(),
-                leaves: vec![],
-                witness: None,
-                limit: None,
-            },
+        return sym.equilibrium_residual.iter().enumerate().find_map(|(k, r)| {
+            let s = frac_sign(r, n, range).filter(|_| !r.is_zero())?;
+            Some(LeafOutcome::NotAnEquilibrium {
+                criterion: format!(
+                    "component {k} of ad*_{{Dh(mu_e)}} mu_e is {} on the whole sub-box (Bernstein coefficients): mu_e is an equilibrium for no parameter in it",
+                    sign_name(s)
+                ),
+            })
         });
     }
-    let bad = sym.incompatible_noise();
-    if let Some(&i) = bad.first() {
-        if let Some(w) = witness(&sym, &sym.noise_residuals[i], range) {
-            return Ok(BoxReport {
-                verdict: BoxVerdict::NoiseIncompatible,
-                reason: format!("ad*_sigma mu_e is not zero for noise field {i} at the witness point"),
-                leaves: vec![],
-                witness: Some(w),
-                limit: None,
-            });
-        }
-    }
+    sym.incompatible_noise().into_iter().find_map(|i| {
+        sym.noise_residuals[i].iter().enumerate().find_map(|(k, r)| {
+            let s = frac_sign(r, n, range).filter(|_| !r.is_zero())?;
+            Some(LeafOutcome::NoiseIncompatible {
+                criterion: format!(
+                    "component {k} of ad*_sigma mu_e for noise field {i} is {} on the whole sub-box (Bernstein coefficients): the noise moves mu_e at every parameter in it",
+                    sign_name(s)
+                ),
+            })
+        })
+    })
+}
+
+/// Why a sub-box is undecided: the budget of sub-boxes was spent first.
+pub const BUDGET_SPENT: &str = "the box budget was spent before this sub-box";
+/// Why a sub-box is undecided: not proved at `max_depth`.
+pub const LARGEST_DEPTH: &str = "not proved at the largest depth";
+/// Why a sub-box is undecided when `mu_e` is not an equilibrium for every
+/// parameter: the residual is not proved nonzero on it at `max_depth`.
+pub const EQUILIBRIUM_UNRESOLVED: &str = "ad*_{Dh(mu_e)} mu_e is not proved nonzero on this sub-box at the largest depth: mu_e may be an equilibrium at some of its parameters (or the system is undefined at some), and nothing is claimed here";
+/// The same for noise that moves `mu_e` for some parameters.
+pub const NOISE_UNRESOLVED: &str = "no ad*_sigma mu_e is proved nonzero on this sub-box at the largest depth: the noise may keep mu_e at some of its parameters (or the system is undefined at some), and nothing is claimed here";
+
+/// Certify the box: bisection until every sub-box is proved (stable,
+/// linearly unstable, or, when the equilibrium or the noise fails for some
+/// parameters, not an equilibrium or noise-incompatible) or left undecided
+/// at the depth or box limit.
+pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings) -> Result<BoxReport, BoxSystemError> {
+    let sym = system.symbolic()?;
+    // When mu_e is not an equilibrium (or the noise moves it) for some
+    // parameters, nothing can be stable on a sub-box of positive volume:
+    // the residual vanishes at most on a set of measure zero. The sub-boxes
+    // are then proved to exclude the equilibrium (or the noise), and the
+    // ones around the residual's zero set stay undecided.
+    let excluded = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
+    let unresolved = if sym.equilibrium_holds() { NOISE_UNRESOLVED } else { EQUILIBRIUM_UNRESOLVED };
     let charpoly = std::cell::OnceCell::new();
     let mut queue = std::collections::VecDeque::from([(range.clone(), 0u32)]);
     let mut leaves = Vec::new();
@@ -464,68 +548,75 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
     while let Some((b, depth)) = queue.pop_front() {
         if analysed >= settings.max_boxes {
             limit = Some("max_boxes");
-            leaves.push(Leaf {
-                range: b,
-                depth,
-                outcome: undecided("the box budget was spent before this sub-box", None),
-            });
+            leaves.push(Leaf { range: b, depth, outcome: undecided(BUDGET_SPENT, None) });
             continue;
         }
         analysed += 1;
-        let centre = b.centre();
-        let analysis = analyse_at(system, &centre);
-        let centre_verdict = analysis.as_ref().map(|(_, a)| a.verdict);
-        let proved = analysis.as_ref().and_then(|(_, a)| prove_stable(&sym, a, &b, &settings.margin));
-        if let Some(outcome) = proved {
-            leaves.push(Leaf { range: b, depth, outcome });
-            continue;
-        }
-        if centre_verdict == Some(Verdict::LinearlyUnstable) {
-            if let Some(criterion) = prove_unstable(&sym, charpoly.get_or_init(|| sym.characteristic_polynomial()), &b)
-            {
-                leaves.push(Leaf { range: b, depth, outcome: LeafOutcome::LinearlyUnstable { criterion } });
+        let centre_verdict = if excluded {
+            if let Some(outcome) = prove_excluded(&sym, &b) {
+                leaves.push(Leaf { range: b, depth, outcome });
                 continue;
             }
-        }
-        // A sub-box unstable at its centre and every corner (each proved
-        // pointwise by the exact Sturm test) is not split further: that
-        // saves the bisection of unstable regions down to the largest
-        // depth. Nothing is claimed for it (instability throughout is not
-        // proved), and a stable island inside it would stay undecided.
-        if centre_verdict == Some(Verdict::LinearlyUnstable)
-            && b.corners().iter().all(|c| analyse_at(system, c).is_some_and(|(_, a)| unstable_exactly(&a)))
-            && analysis.as_ref().is_some_and(|(_, a)| unstable_exactly(a))
-        {
-            leaves.push(Leaf { range: b, depth, outcome: undecided(UNSTABLE_CORNERS, centre_verdict) });
-            continue;
-        }
+            None
+        } else {
+            let centre = b.centre();
+            let analysis = analyse_at(system, &centre);
+            let centre_verdict = analysis.as_ref().map(|(_, a)| a.verdict);
+            let proved = analysis.as_ref().and_then(|(_, a)| prove_stable(&sym, a, &b, &settings.margin));
+            if let Some(outcome) = proved {
+                leaves.push(Leaf { range: b, depth, outcome });
+                continue;
+            }
+            if centre_verdict == Some(Verdict::LinearlyUnstable) {
+                if let Some(criterion) =
+                    prove_unstable(&sym, charpoly.get_or_init(|| sym.characteristic_polynomial()), &b)
+                {
+                    leaves.push(Leaf { range: b, depth, outcome: LeafOutcome::LinearlyUnstable { criterion } });
+                    continue;
+                }
+            }
+            // A sub-box unstable at its centre and every corner (each proved
+            // pointwise by the exact Sturm test) is not split further: that
+            // saves the bisection of unstable regions down to the largest
+            // depth. Nothing is claimed for it (instability throughout is not
+            // proved), and a stable island inside it would stay undecided.
+            if centre_verdict == Some(Verdict::LinearlyUnstable) && unstable_at_centre_and_corners(system, &b) {
+                leaves.push(Leaf { range: b, depth, outcome: undecided(UNSTABLE_CORNERS, centre_verdict) });
+                continue;
+            }
+            centre_verdict
+        };
         if depth >= settings.max_depth {
             limit.get_or_insert("max_depth");
-            leaves.push(Leaf {
-                range: b,
-                depth,
-                outcome: undecided("not proved at the largest depth", centre_verdict),
-            });
+            let reason = if excluded { unresolved } else { LARGEST_DEPTH };
+            leaves.push(Leaf { range: b, depth, outcome: undecided(reason, centre_verdict) });
             continue;
         }
-        // Bisect the side widest relative to the whole box's.
-        let i = (0..b.dim()).filter(|&i| !width[i].is_zero()).max_by(|&x, &y| {
-            ((&b.hi[x] - &b.lo[x]) / &width[x]).cmp(&((&b.hi[y] - &b.lo[y]) / &width[y])).then(y.cmp(&x))
-        });
-        match i {
-            Some(i) => {
-                let (lo, hi) = b.split(i);
-                queue.push_back((lo, depth + 1));
-                queue.push_back((hi, depth + 1));
-            }
-            None => {
-                leaves.push(Leaf { range: b, depth, outcome: undecided("not proved at this point", centre_verdict) })
-            }
-        }
+        // Bisect the side widest relative to the whole box's (every side
+        // has positive width: LO < HI).
+        let i = (0..b.dim())
+            .max_by(|&x, &y| {
+                ((&b.hi[x] - &b.lo[x]) / &width[x]).cmp(&((&b.hi[y] - &b.lo[y]) / &width[y])).then(y.cmp(&x))
+            })
+            .unwrap_or(0);
+        let (lo, hi) = b.split(i);
+        queue.push_back((lo, depth + 1));
+        queue.push_back((hi, depth + 1));
     }
-    tighten(system, &sym, range, &mut leaves, &mut analysed, settings);
-    let (verdict, reason) = verdict_of(&leaves);
-    Ok(BoxReport { verdict, reason, leaves, witness: None, limit })
+    if !excluded {
+        tighten(system, &sym, range, &mut leaves, &mut analysed, settings);
+    }
+    let (verdict, reason) = verdict_of(&LeafCounts::of(&leaves));
+    Ok(BoxReport { verdict, reason, leaves, limit })
+}
+
+/// Whether the pipeline proves `A` unstable (exact Sturm test) at the
+/// sub-box's centre and at every corner: such a sub-box is left whole
+/// ([`UNSTABLE_CORNERS`]).
+pub fn unstable_at_centre_and_corners(system: &BoxSystem, b: &ParamBox) -> bool {
+    std::iter::once(b.centre())
+        .chain(b.corners())
+        .all(|p| analyse_at(system, &p).is_some_and(|(_, a)| unstable_exactly(&a)))
 }
 
 /// The stable outcome on sub-box `b` from the pipeline's analysis at its
@@ -599,28 +690,99 @@ fn tighten(
     }
 }
 
-/// The whole box's verdict from its sub-boxes', and the sentence.
-pub fn verdict_of(leaves: &[Leaf]) -> (BoxVerdict, String) {
-    let total = leaves.len();
-    let stable = leaves.iter().filter(|l| matches!(l.outcome, LeafOutcome::Stable { .. })).count();
-    let unstable = leaves.iter().filter(|l| matches!(l.outcome, LeafOutcome::LinearlyUnstable { .. })).count();
-    let undecided = total - stable - unstable;
-    let counts =
-        format!("{stable} of {total} sub-boxes are proved stable, {unstable} linearly unstable, {undecided} undecided");
-    if total > 0 && stable == total {
+/// How many sub-boxes have each outcome.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LeafCounts {
+    /// Proved stable.
+    pub stable: usize,
+    /// Proved linearly unstable.
+    pub unstable: usize,
+    /// Proved not an equilibrium.
+    pub not_equilibrium: usize,
+    /// Proved noise-incompatible.
+    pub noise_incompatible: usize,
+    /// Undecided.
+    pub undecided: usize,
+}
+
+impl LeafCounts {
+    /// The counts of a partition.
+    pub fn of(leaves: &[Leaf]) -> LeafCounts {
+        let mut c = LeafCounts::default();
+        for l in leaves {
+            c.add(&l.outcome);
+        }
+        c
+    }
+
+    /// Count one more sub-box.
+    pub fn add(&mut self, outcome: &LeafOutcome) {
+        match outcome {
+            LeafOutcome::Stable { .. } => self.stable += 1,
+            LeafOutcome::LinearlyUnstable { .. } => self.unstable += 1,
+            LeafOutcome::NotAnEquilibrium { .. } => self.not_equilibrium += 1,
+            LeafOutcome::NoiseIncompatible { .. } => self.noise_incompatible += 1,
+            LeafOutcome::Undecided { .. } => self.undecided += 1,
+        }
+    }
+
+    /// All sub-boxes.
+    pub fn total(&self) -> usize {
+        self.stable + self.unstable + self.not_equilibrium + self.noise_incompatible + self.undecided
+    }
+}
+
+/// The whole box's verdict from its sub-boxes' counts, and the sentence
+/// (`check` derives both again from the sub-boxes it re-proves).
+pub fn verdict_of(c: &LeafCounts) -> (BoxVerdict, String) {
+    let total = c.total();
+    let of = |k: usize| format!("{k} of {total} sub-boxes");
+    if total > 0 && c.stable == total {
         (BoxVerdict::Stable, "the second variation is definite and Sigma^2 <= S on every sub-box: stable in probability for every parameter in the box".into())
-    } else if total > 0 && unstable == total {
+    } else if total > 0 && c.unstable == total {
         (
             BoxVerdict::LinearlyUnstable,
             "A has an eigenvalue with positive real part for every parameter in the box (proved on every sub-box)"
                 .into(),
         )
-    } else if stable > 0 {
-        (BoxVerdict::PartlyStable, counts)
-    } else if unstable > 0 {
-        (BoxVerdict::PartlyUnstable, counts)
+    } else if total > 0 && c.not_equilibrium == total {
+        (
+            BoxVerdict::NotAnEquilibrium,
+            "ad*_{Dh(mu_e)} mu_e is proved nonzero on every sub-box: mu_e is an equilibrium for no parameter in the box".into(),
+        )
+    } else if total > 0 && c.noise_incompatible == total {
+        (
+            BoxVerdict::NoiseIncompatible,
+            "mu_e is an equilibrium for every parameter, and the noise is proved to move it on every sub-box: for every parameter in the box".into(),
+        )
+    } else if c.not_equilibrium > 0 {
+        (
+            BoxVerdict::PartlyNotAnEquilibrium,
+            format!(
+                "mu_e is proved not an equilibrium on {} (for every parameter in them); the other {} are undecided: they hold the parameters where ad*_{{Dh(mu_e)}} mu_e may vanish, and nothing is claimed there",
+                of(c.not_equilibrium),
+                c.undecided
+            ),
+        )
+    } else if c.noise_incompatible > 0 {
+        (
+            BoxVerdict::PartlyNoiseIncompatible,
+            format!(
+                "the noise is proved to move mu_e on {} (for every parameter in them); the other {} are undecided: they hold the parameters where it may keep mu_e, and nothing is claimed there",
+                of(c.noise_incompatible),
+                c.undecided
+            ),
+        )
     } else {
-        (BoxVerdict::Undecided, "no sub-box is proved stable or unstable".into())
+        let counts =
+            format!("{} are proved stable, {} linearly unstable, {} undecided", of(c.stable), c.unstable, c.undecided);
+        if c.stable > 0 {
+            (BoxVerdict::PartlyStable, counts)
+        } else if c.unstable > 0 {
+            (BoxVerdict::PartlyUnstable, counts)
+        } else {
+            (BoxVerdict::Undecided, "no sub-box is proved stable or unstable".into())
+        }
     }
 }
 

@@ -26,7 +26,10 @@ pub mod parse;
 pub mod symbolic;
 
 pub use bernstein::ParamBox;
-pub use certify::{certify_box, prove_leaf, BoxReport, BoxSettings, BoxVerdict, Leaf, LeafOutcome};
+pub use certify::{
+    certify_box, prove_excluded, prove_leaf, verdict_of, BoxReport, BoxSettings, BoxVerdict, Leaf, LeafCounts,
+    LeafOutcome,
+};
 pub use frac::Frac;
 pub use parse::{parse_box_expression, parse_box_expression_with_divisors, BoxSymbols};
 pub use symbolic::{BoxChoice, BoxSystem, BoxSystemError, Symbolic};

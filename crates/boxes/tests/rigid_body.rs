@@ -84,6 +84,7 @@ fn a_box_across_i2_equal_i1_is_not_stable_whole() {
                 assert!(leaf.range.lo[0] > q(3, 1), "an unstable sub-box reaches I2 <= I1: {:?}", leaf.range)
             }
             LeafOutcome::Undecided { .. } => {}
+            other => panic!("mu_e is an equilibrium and the noise keeps it: {other:?}"),
         }
     }
     // Depth 8 is 4 halvings of each side: the sub-boxes touching I2 = 3

@@ -35,6 +35,9 @@ pub const MAX_BOX_DEPTH: u64 = 40;
 pub const MAX_BOX_COUNT: u64 = 1_000_000;
 /// The start of the reason of a box whose system is refused.
 const REFUSED: &str = "the system is not the same for every parameter in the box";
+/// The start of the reason of a box whose expressions cannot be kept
+/// symbolic in the box parameters (a size limit of the symbolic parser).
+const NOT_SYMBOLIC: &str = "the expressions cannot be kept symbolic in the box parameters";
 
 /// Largest number of box parameters.
 pub const MAX_BOX_PARAMETERS: usize = 8;
@@ -152,7 +155,8 @@ pub struct BoxCertificateDocument {
     /// `stable` (every sub-box), `linearly_unstable` (every sub-box),
     /// `partly_stable` (some stable), `partly_unstable` (none stable, some
     /// unstable), `undecided`, `not_an_equilibrium` or `noise_incompatible`
-    /// (at `witness`).
+    /// (every sub-box), `partly_not_an_equilibrium` or
+    /// `partly_noise_incompatible` (some sub-boxes, the others undecided).
     pub verdict: String,
     /// Why, in a sentence.
     pub reason: String,
@@ -173,12 +177,14 @@ pub struct BoxCertificateDocument {
     pub undecided_fraction: Float,
     /// The share of the sub-boxes proved linearly unstable.
     pub unstable_fraction: Float,
+    /// The share proved not an equilibrium or noise-incompatible (present
+    /// when `mu_e` is not an equilibrium, or the noise moves it, for some
+    /// parameter of the box).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub excluded_fraction: Option<Float>,
     /// Which bound stopped the bisection (`max_depth`, `max_boxes`), if one did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limit: Option<String>,
-    /// A point of the box where the equilibrium or the noise fails.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub witness: Option<Vec<ExactRational>>,
     /// The partition of the box.
     pub sub_boxes: Vec<SubBoxRecord>,
     /// SHA-256 of the embedded spec's compact JSON.
@@ -207,9 +213,10 @@ pub struct SubBoxRecord {
     pub hi: Vec<ExactRational>,
     /// Bisections from the box.
     pub depth: u64,
-    /// `stable`, `linearly_unstable` or `undecided`.
+    /// `stable`, `linearly_unstable`, `not_an_equilibrium`,
+    /// `noise_incompatible` or `undecided`.
     pub verdict: String,
-    /// Why undecided, or what proves linear instability.
+    /// Why undecided, or what proves the sub-box's verdict (not stable).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     /// The pointwise verdict at the centre (undecided sub-boxes).
@@ -274,8 +281,10 @@ fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
             r.sigma2_upper = Some(ExactRational(sigma2_upper.clone()));
             r.sigma2_sampled = Some(Float(*sampled));
         }
-        LeafOutcome::LinearlyUnstable { criterion } => {
-            r.verdict = "linearly_unstable".into();
+        LeafOutcome::LinearlyUnstable { criterion }
+        | LeafOutcome::NotAnEquilibrium { criterion }
+        | LeafOutcome::NoiseIncompatible { criterion } => {
+            r.verdict = leaf.outcome.verdict_name().into();
             r.reason = Some(criterion.clone());
         }
         LeafOutcome::Undecided { reason, centre } => {
@@ -294,8 +303,9 @@ fn fraction(part: &Rational, whole: &Rational) -> f64 {
     exact::rational_to_f64(&(part / whole))
 }
 
-/// The certificate of a report.
-fn document(spec: &Spec, section: &BoxSection, report: &BoxReport) -> BoxCertificateDocument {
+/// The certificate of a report (`excluded`: whether the equilibrium or the
+/// noise fails for some parameter, so the excluded share is stated).
+fn document(spec: &Spec, section: &BoxSection, report: &BoxReport, excluded: bool) -> BoxCertificateDocument {
     let sup = report.sup_sigma2();
     let sampled_max = report
         .leaves
@@ -322,8 +332,8 @@ fn document(spec: &Spec, section: &BoxSection, report: &BoxReport) -> BoxCertifi
         sampled_max,
         undecided_fraction: Float(fraction(&report.undecided_volume(), &section.range.volume())),
         unstable_fraction: Float(fraction(&report.unstable_volume(), &section.range.volume())),
+        excluded_fraction: excluded.then(|| Float(fraction(&report.excluded_volume(), &section.range.volume()))),
         limit: report.limit.map(str::to_string),
-        witness: report.witness.as_ref().map(|w| exact_vec(w)),
         sub_boxes: report.leaves.iter().map(leaf_record).collect(),
         spec_sha256: spec_digest(&spec.raw),
         spec: spec.raw.clone(),
@@ -332,26 +342,28 @@ fn document(spec: &Spec, section: &BoxSection, report: &BoxReport) -> BoxCertifi
 
 /// Certify a spec with a `box` section: the box certificate's JSON. A spec
 /// without one, or whose system the box refuses (a Casimir or first
-/// integral that holds at the spec's values but not for every parameter),
-/// gets a certificate with verdict `undecided` and the reason.
+/// integral that holds at the spec's values but not for every parameter,
+/// or expressions too large to keep symbolic), gets a certificate with
+/// verdict `undecided`, no sub-boxes, and the reason.
 pub fn certify_box_spec(spec: &Spec) -> Value {
     let Some(section) = &spec.parameter_box else {
         return serde_json::json!({"error": "the spec has no box section"});
     };
-    let report =
-        match spec.box_system(&section.names).map_err(|e| e.to_string()).and_then(|system| {
-            ::boxes::certify_box(&system, &section.range, &section.settings).map_err(|e| e.to_string())
-        }) {
-            Ok(r) => r,
-            Err(why) => BoxReport {
-                verdict: BoxVerdict::Undecided,
-                reason: format!("{REFUSED}: {why}"),
-                leaves: vec![],
-                witness: None,
-                limit: None,
-            },
-        };
-    serde_json::to_value(document(spec, section, &report)).unwrap_or(Value::Null)
+    let refused = |reason: String| BoxReport { verdict: BoxVerdict::Undecided, reason, leaves: vec![], limit: None };
+    let (report, excluded) = match spec.box_system(&section.names) {
+        Err(e) => (refused(format!("{NOT_SYMBOLIC}: {e}")), false),
+        Ok(system) => match system.symbolic() {
+            Err(e) => (refused(format!("{REFUSED}: {e}")), false),
+            Ok(sym) => {
+                let excluded = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
+                match ::boxes::certify_box(&system, &section.range, &section.settings) {
+                    Ok(r) => (r, excluded),
+                    Err(e) => (refused(format!("{REFUSED}: {e}")), false),
+                }
+            }
+        },
+    };
+    serde_json::to_value(document(spec, section, &report, excluded)).unwrap_or(Value::Null)
 }
 
 /// Whether a certificate is a box certificate.
@@ -363,15 +375,23 @@ fn rationals(v: &[ExactRational]) -> Vec<Rational> {
     v.iter().map(|x| x.0.clone()).collect()
 }
 
-/// Re-check a box certificate: the partition, every stable sub-box's proof
-/// (exactly, from the embedded spec and the recorded choice and bound), the
-/// witness, and every derived number. Nothing stored is trusted; the
-/// choices are only the proofs' inputs.
+/// Re-check a box certificate: the partition, every sub-box's proof
+/// (exactly, from the embedded spec and the recorded choice and bound),
+/// every undecided sub-box's reason, and every derived number and sentence
+/// (the verdict, the reason, the sup, the fractions, the samples, the
+/// limit). Nothing stored is trusted; the choices are only the proofs'
+/// inputs. Every field and how it is verified: docs/ci.md.
 pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
     let map = crate::json::as_object(cert, "$").map_err(CheckError::BadInput)?;
     crate::check::check_engine(map)?;
     let doc: BoxCertificateDocument = crate::document::from_value(cert)
         .map_err(|e| fail(&e.path, format!("not a box certificate as this engine writes them: {}", e.message)))?;
+    if doc.certificate_version != CERTIFICATE_VERSION {
+        return Err(fail(
+            "$.certificate_version",
+            format!("is {}, this checker reads version {CERTIFICATE_VERSION}", doc.certificate_version),
+        ));
+    }
     let spec = spec_from_value(doc.spec.clone()).map_err(|e| {
         fail(
             &format!("$.spec{}", e.path.trim_start_matches('$')),
@@ -381,217 +401,311 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     if doc.spec_sha256 != spec_digest(&spec.raw) {
         return Err(fail("$.spec_sha256", "does not match the embedded spec".into()));
     }
+    if doc.name != spec.name {
+        return Err(fail("$.name", "is not the embedded spec's name".into()));
+    }
+    if doc.kind != "box" {
+        return Err(fail("$.kind", "expected \"box\"".into()));
+    }
     let Some(section) = &spec.parameter_box else {
         return Err(fail("$.spec.box", "a box certificate's spec must have a box section".into()));
     };
     if doc.parameters != section.names {
         return Err(fail("$.parameters", "differs from the spec's box section".into()));
     }
-    // A system that is not the same for every parameter (certify's
-    // `undecided` with no sub-boxes, and that reason) claims nothing.
-    let refused = |why: String| -> std::result::Result<CheckReport, CheckError> {
-        let reason = format!("{REFUSED}: {why}");
-        if doc.verdict == "undecided" && doc.sub_boxes.is_empty() && doc.witness.is_none() && doc.reason == reason {
+    // A system the box refuses (certify's `undecided` with no sub-boxes,
+    // and that reason) claims nothing.
+    let refused = |reason: String| -> std::result::Result<CheckReport, CheckError> {
+        let expected = BoxCertificateDocument {
+            certificate_version: CERTIFICATE_VERSION,
+            engine: doc.engine.clone(),
+            name: spec.name.clone(),
+            kind: "box".into(),
+            verdict: "undecided".into(),
+            reason: reason.clone(),
+            parameters: section.names.clone(),
+            sup_sigma2: None,
+            sup_sigma2_exact: None,
+            sampled_max: None,
+            undecided_fraction: Float(0.0),
+            unstable_fraction: Float(0.0),
+            excluded_fraction: None,
+            limit: None,
+            sub_boxes: vec![],
+            spec_sha256: doc.spec_sha256.clone(),
+            spec: doc.spec.clone(),
+        };
+        if doc == expected {
             Ok(CheckReport { name: spec.name.clone(), verdict: Verdict::Inconclusive, level: None, sigma2: None })
         } else {
             Err(fail(
-                "$.spec",
+                "$",
                 format!(
-                    "the box refuses the system ({why}), so the certificate can only be undecided with that reason"
+                    "the box refuses the system, so the certificate can only be undecided, with no sub-boxes and the reason '{}'",
+                    exact::cut(&reason, 200)
                 ),
             ))
         }
     };
     let system = match spec.box_system(&section.names) {
         Ok(s) => s,
-        Err(e) => return refused(e.to_string()),
+        Err(e) => return refused(format!("{NOT_SYMBOLIC}: {e}")),
     };
     let sym = match system.symbolic() {
         Ok(s) => s,
-        Err(e) => return refused(e.to_string()),
+        Err(e) => return refused(format!("{REFUSED}: {e}")),
     };
     let n = system.dim();
     let np = section.names.len();
     let range = &section.range;
-    let verdict = match doc.verdict.as_str() {
-        "not_an_equilibrium" | "noise_incompatible" => {
-            let Some(w) = &doc.witness else {
-                return Err(fail("$.witness", "missing for this verdict".into()));
-            };
-            let w = rationals(w);
-            if w.len() != np || !range.contains(&w) {
-                return Err(fail("$.witness", "not a point of the box".into()));
+    let settings = &section.settings;
+    check_partition(&doc, range, np)?;
+    let excluded = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
+    let unresolved = if sym.equilibrium_holds() {
+        ::boxes::certify::NOISE_UNRESOLVED
+    } else {
+        ::boxes::certify::EQUILIBRIUM_UNRESOLVED
+    };
+    let mut sup: Option<Rational> = None;
+    let mut undecided = Rational::zero();
+    let mut unstable_volume = Rational::zero();
+    let mut excluded_volume = Rational::zero();
+    let mut counts = ::boxes::LeafCounts::default();
+    let mut budget = 0usize;
+    let mut at_depth_limit = 0usize;
+    let charpoly = std::cell::OnceCell::new();
+    let mut sampled_max: Option<(f64, Vec<Rational>)> = None;
+    for (i, r) in doc.sub_boxes.iter().enumerate() {
+        let path = format!("$.sub_boxes[{i}]");
+        let b = ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) };
+        let proved_only = |what: &str| -> std::result::Result<(), CheckError> {
+            // the choice and bound fields belong to stable sub-boxes only
+            if r.sign.is_some()
+                || r.multipliers.is_some()
+                || r.free.is_some()
+                || r.pivot_rows.is_some()
+                || r.m.is_some()
+                || r.sigma2_upper.is_some()
+                || r.sigma2_sampled.is_some()
+            {
+                return Err(fail(&path, format!("a {what} sub-box records no choice or bound")));
             }
-            if !::boxes::certify::defined_at(&sym, &w) {
-                return Err(fail("$.witness", "the system is undefined there (a denominator vanishes)".into()));
+            Ok(())
+        };
+        let outcome = match r.verdict.as_str() {
+            "stable" if excluded => {
+                return Err(fail(
+                    &format!("{path}.verdict"),
+                    "mu_e is not an equilibrium (or the noise moves it) for some parameters of the box, so no sub-box is stable".into(),
+                ))
             }
-            let residuals: Vec<&::boxes::Frac> = if doc.verdict == "not_an_equilibrium" {
-                sym.equilibrium_residual.iter().collect()
-            } else {
-                sym.noise_residuals.iter().flatten().collect()
-            };
-            if !residuals.iter().any(|r| value_at(r, n, &w).is_some_and(|v| !v.is_zero())) {
-                return Err(fail("$.witness", "the residual is zero (or undefined) there".into()));
-            }
-            if doc.verdict == "noise_incompatible" && !sym.equilibrium_holds() {
-                return Err(fail("$.verdict", "mu_e is not an equilibrium for every parameter".into()));
-            }
-            if !doc.sub_boxes.is_empty() {
-                return Err(fail("$.sub_boxes", "must be empty for this verdict".into()));
-            }
-            if doc.verdict == "not_an_equilibrium" {
-                Verdict::NotAnEquilibrium
-            } else {
-                Verdict::NoiseIncompatible
-            }
-        }
-        _ => {
-            // An equilibrium or noise that fails for some parameter but at no
-            // sampled point: undecided, with nothing to partition.
-            let unresolved = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
-            if doc.sub_boxes.is_empty() && unresolved && doc.verdict == "undecided" && doc.witness.is_none() {
-                return Ok(CheckReport {
-                    name: spec.name.clone(),
-                    verdict: Verdict::Inconclusive,
-                    level: None,
-                    sigma2: None,
-                });
-            }
-            check_partition(&doc, range, np)?;
-            if !sym.equilibrium_holds() {
-                return Err(fail("$.verdict", "mu_e is not an equilibrium for every parameter in the box".into()));
-            }
-            if !sym.incompatible_noise().is_empty() {
-                return Err(fail("$.verdict", "the noise moves mu_e for some parameter in the box".into()));
-            }
-            let mut sup: Option<Rational> = None;
-            let mut undecided = Rational::zero();
-            let mut unstable_volume = Rational::zero();
-            let mut unstable = 0usize;
-            let charpoly = std::cell::OnceCell::new();
-            let mut sampled_max: Option<(f64, Vec<Rational>)> = None;
-            let mut stable = 0usize;
-            for (i, r) in doc.sub_boxes.iter().enumerate() {
-                let path = format!("$.sub_boxes[{i}]");
-                let b = ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) };
-                match r.verdict.as_str() {
-                    "stable" => {
-                        let choice = record_choice(r, &path)?;
-                        let s = r
-                            .sigma2_upper
-                            .as_ref()
-                            .map(|x| x.0.clone())
-                            .ok_or_else(|| fail(&path, "no sigma2_upper".into()))?;
-                        let forms = ::boxes::prove_leaf(&sym, &b, &choice, &s)
-                            .map_err(|e| fail(&format!("{path}.sigma2_upper"), format!("not proved: {e}")))?;
-                        // The recorded multipliers are the centre's: the free
-                        // ones are used as given, the solved ones must be the
-                        // solution there (nothing stated goes unchecked).
-                        let centre = b.centre();
-                        for (j, (l, stated)) in forms.multipliers.iter().zip(&choice.multipliers).enumerate() {
-                            if value_at(l, n, &centre).as_ref() != Some(stated) {
-                                return Err(fail(
-                                    &format!("{path}.multipliers[{j}]"),
-                                    "is not the multiplier at the sub-box's centre".into(),
-                                ));
-                            }
-                        }
-                        let (_, sampled, at) = sampled_bound(&forms, n, &b, &section.settings.margin)
-                            .ok_or_else(|| fail(&path, "the samples could not be re-derived".into()))?;
-                        let stated = r.sigma2_sampled.map(|x| x.0).unwrap_or(f64::NAN);
-                        if !close(stated, sampled) {
-                            return Err(fail(
-                                &format!("{path}.sigma2_sampled"),
-                                format!("{stated:e} differs from the re-derived {sampled:e}"),
-                            ));
-                        }
-                        if sampled_max.as_ref().is_none_or(|m| sampled > m.0) {
-                            sampled_max = Some((sampled, at));
-                        }
-                        sup = Some(sup.map_or(s.clone(), |x: Rational| x.max(s)));
-                        stable += 1;
+            "stable" => {
+                let choice = record_choice(r, &path)?;
+                let s = r
+                    .sigma2_upper
+                    .as_ref()
+                    .map(|x| x.0.clone())
+                    .ok_or_else(|| fail(&path, "no sigma2_upper".into()))?;
+                let forms = ::boxes::prove_leaf(&sym, &b, &choice, &s)
+                    .map_err(|e| fail(&format!("{path}.sigma2_upper"), format!("not proved: {e}")))?;
+                // The recorded multipliers are the centre's: the free
+                // ones are used as given, the solved ones must be the
+                // solution there (nothing stated goes unchecked).
+                let centre = b.centre();
+                for (j, (l, stated)) in forms.multipliers.iter().zip(&choice.multipliers).enumerate() {
+                    if value_at(l, n, &centre).as_ref() != Some(stated) {
+                        return Err(fail(
+                            &format!("{path}.multipliers[{j}]"),
+                            "is not the multiplier at the sub-box's centre".into(),
+                        ));
                     }
-                    "linearly_unstable" => {
-                        let criterion = ::boxes::certify::prove_unstable(
-                            &sym,
-                            charpoly.get_or_init(|| sym.characteristic_polynomial()),
-                            &b,
-                        )
+                }
+                let (_, sampled, at) = sampled_bound(&forms, n, &b, &settings.margin)
+                    .ok_or_else(|| fail(&path, "the samples could not be re-derived".into()))?;
+                let stated = r.sigma2_sampled.map(|x| x.0).unwrap_or(f64::NAN);
+                if !close(stated, sampled) {
+                    return Err(fail(
+                        &format!("{path}.sigma2_sampled"),
+                        format!("{stated:e} differs from the re-derived {sampled:e}"),
+                    ));
+                }
+                if r.reason.is_some() || r.centre_verdict.is_some() {
+                    return Err(fail(&path, "a stable sub-box has no reason or centre_verdict".into()));
+                }
+                if sampled_max.as_ref().is_none_or(|m| sampled > m.0) {
+                    sampled_max = Some((sampled, at.clone()));
+                }
+                sup = Some(sup.map_or(s.clone(), |x: Rational| x.max(s.clone())));
+                LeafOutcome::Stable { choice, sigma2_upper: s, sampled, sampled_at: at }
+            }
+            "linearly_unstable" => {
+                if excluded {
+                    return Err(fail(
+                        &format!("{path}.verdict"),
+                        "mu_e is not an equilibrium (or the noise moves it) for some parameters of the box: only not_an_equilibrium, noise_incompatible or undecided sub-boxes".into(),
+                    ));
+                }
+                let criterion =
+                    ::boxes::certify::prove_unstable(&sym, charpoly.get_or_init(|| sym.characteristic_polynomial()), &b)
                         .ok_or_else(|| {
                             fail(&format!("{path}.verdict"), "linear instability is not proved on this sub-box".into())
                         })?;
-                        if r.reason.as_deref() != Some(criterion.as_str()) {
-                            return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
+                if r.reason.as_deref() != Some(criterion.as_str()) {
+                    return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
+                }
+                proved_only("linearly unstable")?;
+                if r.centre_verdict.is_some() {
+                    return Err(fail(&format!("{path}.centre_verdict"), "only undecided sub-boxes state one".into()));
+                }
+                unstable_volume += b.volume();
+                LeafOutcome::LinearlyUnstable { criterion }
+            }
+            "not_an_equilibrium" | "noise_incompatible" => {
+                let outcome = ::boxes::prove_excluded(&sym, &b)
+                    .filter(|o| o.verdict_name() == r.verdict)
+                    .ok_or_else(|| fail(&format!("{path}.verdict"), format!("'{}' is not proved on this sub-box", r.verdict)))?;
+                let (LeafOutcome::NotAnEquilibrium { criterion } | LeafOutcome::NoiseIncompatible { criterion }) =
+                    &outcome
+                else {
+                    unreachable!("prove_excluded proves only these two")
+                };
+                if r.reason.as_deref() != Some(criterion.as_str()) {
+                    return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
+                }
+                proved_only("not stable")?;
+                if r.centre_verdict.is_some() {
+                    return Err(fail(&format!("{path}.centre_verdict"), "only undecided sub-boxes state one".into()));
+                }
+                excluded_volume += b.volume();
+                outcome
+            }
+            "undecided" => {
+                proved_only("undecided")?;
+                let reason = r.reason.clone().unwrap_or_default();
+                let rpath = format!("{path}.reason");
+                // Each reason is a statement about how the bisection ended
+                // there, and it is checked as one.
+                match reason.as_str() {
+                    ::boxes::certify::BUDGET_SPENT => budget += 1,
+                    ::boxes::certify::LARGEST_DEPTH | ::boxes::certify::EQUILIBRIUM_UNRESOLVED | ::boxes::certify::NOISE_UNRESOLVED => {
+                        let expected = if excluded { unresolved } else { ::boxes::certify::LARGEST_DEPTH };
+                        if reason != expected {
+                            return Err(fail(&rpath, format!("expected '{expected}' for this system")));
                         }
-                        unstable_volume += b.volume();
-                        unstable += 1;
-                    }
-                    "undecided" => {
-                        // the pointwise verdict stated at the centre, if the
-                        // sub-box was analysed (not one left by the budget), is
-                        // the pipeline's
-                        let derived = || ::boxes::certify::analyse_at(&system, &b.centre()).map(|(_, a)| a.verdict);
-                        if r.centre_verdict.is_some() && r.centre_verdict != derived() {
-                            return Err(fail(
-                                &format!("{path}.centre_verdict"),
-                                format!("is not the pipeline's verdict at the centre ({:?})", derived()),
-                            ));
+                        if r.depth != settings.max_depth as u64 {
+                            return Err(fail(&rpath, format!("says the largest depth, but the sub-box is at depth {} of {}", r.depth, settings.max_depth)));
                         }
-                        undecided += b.volume()
+                        at_depth_limit += 1;
                     }
-                    other => {
-                        return Err(fail(&format!("{path}.verdict"), format!("'{other}' is not a sub-box verdict")))
+                    ::boxes::certify::UNSTABLE_CORNERS => {
+                        if excluded || !::boxes::certify::unstable_at_centre_and_corners(&system, &b) {
+                            return Err(fail(&rpath, "the pipeline does not prove A unstable at the sub-box's centre and every corner".into()));
+                        }
+                    }
+                    _ => return Err(fail(&rpath, "is not a reason this engine gives for an undecided sub-box".into())),
+                }
+                // the pointwise verdict stated at the centre is the
+                // pipeline's; sub-boxes left by the budget or bisected for
+                // a failing equilibrium or noise state none
+                if excluded || reason == ::boxes::certify::BUDGET_SPENT {
+                    if r.centre_verdict.is_some() {
+                        return Err(fail(
+                            &format!("{path}.centre_verdict"),
+                            "this sub-box was not analysed at its centre".into(),
+                        ));
+                    }
+                } else {
+                    let derived = ::boxes::certify::analyse_at(&system, &b.centre()).map(|(_, a)| a.verdict);
+                    if r.centre_verdict != derived {
+                        return Err(fail(
+                            &format!("{path}.centre_verdict"),
+                            format!("is not the pipeline's verdict at the centre ({derived:?})"),
+                        ));
                     }
                 }
+                undecided += b.volume();
+                LeafOutcome::Undecided { reason, centre: r.centre_verdict }
             }
-            let total = doc.sub_boxes.len();
-            let expected = if total > 0 && stable == total {
-                "stable"
-            } else if total > 0 && unstable == total {
-                "linearly_unstable"
-            } else if stable > 0 {
-                "partly_stable"
-            } else if unstable > 0 {
-                "partly_unstable"
-            } else {
-                "undecided"
-            };
-            if doc.verdict != expected {
-                return Err(fail("$.verdict", format!("the sub-boxes prove '{expected}', not '{}'", doc.verdict)));
+            other => {
+                return Err(fail(
+                    &format!("{path}.verdict"),
+                    format!("'{}' is not a sub-box verdict", exact::cut(other, 40)),
+                ))
             }
-            let stated_sup = doc.sup_sigma2_exact.as_ref().map(|x| x.0.clone());
-            if stated_sup != sup {
-                return Err(fail("$.sup_sigma2_exact", "is not the largest sub-box bound".into()));
-            }
-            let sup_f = sup.as_ref().map(exact::rational_to_f64_up);
-            if doc.sup_sigma2.map(|x| x.0) != sup_f {
-                return Err(fail("$.sup_sigma2", "is not the exact bound rounded up".into()));
-            }
-            if !close(doc.undecided_fraction.0, fraction(&undecided, &range.volume())) {
-                return Err(fail("$.undecided_fraction", "is not the undecided sub-boxes' share".into()));
-            }
-            if !close(doc.unstable_fraction.0, fraction(&unstable_volume, &range.volume())) {
-                return Err(fail("$.unstable_fraction", "is not the unstable sub-boxes' share".into()));
-            }
-            match (&doc.sampled_max, &sampled_max) {
-                (None, None) => {}
-                (Some(stated), Some((v, at))) if close(stated.sigma2.0, *v) && &rationals(&stated.at) == at => {}
-                _ => return Err(fail("$.sampled_max", "is not the largest re-derived sample".into())),
-            }
-            if doc.witness.is_some() {
-                return Err(fail("$.witness", "only a failing equilibrium or noise has a witness".into()));
-            }
-            if let Some(l) = &doc.limit {
-                if l != "max_depth" && l != "max_boxes" {
-                    return Err(fail("$.limit", format!("'{l}' is not a limit")));
-                }
-            }
-            match expected {
-                "stable" => Verdict::Stable,
-                "linearly_unstable" => Verdict::LinearlyUnstable,
-                _ => Verdict::Inconclusive,
-            }
-        }
+        };
+        counts.add(&outcome);
+    }
+    // The bisection analyses every node of its binary tree but the sub-boxes
+    // left by the budget: 2 L - 1 nodes for L sub-boxes. Sub-boxes left by
+    // the budget mean that exactly max_boxes were analysed.
+    let nodes = (2 * doc.sub_boxes.len()).saturating_sub(1);
+    if budget > 0 && nodes - budget != settings.max_boxes {
+        return Err(fail(
+            "$.sub_boxes",
+            format!(
+                "{budget} sub-boxes say the budget was spent, but {} were analysed, not max_boxes = {}",
+                nodes - budget,
+                settings.max_boxes
+            ),
+        ));
+    }
+    if nodes > settings.max_boxes + budget {
+        return Err(fail(
+            "$.sub_boxes",
+            format!("{} sub-boxes need more than max_boxes = {} analysed", doc.sub_boxes.len(), settings.max_boxes),
+        ));
+    }
+    let limit = if budget > 0 {
+        Some("max_boxes")
+    } else if at_depth_limit > 0 {
+        Some("max_depth")
+    } else {
+        None
+    };
+    if doc.limit.as_deref() != limit {
+        return Err(fail("$.limit", format!("the sub-boxes show {limit:?} stopped the bisection")));
+    }
+    let (verdict, reason) = ::boxes::verdict_of(&counts);
+    if doc.verdict != verdict.as_str() {
+        return Err(fail(
+            "$.verdict",
+            format!("the sub-boxes prove '{}', not '{}'", verdict.as_str(), exact::cut(&doc.verdict, 40)),
+        ));
+    }
+    if doc.reason != reason {
+        return Err(fail(
+            "$.reason",
+            format!("is not the sentence for what the sub-boxes prove ('{}')", exact::cut(&reason, 200)),
+        ));
+    }
+    let stated_sup = doc.sup_sigma2_exact.as_ref().map(|x| x.0.clone());
+    if stated_sup != sup {
+        return Err(fail("$.sup_sigma2_exact", "is not the largest sub-box bound".into()));
+    }
+    let sup_f = sup.as_ref().map(exact::rational_to_f64_up);
+    if doc.sup_sigma2.map(|x| x.0) != sup_f {
+        return Err(fail("$.sup_sigma2", "is not the exact bound rounded up".into()));
+    }
+    if !close(doc.undecided_fraction.0, fraction(&undecided, &range.volume())) {
+        return Err(fail("$.undecided_fraction", "is not the undecided sub-boxes' share".into()));
+    }
+    if !close(doc.unstable_fraction.0, fraction(&unstable_volume, &range.volume())) {
+        return Err(fail("$.unstable_fraction", "is not the unstable sub-boxes' share".into()));
+    }
+    let excluded_fraction = excluded.then(|| fraction(&excluded_volume, &range.volume()));
+    match (doc.excluded_fraction, excluded_fraction) {
+        (None, None) => {}
+        (Some(x), Some(y)) if close(x.0, y) => {}
+        _ => return Err(fail("$.excluded_fraction", "is not the excluded sub-boxes' share (present exactly when the equilibrium or the noise fails for some parameter)".into())),
+    }
+    match (&doc.sampled_max, &sampled_max) {
+        (None, None) => {}
+        (Some(stated), Some((v, at))) if close(stated.sigma2.0, *v) && &rationals(&stated.at) == at => {}
+        _ => return Err(fail("$.sampled_max", "is not the largest re-derived sample".into())),
+    }
+    let verdict = match verdict.at_every_point() {
+        Some(v) => v,
+        None => Verdict::Inconclusive,
     };
     let sigma2 = doc.sup_sigma2.map(|x| x.0).filter(|_| verdict == Verdict::Stable);
     Ok(CheckReport { name: spec.name.clone(), verdict, level: None, sigma2 })

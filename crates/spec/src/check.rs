@@ -198,6 +198,15 @@ fn check_lie_certificate(cert: &Value, map: &serde_json::Map<String, Value>) -> 
     let direction =
         (take(&mut expected, &["growth", "fastest_direction"]), take(&mut found, &["growth", "fastest_direction"]));
     compare(&expected, &found, "$", 0.0)?;
+    let bound = match cert.get("sigma2_exact").and_then(Value::as_str) {
+        Some(e) => Some(
+            exact::parse_number(e)
+                .map(|r| exact::rational_to_f64_up(&r))
+                .map_err(|_| fail("$.sigma2_exact", "not a rational".into()))?,
+        ),
+        None => cert.get("sigma2").and_then(Value::as_f64),
+    };
+    check_stopping(cert, spec.stopping, bound)?;
     check_spectrum(spectrum)?;
     check_eigenvector(eigenvector, &rederived.analysis)?;
     check_direction(direction, &rederived.analysis)?;
@@ -207,6 +216,63 @@ fn check_lie_certificate(cert: &Value, map: &serde_json::Map<String, Value>) -> 
         level: Some(level),
         sigma2: rederived.analysis.sigma2(),
     })
+}
+
+/// The one rule for a stated stopping time, for every kind of certificate:
+/// `epsilon` and `delta` are the spec's, and `T` is `ln(epsilon/delta)/S`
+/// rounded down ([`generator::StoppingTime::time`]), where `S` is the
+/// certificate's own stated bound on `Sigma^2` (its proved `sigma2_upper`,
+/// its exact `Sigma^2` rounded up, or, where it proves none and says so in
+/// `stopping.bound`, its estimate): never above that time, and not below it
+/// by more than a relative `1e-12`; infinite exactly when `S = 0`. `bound`
+/// is `S` as the certificate states it (`None`: no stopping time may be
+/// stated).
+pub(crate) fn check_stopping(
+    cert: &Value,
+    stopping: Option<crate::parse::Stopping>,
+    bound: Option<f64>,
+) -> Result<(), CheckError> {
+    let stated = cert.get("stopping").filter(|v| !v.is_null());
+    let (stop, st, s) = match (stopping, stated, bound) {
+        (_, None, _) | (None, Some(_), _) | (_, Some(_), None) => {
+            // whether one must be there is the re-derivation's to compare
+            return match (stopping.zip(bound), stated) {
+                (Some(_), None) => Err(fail("$.stopping", "missing: the spec asks for a stopping time".into())),
+                (None, Some(_)) => Err(fail("$.stopping", "the spec asks for none, or nothing bounds Sigma^2".into())),
+                _ => Ok(()),
+            };
+        }
+        (Some(stop), Some(st), Some(s)) => (stop, st, s),
+    };
+    for (key, value) in [("epsilon", stop.epsilon), ("delta", stop.delta)] {
+        if st.get(key).and_then(Value::as_f64) != Some(value) {
+            return Err(fail(&format!("$.stopping.{key}"), format!("is not the spec's {key} = {value:e}")));
+        }
+    }
+    let guaranteed = generator::StoppingTime::new(stop.epsilon, stop.delta, s).time();
+    match (st.get("T"), guaranteed) {
+        (Some(Value::String(t)), None) if t == "infinity" => Ok(()),
+        (Some(Value::String(_)), _) => {
+            Err(fail("$.stopping.T", format!("infinite, but the bound on Sigma^2 is {s:e}")))
+        }
+        (Some(t), Some(g)) => {
+            let t = t.as_f64().ok_or_else(|| fail("$.stopping.T", "expected a number or \"infinity\"".into()))?;
+            if t > g {
+                Err(fail(
+                    "$.stopping.T",
+                    format!(
+                        "{t:e} exceeds ln(epsilon/delta)/S = {g:e} (S = {s:e}), the time the stated bound guarantees"
+                    ),
+                ))
+            } else if t < g * (1.0 - 1e-12) {
+                Err(fail("$.stopping.T", format!("{t:e} is not ln(epsilon/delta)/S = {g:e} rounded down (S = {s:e})")))
+            } else {
+                Ok(())
+            }
+        }
+        (Some(_), None) => Err(fail("$.stopping.T", "finite, but the bound on Sigma^2 is 0: T is infinite".into())),
+        (None, _) => Err(fail("$.stopping.T", "missing".into())),
+    }
 }
 
 /// The certificate must name this engine and version: every number in it

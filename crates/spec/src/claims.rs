@@ -324,34 +324,8 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<VerificationLe
             ));
         }
     }
-    // The stopping time follows from sigma2: infinite only for S = 0, and
-    // never beyond the time that the (upward-rounded) S guarantees.
-    if let Some(st) = cert.get("stopping") {
-        let eps = st
-            .get("epsilon")
-            .and_then(Value::as_f64)
-            .ok_or_else(|| failure("$.stopping.epsilon", "expected a number"))?;
-        let delta =
-            st.get("delta").and_then(Value::as_f64).ok_or_else(|| failure("$.stopping.delta", "expected a number"))?;
-        let guaranteed = generator::StoppingTime::new(eps, delta, exact::rational_to_f64_up(&s)).time();
-        match (st.get("T"), guaranteed) {
-            (Some(Value::String(t)), None) if t == "infinity" => {}
-            (Some(Value::String(_)), _) => {
-                return Err(failure("$.stopping.T", "infinite, but sigma2 is positive"));
-            }
-            (Some(t), Some(g)) => {
-                let t = t.as_f64().ok_or_else(|| failure("$.stopping.T", "expected a number"))?;
-                if t > g || t < g * (1.0 - 1e-12) {
-                    return Err(failure(
-                        "$.stopping.T",
-                        format!("is not ln(epsilon/delta)/sigma2 = {g:e} rounded down (a guarantee may not exceed it)"),
-                    ));
-                }
-            }
-            (Some(_), None) => return Err(failure("$.stopping.T", "finite, but sigma2 is 0: T is infinite")),
-            (None, _) => return Err(failure("$.stopping.T", "missing")),
-        }
-    }
+    // The stopping time: the one rule of every kind, applied by the
+    // checker after this (crate::check::check_stopping).
     Ok(VerificationLevel::Exact)
 }
 

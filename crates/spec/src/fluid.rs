@@ -34,7 +34,6 @@ use fluid::analysis::{
 use fluid::expr::{parse, Expr};
 use fluid::grid::{Boundary, ELEMENT_DEGREE};
 use fluid::profile::{Potential, Profile, ProfileError};
-use generator::StoppingTime;
 use outcome::{Cancelled, Progress, Sign, Verdict, VerificationLevel};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -863,8 +862,8 @@ pub(crate) fn check_fluid_certificate_with(
 ///   ([`fluid::analysis::prove_mode_bounds`]), or it is rejected, however
 ///   small the difference;
 /// * the overall `sigma2_upper` is at least every per-mode one;
-/// * `T` is at most the stopping time of the stated `sigma2_upper`, and
-///   infinite only when that bound is exactly 0.
+/// * `T` follows the one rule of every kind
+///   ([`crate::check::check_stopping`]) at the stated `sigma2_upper`.
 fn prove_stated_bounds(
     spec: &FluidSpec,
     analysis: &FluidAnalysis,
@@ -911,27 +910,8 @@ fn prove_stated_bounds(
             return Err(fail("$.sigma2_upper", format!("{u:e} is below the per-mode bound {largest:e}")));
         }
     }
-    if let (Some(stop), Some(t)) = (spec.stopping, cert.pointer("/stopping/T")) {
-        let Some(u) = overall else {
-            return Err(fail("$.stopping.T", "a stopping time needs a proved sigma2_upper".into()));
-        };
-        let guaranteed = StoppingTime::new(stop.epsilon, stop.delta, u).time();
-        match (t, guaranteed) {
-            (Value::String(s), None) if s == "infinity" => {}
-            (Value::String(_), _) => {
-                return Err(fail("$.stopping.T", format!("infinite, but sigma2_upper = {u:e} is positive")));
-            }
-            (t, Some(g)) => {
-                let t = t.as_f64().ok_or_else(|| fail("$.stopping.T", "expected a number".into()))?;
-                if t > g {
-                    return Err(fail(
-                        "$.stopping.T",
-                        format!("{t:e} exceeds ln(epsilon/delta)/sigma2_upper = {g:e}, the time the proved bound guarantees"),
-                    ));
-                }
-            }
-            (_, None) => return Err(fail("$.stopping.T", "finite, but sigma2_upper is 0: T is infinite".into())),
-        }
-    }
+    // T by the one rule, at the stated (proved) bound: only a proved
+    // sigma2_upper gives a stopping time.
+    crate::check::check_stopping(cert, spec.stopping, overall)?;
     Ok(())
 }

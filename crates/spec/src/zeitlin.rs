@@ -869,6 +869,10 @@ pub(crate) fn check_zeitlin_certificate_with(
     progress.check()?;
     let expected = serde_json::to_value(zeitlin_certificate_document(&spec, &analysis)).unwrap_or_default();
     compare_with(&expected, cert, "$", 0.0, ZEITLIN_TOLERANCE)?;
+    // T by the one rule, at the stated bound (proved, or the estimate the
+    // certificate says it is).
+    let bound = cert.get("sigma2_upper").or(cert.get("sigma2")).and_then(Value::as_f64);
+    crate::check::check_stopping(cert, spec.stopping, bound)?;
     let level = expected.get("level").and_then(Value::as_str).and_then(|s| s.parse::<VerificationLevel>().ok());
     let (verdict, sigma2) = match &analysis {
         ZeitlinOutcome::Zonal(Ok(a)) => (a.verdict, a.sigma2),
