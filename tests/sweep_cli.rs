@@ -375,6 +375,102 @@ fn merge_checks_identity_duplicates_and_completeness() {
     let o = merge(&[&cut, parts[1], parts[2]], &tmp("triangle-cut-out.jsonl"), &small);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--resume"), "{}", stderr(&o));
+
+    // A byte-order mark at the start of a shard (an editor's) is not an
+    // interrupted shard: the merge is the same.
+    let bom = tmp("triangle-bom.jsonl");
+    std::fs::write(&bom, format!("\u{feff}{}", std::fs::read_to_string(parts[0]).unwrap())).unwrap();
+    let o = merge(&[&bom, parts[1], parts[2]], &tmp("triangle-bom-out.jsonl"), &small);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(lines_of(&tmp("triangle-bom-out.jsonl")), lines_of(&merged));
+    // A malformed line in the middle is not called a partial last line.
+    let middle = tmp("triangle-middle.jsonl");
+    let mut lines = lines_of(parts[0]);
+    lines[1].truncate(10);
+    std::fs::write(&middle, lines.join("\n") + "\n").unwrap();
+    let o = merge(&[&middle, parts[1], parts[2]], &tmp("triangle-middle-out.jsonl"), &small);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains(":2: not a sweep line") && !stderr(&o).contains("--resume"), "{}", stderr(&o));
+}
+
+/// Merged results were passed through unverified: a shard line edited
+/// from `linearly_unstable` to `stable` merged with exit 0, and a line
+/// whose float `parameters` disagree with its `exact_parameters` was
+/// passed on. Now every line must be what `verify sweep` writes for its
+/// plan point (its parameters the exact ones rounded); the summary says the
+/// verdicts are the shards' data; `--recheck` certifies each point again
+/// and refuses the edited verdict (exit 1, naming the point and the key).
+#[test]
+fn merge_never_passes_an_edited_result_as_checked() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let spec_s = spec.to_str().unwrap();
+    // I2 in [2, 4] with I1 = 3: stable below I1, the intermediate axis above
+    let plan = ["--param", "I2=2:4:5"];
+    let shards: Vec<PathBuf> = (0..2).map(|k| tmp(&format!("axis{k}.jsonl"))).collect();
+    for (k, path) in shards.iter().enumerate() {
+        let shard = format!("{k}/2");
+        let mut args = vec!["sweep", spec_s, "-o", path.to_str().unwrap(), "--shard", &shard];
+        args.extend_from_slice(&plan);
+        assert!(verify(&args).status.success());
+    }
+    let merge = |files: &[&Path], out: &Path, extra: &[&str]| -> Output {
+        let mut args = vec!["merge", spec_s, "-o", out.to_str().unwrap()];
+        args.extend_from_slice(&plan);
+        args.extend_from_slice(extra);
+        args.push("--lines");
+        args.extend(files.iter().map(|f| f.to_str().unwrap()));
+        verify(&args)
+    };
+    let parts: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
+    let o = merge(&parts, &tmp("axis-merged.jsonl"), &["--recheck"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("certified again here"), "{}", stderr(&o));
+    let o = merge(&parts, &tmp("axis-merged.jsonl"), &[]);
+    assert!(stderr(&o).contains("not re-derived"), "{}", stderr(&o));
+
+    // I2 = 4 (index 4, shard 0) is the intermediate axis: call it stable.
+    let edit = |f: &dyn Fn(&mut Value)| -> PathBuf {
+        let path = tmp("axis-edited.jsonl");
+        let lines: Vec<String> = lines_of(parts[0])
+            .iter()
+            .map(|l| {
+                let mut v: Value = serde_json::from_str(l).unwrap();
+                if v["index"] == 4 {
+                    f(&mut v);
+                }
+                v.to_string()
+            })
+            .collect();
+        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+        path
+    };
+    let stable = edit(&|v| {
+        assert_eq!(v["verdict"], "linearly_unstable", "{v}");
+        v["verdict"] = "stable".into();
+        v.as_object_mut().unwrap().remove("growth_rate");
+        v["sigma2"] = 0.1.into();
+    });
+    let o = merge(&[&stable, parts[1]], &tmp("axis-out.jsonl"), &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not re-derived"), "{}", stderr(&o));
+    let o = merge(&[&stable, parts[1]], &tmp("axis-out.jsonl"), &["--recheck"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("point 4") && stderr(&o).contains("\"verdict\""), "{}", stderr(&o));
+
+    // float parameters that are not the exact ones rounded
+    let shifted = edit(&|v| v["parameters"]["I2"] = 4.5.into());
+    let o = merge(&[&shifted, parts[1]], &tmp("axis-out.jsonl"), &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("float parameters are not the exact ones rounded"), "{}", stderr(&o));
+    // an unknown verdict, a key the engine never writes
+    for f in [
+        &(|v: &mut Value| v["verdict"] = "very_stable".into()) as &dyn Fn(&mut Value),
+        &|v: &mut Value| v["note"] = "checked by hand".into(),
+        &|v: &mut Value| v["spec"] = "0000000000000000".into(),
+    ] {
+        let o = merge(&[&edit(f), parts[1]], &tmp("axis-out.jsonl"), &[]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    }
 }
 
 /// The numeric level gives the same verdicts and Sigma^2 (to 1e-9, or

@@ -11,7 +11,17 @@
 //!   different results for one point are refused;
 //! * **completeness**: every point of the plan inside the spec's sweep
 //!   domain has its line (the missing ones are counted, with the shard that
-//!   holds the first few).
+//!   holds the first few);
+//! * **form**: every line is exactly what `verify sweep` writes for its
+//!   index's plan point and its own results ([`sweep::record_line`]): the
+//!   float parameters are the exact ones rounded, the spec tag is the
+//!   spec's, the verdict and level are names the engine uses, no key is
+//!   added.
+//!
+//! The results themselves (verdict, `Sigma^2`, `T`) are the shards' data:
+//! without `--recheck` they are passed on as the shards state them, and the
+//! summary says so; `--recheck` certifies every point again and refuses a
+//! line whose results differ.
 //!
 //! The output has the lines in index order, written atomically.
 
@@ -22,7 +32,6 @@ use crate::Failure;
 use clap::Args;
 use serde_json::Value;
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 
 /// Options of `verify merge`.
@@ -48,6 +57,11 @@ pub struct MergeArgs {
     /// invalid point).
     #[arg(long, value_name = "FILE")]
     pub npz: Option<PathBuf>,
+    /// Certify every point again and refuse a line whose results (verdict,
+    /// level, Sigma^2, T, growth rate) differ from the re-derived ones.
+    /// Costs as much as the sweep itself.
+    #[arg(long)]
+    pub recheck: bool,
 }
 
 fn bad(m: impl Into<String>) -> Failure {
@@ -72,13 +86,18 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
     // files (a line is about 200 bytes).
     let mut points: BTreeMap<u64, (String, String)> = BTreeMap::new();
     let mut dropped = 0u64;
+    let spec_tag = evaluator.spec_tag();
     for path in &args.lines {
-        let file = std::fs::File::open(path).map_err(|e| bad(format!("{}: cannot read: {e}", path.display())))?;
-        let reader = BufReader::new(file);
-        for (n, line) in reader.split(b'\n').enumerate() {
+        let bytes = std::fs::read(path).map_err(|e| bad(format!("{}: cannot read: {e}", path.display())))?;
+        let complete = bytes.last().is_none_or(|&b| b == b'\n');
+        let chunks: Vec<&[u8]> = bytes.split(|&b| b == b'\n').collect();
+        let last = chunks.len().saturating_sub(1);
+        for (n, line) in chunks.into_iter().enumerate() {
             let at = format!("{}:{}", path.display(), n + 1);
-            let line = line.map_err(|e| bad(format!("{at}: cannot read: {e}")))?;
-            let mut line = String::from_utf8(line).map_err(|_| bad(format!("{at}: not UTF-8 text")))?;
+            let mut line = String::from_utf8(line.to_vec()).map_err(|_| bad(format!("{at}: not UTF-8 text")))?;
+            if n == 0 && line.starts_with('\u{feff}') {
+                line.remove(0); // a byte-order mark an editor added: not part of the line
+            }
             if line.ends_with('\r') {
                 line.pop(); // a CRLF file (copied through Windows): the same line
             }
@@ -86,9 +105,13 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
                 continue;
             }
             let value: Value = serde_json::from_str(&line).map_err(|e| {
-                bad(format!(
-                    "{at}: not a sweep line ({e}); an interrupted shard ends in a partial line: finish it with `verify sweep --resume`"
-                ))
+                if n == last && !complete {
+                    bad(format!(
+                        "{at}: the file ends in a partial line ({e}): an interrupted shard; finish it with `verify sweep --resume`"
+                    ))
+                } else {
+                    bad(format!("{at}: not a sweep line: {e}"))
+                }
             })?;
             let Some(line_id) = value.get("sweep").and_then(Value::as_str) else {
                 return Err(bad(format!("{at}: not a sweep record (no \"sweep\" id)")));
@@ -120,6 +143,25 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
                     "{at}: point {index} of this plan is not the point the line states, or lies outside the sweep domain"
                 )));
             }
+            // The line is exactly what `verify sweep` writes for this point
+            // and these results.
+            let outcome = sweep::outcome_from_line(&value).ok_or_else(|| {
+                Failure::Failed(format!(
+                    "{at}: not a result `verify sweep` writes (an unknown verdict or level, or a number that is not one)"
+                ))
+            })?;
+            let canonical = sweep::record_line(&id, &spec_tag, index, evaluator.names(), &values, &outcome);
+            let written: Value = serde_json::from_str(&canonical).unwrap_or_default();
+            if written != value {
+                let key = differing_key(&written, &value);
+                return Err(Failure::Failed(format!(
+                    "{at}: the line differs from what `verify sweep` writes for point {index} with these results (at \"{key}\"{})",
+                    if key == "parameters" { ": the float parameters are not the exact ones rounded" } else { "" }
+                )));
+            }
+            // The merged file holds the canonical text (keys in the order
+            // `verify sweep` writes them).
+            let line = canonical.trim_end().to_string();
             match points.get(&index) {
                 Some((seen, _)) if *seen == line => dropped += 1,
                 Some((_, first)) => {
@@ -153,6 +195,9 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
             if missing > 5 { ", ..." } else { "" }
         )));
     }
+    if args.recheck {
+        recheck(&evaluator, &plan, &id, &spec_tag, &points)?;
+    }
     let mut text = String::new();
     let mut verdicts: BTreeMap<String, u64> = BTreeMap::new();
     for (line, _) in points.values() {
@@ -173,6 +218,14 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
         args.output.display(),
         if dropped > 0 { format!("; {dropped} repeated lines dropped") } else { String::new() }
     );
+    eprintln!(
+        "  {}",
+        if args.recheck {
+            "every point was certified again here and its results agree with the line"
+        } else {
+            "the results are the shards' data: each line's form and parameters were checked against the plan, its verdict and numbers were not re-derived (--recheck certifies every point again)"
+        }
+    );
     if let Some(path) = &args.npz {
         crate::npz_out::write_sweep_columns(path, evaluator.names(), points.values().map(|(line, _)| line.as_str()))
             .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", path.display())))?;
@@ -181,4 +234,53 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
         crate::sweep_plots::plot_files(std::slice::from_ref(&args.output), &args.plan.spec, dir, None, None)?;
     }
     Ok(())
+}
+
+/// The first top-level key whose value differs between two lines, the
+/// results first (the verdict before the numbers that follow from it).
+fn differing_key(written: &Value, found: &Value) -> String {
+    let (Some(w), Some(f)) = (written.as_object(), found.as_object()) else { return "$".into() };
+    const ORDER: [&str; 10] =
+        ["verdict", "error", "level", "sigma2", "T", "growth_rate", "parameters", "exact_parameters", "spec", "sweep"];
+    let keys = ORDER.iter().map(|k| k.to_string()).chain(w.keys().cloned()).chain(f.keys().cloned());
+    keys.into_iter().find(|k| w.get(k) != f.get(k)).unwrap_or_else(|| "the layout".into())
+}
+
+/// Certify every merged point again (in parallel) and compare its line.
+fn recheck(
+    evaluator: &sweep::Evaluator,
+    plan: &sweep::Plan,
+    id: &str,
+    spec_tag: &str,
+    points: &BTreeMap<u64, (String, String)>,
+) -> Result<(), Failure> {
+    use rayon::prelude::*;
+    let entries: Vec<(&u64, &(String, String))> = points.iter().collect();
+    let mut differing: Vec<(u64, String, String)> = entries
+        .par_iter()
+        .filter_map(|(&index, (line, at))| {
+            let values = plan.point(index);
+            let outcome = evaluator.evaluate(&values);
+            let derived = sweep::record_line(id, spec_tag, index, evaluator.names(), &values, &outcome);
+            if derived.trim_end() == line {
+                return None;
+            }
+            let (w, f) =
+                (serde_json::from_str(&derived).unwrap_or_default(), serde_json::from_str(line).unwrap_or_default());
+            Some((index, at.clone(), differing_key(&w, &f)))
+        })
+        .collect();
+    if differing.is_empty() {
+        return Ok(());
+    }
+    differing.sort();
+    let examples: Vec<String> =
+        differing.iter().take(5).map(|(i, at, key)| format!("point {i} ({at}) at \"{key}\"")).collect();
+    Err(Failure::Failed(format!(
+        "--recheck: {} of {} lines differ from the results certified again: {}{}",
+        differing.len(),
+        points.len(),
+        examples.join("; "),
+        if differing.len() > 5 { "; ..." } else { "" }
+    )))
 }

@@ -38,7 +38,8 @@ mod run;
 
 pub use plan::{Plan, PlanError, Sampling, Shard, MAX_POINTS};
 pub use point::{
-    outcome_from_certificate, record_line, Evaluator, Level, Outcome, UnknownParameter, Verdict, VerificationLevel,
+    outcome_from_certificate, outcome_from_line, record_line, Evaluator, Level, Outcome, UnknownParameter, Verdict,
+    VerificationLevel,
 };
 pub use resume::{scan, Existing, ResumeError};
 pub use run::{run, Done, Summary};

@@ -228,6 +228,58 @@ pub fn outcome_from_certificate(cert: &Value) -> Outcome {
     Outcome { verdict, level, sigma2, stopping_time, growth_rate, error: None }
 }
 
+/// The record a sweep line states, read back: `None` when a field is not
+/// one [`record_line`] writes (an unknown verdict or level, a number where
+/// a string belongs). With [`record_line`] this gives the line's canonical
+/// form: `verify merge` re-renders every line from its index's plan point
+/// and its own results and refuses one that differs (float parameters that
+/// are not the exact ones rounded, a key added, a level misspelt).
+///
+/// ```
+/// let line = r#"{"sweep":"ab12","spec":"cd34","index":0,"parameters":{"I2":2.0},"exact_parameters":{"I2":"2"},"verdict":"stable","level":"exact","sigma2":0.27,"T":17.05}"#;
+/// let v: serde_json::Value = serde_json::from_str(line).unwrap();
+/// let o = sweep::outcome_from_line(&v).unwrap();
+/// assert_eq!(o.verdict, Some(sweep::Verdict::Stable));
+/// let again = sweep::record_line("ab12", "cd34", 0, &["I2".to_string()], &[exact::parse_number("2").unwrap()], &o);
+/// assert_eq!(again.trim_end(), line);
+/// ```
+pub fn outcome_from_line(v: &Value) -> Option<Outcome> {
+    let number = |key: &str| -> Option<Option<f64>> {
+        match v.get(key) {
+            None => Some(None),
+            Some(x) => x.as_f64().map(Some),
+        }
+    };
+    if let Some(e) = v.get("error") {
+        return Some(Outcome {
+            verdict: None,
+            level: None,
+            sigma2: None,
+            stopping_time: None,
+            growth_rate: None,
+            error: Some(e.as_str()?.to_string()),
+        });
+    }
+    let verdict = Verdict::from_name(v.get("verdict")?.as_str()?)?;
+    let level = match v.get("level")?.as_str()? {
+        "none" => None,
+        name => Some(VerificationLevel::from_name(name)?),
+    };
+    let stopping_time = match v.get("T") {
+        None => None,
+        Some(Value::String(t)) if t == "infinity" => Some(None),
+        Some(t) => Some(Some(t.as_f64()?)),
+    };
+    Some(Outcome {
+        verdict: Some(verdict),
+        level,
+        sigma2: number("sigma2")?,
+        stopping_time,
+        growth_rate: number("growth_rate")?,
+        error: None,
+    })
+}
+
 /// A double as JSON (`null` if not finite).
 fn number(out: &mut String, x: f64) {
     if x.is_finite() {
