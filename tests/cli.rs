@@ -500,7 +500,9 @@ fn huge_inputs_are_quoted_as_excerpts() {
     let o = verify(&["certify", good.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", &stderr(&o)[..stderr(&o).len().min(300)]);
     assert!(stderr(&o).contains("(50000000 bytes): stable"), "{}", &stderr(&o)[..stderr(&o).len().min(300)]);
-    assert!(o.stderr.len() < 1000, "{} bytes of stderr", o.stderr.len());
+    // the summary carries the certificate's statement and what it does not
+    // check (about 1,300 bytes, the name cut to 80 characters in them)
+    assert!(o.stderr.len() < 2500, "{} bytes of stderr", o.stderr.len());
     v["noise"] = serde_json::json!([["sigma", 0]]);
     let bad = temp_file("huge-name-bad.json", &v.to_string());
     for args in [vec!["certify", bad.to_str().unwrap()], vec!["simulate", bad.to_str().unwrap()]] {

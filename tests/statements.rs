@@ -58,3 +58,141 @@ fn a_stopping_time_past_its_proof_fails_for_every_kind() {
         }
     }
 }
+
+/// A fixture certificate of every kind and verdict family, cheap to check.
+const EVERY_KIND: [&str; 12] = [
+    "rigid-body-major-axis.cert.json",
+    "rigid-body-intermediate-axis.cert.json",
+    "rigid-body-spherical.cert.json",
+    "rigid-body-not-equilibrium.cert.json",
+    "fluids/kolmogorov-periodic.cert.json",
+    "fluids/sin2y-unstable.cert.json",
+    "zeitlin/energy-casimir-n32.cert.json",
+    "zeitlin/mixed-degrees-n8.cert.json",
+    "large/chain-30.cert.json",
+    "large/chain-30-repelling.cert.json",
+    "boxes/rigid-body-inertia-box.cert.json",
+    "boxes/lagrange-top-stability-map.cert.json",
+];
+
+/// Every leaf of `v` as a JSON pointer, with arrays sampled at their first
+/// and last element (the same code reads every element of an array).
+fn leaves(v: &Value, at: String, out: &mut Vec<String>) {
+    match v {
+        Value::Object(m) => {
+            for (k, x) in m {
+                leaves(x, format!("{at}/{}", k.replace('~', "~0").replace('/', "~1")), out);
+            }
+        }
+        Value::Array(a) if !a.is_empty() => {
+            let mut idx = vec![0];
+            if a.len() > 1 {
+                idx.push(a.len() - 1);
+            }
+            for i in idx {
+                leaves(&a[i], format!("{at}/{i}"), out);
+            }
+        }
+        _ => out.push(at),
+    }
+}
+
+/// The smallest edit of a value: a number moved by a relative 1e-7 (an
+/// integer by 1), a rational string by 1e-7, other text changed, a boolean
+/// flipped, null made 0, an empty array or object given an element.
+fn edited(v: &Value) -> Value {
+    match v {
+        Value::Number(n) if n.is_u64() || n.is_i64() => json!(n.as_i64().unwrap_or(0) + 1),
+        Value::Number(n) => {
+            let x = n.as_f64().unwrap();
+            json!(if x == 0.0 { 1e-7 } else { x * (1.0 + 1e-7) })
+        }
+        Value::String(s) => match exact::parse_number(s) {
+            Ok(r) if s.len() < 200 => {
+                let step = exact::parse_number("1/10000000").unwrap();
+                let scale = if r == exact::Rational::from(0) { exact::Rational::from(1) } else { r.clone() };
+                let bumped = &r + &step * if scale < exact::Rational::from(0) { -scale } else { scale };
+                Value::String(bumped.to_string())
+            }
+            _ => Value::String(format!("{s} (edited)")),
+        },
+        Value::Bool(b) => json!(!b),
+        Value::Null => json!(0),
+        Value::Array(_) => json!([0]),
+        Value::Object(_) => json!({"edited": 0}),
+    }
+}
+
+/// The fields `docs/ci.md` declares free text that no claim rests on, as
+/// JSON pointers (the table's rows marked `free text`).
+fn documented_free_text() -> Vec<String> {
+    let doc = std::fs::read_to_string(fixture_path("../docs/ci.md")).unwrap();
+    doc.lines()
+        .filter(|l| l.starts_with("| `") && l.contains("| free text"))
+        .filter_map(|l| l.split('`').nth(1).map(str::to_string))
+        .collect()
+}
+
+/// Whether `pointer` is covered by a documented free-text field (a
+/// pattern whose `*` matches one path segment).
+fn is_free_text(pointer: &str, free: &[String]) -> bool {
+    let segments: Vec<&str> = pointer.split('/').skip(1).collect();
+    free.iter().any(|pattern| {
+        let p: Vec<&str> = pattern.trim_start_matches('$').split('.').filter(|s| !s.is_empty()).collect();
+        p.len() <= segments.len() && p.iter().zip(&segments).all(|(a, b)| *a == "*" || a == b)
+    })
+}
+
+/// `check` read only some fields of a box certificate (its `reason`, its
+/// `limit`, its version and an undecided sub-box's reason could be edited
+/// and still pass). Every field of every kind: an edit of any leaf (sampled
+/// at the ends of each array), and the removal of any key, fails `check`,
+/// except the fields `docs/ci.md` declares free text, whose edits must pass
+/// (so the table is exact both ways).
+#[test]
+fn every_field_of_every_kind_is_read_by_check() {
+    let free = documented_free_text();
+    let mut tried = 0;
+    let mut failures = vec![];
+    for name in EVERY_KIND {
+        let cert = committed(name);
+        assert!(check(name, &cert).is_ok(), "{name}: the committed certificate");
+        let mut paths = vec![];
+        leaves(&cert, String::new(), &mut paths);
+        for p in &paths {
+            let mut c = cert.clone();
+            let slot = c.pointer_mut(p).unwrap();
+            *slot = edited(slot);
+            tried += 1;
+            let accepted = check(name, &c).is_ok();
+            if accepted != is_free_text(p, &free) {
+                failures.push(format!("{name}: {p} edited: {}", if accepted { "accepted" } else { "refused" }));
+            }
+        }
+        // every key removed, one at a time (objects sampled as above)
+        let mut objects = vec![String::new()];
+        for p in &paths {
+            let mut parts: Vec<&str> = p.split('/').collect();
+            while parts.len() > 1 {
+                parts.pop();
+                let parent = parts.join("/");
+                if cert.pointer(&parent).is_some_and(Value::is_object) && !objects.contains(&parent) {
+                    objects.push(parent);
+                }
+            }
+        }
+        for o in objects {
+            let keys: Vec<String> = cert.pointer(&o).unwrap().as_object().unwrap().keys().cloned().collect();
+            for k in keys {
+                let mut c = cert.clone();
+                c.pointer_mut(&o).unwrap().as_object_mut().unwrap().remove(&k);
+                tried += 1;
+                let p = format!("{o}/{k}");
+                if check(name, &c).is_ok() && !is_free_text(&p, &free) {
+                    failures.push(format!("{name}: {p} removed: accepted"));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{} of {tried} edits:\n{}", failures.len(), failures.join("\n"));
+}

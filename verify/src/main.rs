@@ -40,6 +40,7 @@ mod paths;
 mod plots;
 mod png;
 mod report;
+mod report_box;
 mod simulate_cmd;
 mod sweep_cmd;
 mod sweep_plots;
@@ -282,10 +283,10 @@ fn summary(cert: &Value) -> String {
         "{}: {} ({})",
         messages::excerpt(cert["name"].as_str().unwrap_or("?")),
         cert["verdict"].as_str().unwrap_or("?"),
-        cert["level"].as_str().unwrap_or(if cert["kind"] == "box" {
-            "exact, for every parameter in the box"
-        } else {
-            "?"
+        cert["level"].as_str().unwrap_or(match cert.pointer("/theorem/status").and_then(Value::as_str) {
+            Some("proved") => "exact",
+            Some(_) => "nothing is claimed",
+            None => "?",
         })
     );
     if let Some(s2) = cert.get("sigma2") {
@@ -314,6 +315,13 @@ fn summary(cert: &Value) -> String {
     }
     if let Some(r) = cert["reason"].as_str() {
         s.push_str(&format!("\n  {r}"));
+    }
+    // The statement in the certificate's own words (re-derived by check).
+    if let Some(t) = cert.pointer("/theorem/statement").and_then(Value::as_str) {
+        s.push_str(&format!("\n  claim: {t}"));
+    }
+    if let Some(t) = cert.pointer("/theorem/not_checked").and_then(Value::as_str) {
+        s.push_str(&format!("\n  not checked: {t}"));
     }
     if let Some(list) = cert.pointer("/compressible/compatible_completion") {
         s.push_str(&format!("\n  compatible noise (paste as fluid.noise): {list}"));

@@ -52,8 +52,17 @@ fn kind(cert: &Value) -> &str {
     cert.get("kind").and_then(Value::as_str).unwrap_or("finite")
 }
 
-/// What the verdict means, in a sentence.
+/// What the certificate claims: its own statement (`theorem`, re-derived
+/// by `check`), or, for a certificate without one, the verdict in words.
 fn in_words(cert: &Value) -> String {
+    if let Some(t) = cert.pointer("/theorem/statement").and_then(Value::as_str) {
+        return t.to_string();
+    }
+    fallback_words(cert)
+}
+
+/// The verdict in a sentence, for a certificate with no `theorem`.
+fn fallback_words(cert: &Value) -> String {
     let verdict = cert["verdict"].as_str().unwrap_or("?");
     let stopping = cert.get("stopping");
     let number = |p: &str| stopping.and_then(|s| s.get(p)).map(format_number).unwrap_or_else(|| "?".into());
@@ -61,7 +70,7 @@ fn in_words(cert: &Value) -> String {
         "stable" => {
             let guarantee = match stopping {
                 Some(_) => format!(
-                    " For a perturbation of size delta = {}, the probability of leaving the ball of size epsilon = {} is at most (delta/epsilon) exp(Sigma^2 t), which stays below 1 until T(epsilon, delta) = {}.",
+                    " For |dmu_0|_P^2 = delta = {}, P(|dmu_t|_P^2 > epsilon = {}) <= (delta/epsilon) exp(Sigma^2 t) at each fixed time t, below 1 until T(epsilon, delta) = {}.",
                     number("delta"),
                     number("epsilon"),
                     number("T")
@@ -69,7 +78,7 @@ fn in_words(cert: &Value) -> String {
                 None => String::new(),
             };
             format!(
-                "Stable in probability: a conserved form is definite at the equilibrium, and E|dmu_t|^2 <= |dmu_0|^2 exp(Sigma^2 t) with Sigma^2 = {}.{guarantee}",
+                "Stable for the linearised SDE: a conserved form P is definite at the equilibrium, and E|dmu_t|_P^2 <= |dmu_0|_P^2 exp(Sigma^2 t) with Sigma^2 = {}.{guarantee}",
                 cert.get("sigma2_upper").or(cert.get("sigma2")).map(format_number).unwrap_or_else(|| "?".into())
             )
         }
@@ -93,6 +102,24 @@ fn level_in_words(level: &str) -> &'static str {
         "numerical" | "float" => "floating point, not proved: a careful computation, not a proof",
         _ => "no claim needs a proof",
     }
+}
+
+/// The level a certificate states; a box certificate's proofs are exact
+/// (its `theorem.status` says whether anything is claimed).
+fn level_of(cert: &Value) -> &str {
+    match cert["level"].as_str() {
+        Some(l) => l,
+        None if kind(cert) == "box" && cert.pointer("/theorem/status").and_then(Value::as_str) == Some("proved") => {
+            "exact"
+        }
+        None => "none",
+    }
+}
+
+/// The certificate's `Sigma^2` for the summary: the pointwise value, or a
+/// box's proved sup.
+fn sigma2_of(cert: &Value) -> Option<&Value> {
+    cert.get("sigma2_upper").or(cert.get("sigma2")).or(cert.get("sup_sigma2"))
 }
 
 fn row(out: &mut String, key: &str, value: &str) {
@@ -132,7 +159,7 @@ fn guarantee_chart(cert: &Value) -> Option<XyChart> {
 fn section(out: &mut String, path: &Path, cert: &Value, check: &Result<spec::CheckReport, spec::CheckError>) {
     let name = cert["name"].as_str().unwrap_or("?");
     let verdict = cert["verdict"].as_str().unwrap_or("?");
-    let level = cert["level"].as_str().unwrap_or("none");
+    let level = level_of(cert);
     let _ = write!(
         out,
         "<section><h2>{}</h2><p class=\"file\">{}</p><p><span class=\"verdict {}\">{}</span> <span class=\"level\">level: {} ({})</span></p>",
@@ -144,6 +171,9 @@ fn section(out: &mut String, path: &Path, cert: &Value, check: &Result<spec::Che
         level_in_words(level)
     );
     let _ = write!(out, "<p class=\"words\">{}</p>", escape(&in_words(cert)));
+    if let Some(t) = cert.pointer("/theorem/not_checked").and_then(Value::as_str) {
+        let _ = write!(out, "<p class=\"limits\">Not checked: {}</p>", escape(t));
+    }
     if let Some(reason) = cert["reason"].as_str() {
         let _ = write!(out, "<p class=\"reason\">{}</p>", escape(reason));
     }
@@ -205,6 +235,7 @@ fn section(out: &mut String, path: &Path, cert: &Value, check: &Result<spec::Che
                 row(out, "dimension", &format_number(v));
             }
         }
+        "box" => box_rows(out, cert),
         _ => {
             if let Some(c) = cert.get("casimir_choice") {
                 for (key, label) in
@@ -232,6 +263,14 @@ fn section(out: &mut String, path: &Path, cert: &Value, check: &Result<spec::Che
     if kind(cert) == "fluid" {
         charts.extend(crate::fluid_plots::fluid_charts(cert).into_iter().map(|(_, c)| c));
     }
+    if kind(cert) == "box" {
+        match crate::report_box::sub_box_map(cert) {
+            Some(svg) => {
+                let _ = write!(out, "<figure>{svg}</figure>");
+            }
+            None => out.push_str("<p>(no map: the certificate has no sub-boxes)</p>"),
+        }
+    }
     for chart in &charts {
         match xy_svg(chart, (900, 520)) {
             Ok(svg) => {
@@ -248,8 +287,8 @@ fn section(out: &mut String, path: &Path, cert: &Value, check: &Result<spec::Che
 const STYLE: &str = "body{font-family:sans-serif;max-width:960px;margin:2em auto;padding:0 1em;color:#222}\
 h1{font-size:1.6em}section{border-top:2px solid #ccc;margin-top:2em;padding-top:1em}\
 .file{color:#666;font-size:.9em;margin-top:-.5em}.verdict{font-weight:bold;padding:.2em .6em;border-radius:4px;color:#fff;background:#777}\
-.verdict.stable{background:#2a62c9}.verdict.linearly_unstable{background:#c82828}.verdict.noise_incompatible{background:#8c3caa}\
-.verdict.not_an_equilibrium{background:#b48c14}.level{color:#444}.words{font-size:1.05em}.reason{color:#444;font-style:italic}\
+.verdict.stable{background:#2a62c9}.verdict.partly_stable{background:#6f8fcf}.verdict.partly_unstable{background:#c86a6a}.verdict.linearly_unstable{background:#c82828}.verdict.noise_incompatible{background:#8c3caa}\
+.verdict.not_an_equilibrium{background:#b48c14}.level{color:#444}.words{font-size:1.05em}.limits{color:#555;font-size:.95em}.reason{color:#444;font-style:italic}\
 .check.ok{color:#17703a}.check.failed{color:#c82828;font-weight:bold}table{border-collapse:collapse;margin:.5em 0}\
 th,td{border:1px solid #ddd;padding:.3em .6em;text-align:left;vertical-align:top;font-size:.92em}th{background:#f4f4f4}\
 figure{margin:1em 0}svg{max-width:100%;height:auto}";
@@ -260,7 +299,7 @@ pub fn run(args: &ReportArgs) -> Result<(), Failure> {
     crate::plots::register_font();
     let mut body = String::new();
     let mut summary = String::from(
-        "<table><tr><th>certificate</th><th>verdict</th><th>level</th><th>Sigma^2</th><th>re-check</th></tr>",
+        "<table><tr><th>certificate</th><th>verdict</th><th>level</th><th>Sigma^2 (proved bound where there is one)</th><th>re-check</th></tr>",
     );
     let mut failed = 0usize;
     for path in &args.certificates {
@@ -283,8 +322,8 @@ pub fn run(args: &ReportArgs) -> Result<(), Failure> {
             "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             escape(cert["name"].as_str().unwrap_or("?")),
             escape(cert["verdict"].as_str().unwrap_or("?")),
-            escape(cert["level"].as_str().unwrap_or("none")),
-            escape(&cert.get("sigma2").map(format_number).unwrap_or_else(|| "-".into())),
+            escape(level_of(&cert)),
+            escape(&sigma2_of(&cert).map(format_number).unwrap_or_else(|| "-".into())),
             if check.is_ok() { "passed" } else { "FAILED" }
         );
         section(&mut body, path, &cert, &check);
@@ -302,4 +341,44 @@ pub fn run(args: &ReportArgs) -> Result<(), Failure> {
         )));
     }
     Ok(())
+}
+
+/// A box certificate's key numbers: the box, the sup and where it is
+/// approached, the shares of the box by verdict, the sub-boxes.
+fn box_rows(out: &mut String, cert: &Value) {
+    if let (Some(names), Some(spec)) = (cert.get("parameters").and_then(Value::as_array), cert.get("spec")) {
+        for n in names.iter().filter_map(Value::as_str) {
+            if let Some(side) = spec.pointer(&format!("/box/parameters/{n}")) {
+                row(out, &format!("box: {n}"), &rationals(side));
+            }
+        }
+    }
+    if let Some(v) = cert.get("sup_sigma2_exact") {
+        row(out, "sup Sigma^2 over the stable sub-boxes (proved, exact)", &rationals(v));
+    }
+    if let Some(m) = cert.get("sampled_max") {
+        row(
+            out,
+            "largest Sigma^2 sampled, and where (the sup is approached there)",
+            &format!("{} at {}", format_number(&m["sigma2"]), rationals(&m["at"])),
+        );
+    }
+    let share = |key: &str| cert.get(key).and_then(Value::as_f64);
+    let (undecided, unstable, excluded) = (
+        share("undecided_fraction").unwrap_or(0.0),
+        share("unstable_fraction").unwrap_or(0.0),
+        share("excluded_fraction"),
+    );
+    let stable = crate::report_box::stable_share(cert);
+    row(out, "share of the box proved stable", &crate::report_box::percent(stable));
+    row(out, "share proved linearly unstable", &crate::report_box::percent(unstable));
+    if let Some(x) = excluded {
+        row(out, "share proved not an equilibrium or noise-incompatible", &crate::report_box::percent(x));
+    }
+    row(out, "share undecided", &crate::report_box::percent(undecided));
+    let subs = cert.get("sub_boxes").and_then(Value::as_array).map_or(0, Vec::len);
+    row(out, "sub-boxes", &subs.to_string());
+    if let Some(l) = cert.get("limit").and_then(Value::as_str) {
+        row(out, "bisection stopped by", l);
+    }
 }

@@ -444,8 +444,9 @@ fn float_pipeline(system: &System, settings: &Settings) -> Result<NumericAnalysi
         return Err("the restricted Hessian's sign is within its rounding of the definiteness tolerance");
     }
     let Some(sign) = [Sign::Positive, Sign::Negative].into_iter().find(|&s| margin(s) > tol) else {
-        out.restricted_margin = Some(margin(Sign::Positive).max(margin(Sign::Negative)));
-        return Ok(conclude(out, "no choice of multipliers and Casimir function makes the second variation definite"));
+        let best = margin(Sign::Positive).max(margin(Sign::Negative));
+        out.restricted_margin = Some(best);
+        return Ok(conclude(out, &crate::pipeline::margin_reason(best, tol)));
     };
     out.restricted_margin = Some(margin(sign));
     if out.instability.is_some() {

@@ -250,10 +250,8 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
     analysis.variation = Some(variation);
     analysis.search = Some(outcome.clone());
     let Some(choice) = outcome.definite() else {
-        return conclude_without_form(
-            analysis,
-            "no choice of multipliers and Casimir function makes the second variation definite",
-        );
+        let why = not_definite_reason(&outcome, settings.search.definiteness_tolerance);
+        return conclude_without_form(analysis, &why);
     };
     if matches!(analysis.spectral_proof, Some(SpectralProof::Unstable { .. })) || analysis.instability.is_some() {
         // A conserved definite form rules out eigenvalues off the imaginary
@@ -370,6 +368,31 @@ pub(crate) fn incompatible_reason(fields: &[usize]) -> String {
     format!(
         "ad*_sigma mu_e is not zero for noise field(s) {fields:?}: the noise moves the equilibrium; compatible noise lies in the isotropy algebra of mu_e"
     )
+}
+
+/// Why the search found no definite form: none at all (every relative
+/// margin at most 0), or one too close to singular to certify (a positive
+/// margin below the tolerance: a conditioning limit, not a proof that none
+/// exists).
+pub fn not_definite_reason(outcome: &casimir::SearchOutcome, tolerance: f64) -> String {
+    let best = match outcome {
+        casimir::SearchOutcome::NotFound { best_positive_margin, best_negative_margin, .. } => {
+            best_positive_margin.max(*best_negative_margin)
+        }
+        casimir::SearchOutcome::Definite(_) => f64::NAN,
+    };
+    margin_reason(best, tolerance)
+}
+
+/// [`not_definite_reason`] from the best relative margin found.
+pub fn margin_reason(best: f64, tolerance: f64) -> String {
+    if best > 0.0 {
+        format!(
+            "the best choice of multipliers and Casimir function found makes the second variation definite only with relative margin {best:.3e} (smallest over largest eigenvalue of the restricted Hessian), below settings.search.definiteness_tolerance = {tolerance:e}: a conditioning limit, so it is not certified (this does not show that no definite form exists)"
+        )
+    } else {
+        "no choice of multipliers and Casimir function makes the second variation definite".to_string()
+    }
 }
 
 fn conclude_without_form(mut analysis: Analysis, why: &str) -> Analysis {

@@ -74,7 +74,7 @@ impl SparseAlgebra {
             }
             if a == b {
                 if !c.is_zero() {
-                    return Err(LargeError::Algebra(format!("row {row}: c^{k}_{a}{a} must be 0 (antisymmetry)")));
+                    return Err(LargeError::Algebra(format!("row {row}: c^{k}_({a},{a}) must be 0 (antisymmetry)")));
                 }
                 continue;
             }
@@ -82,7 +82,7 @@ impl SparseAlgebra {
                 match table.get(&(x, y, *k)) {
                     Some((old, earlier)) if *old != v => {
                         return Err(LargeError::Algebra(format!(
-                            "row {row}: c^{k}_{a}{b} = {c} contradicts row {earlier}"
+                            "row {row}: c^{k}_({a},{b}) = {c} contradicts row {earlier}"
                         )))
                     }
                     Some(_) => {}

@@ -160,6 +160,8 @@ pub struct BoxCertificateDocument {
     pub verdict: String,
     /// Why, in a sentence.
     pub reason: String,
+    /// The statement proved, generated from the data.
+    pub theorem: crate::theorem::TheoremRecord,
     /// The box parameters, in name order (the spec's `box` section).
     pub parameters: Vec<String>,
     /// A proved upper bound on `Sigma^2` over the stable sub-boxes (the
@@ -303,6 +305,47 @@ fn fraction(part: &Rational, whole: &Rational) -> f64 {
     exact::rational_to_f64(&(part / whole))
 }
 
+/// The statement of a box certificate from what its sub-boxes prove
+/// (`volumes`: stable, linearly unstable, excluded, undecided).
+fn statement(
+    spec: &Spec,
+    section: &BoxSection,
+    verdict: BoxVerdict,
+    volumes: [&Rational; 4],
+    sup: Option<&Rational>,
+) -> crate::theorem::TheoremRecord {
+    let range = section
+        .names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| format!("{n} in [{}, {}]", section.range.lo[i], section.range.hi[i]))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let equilibrium = spec
+        .raw
+        .get("equilibrium")
+        .and_then(Value::as_array)
+        .map(|v| {
+            format!(
+                "({})",
+                v.iter()
+                    .map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+        .unwrap_or_else(|| "the spec's equilibrium".into());
+    let whole = section.range.volume();
+    crate::theorem::box_theorem(&crate::theorem::BoxParts {
+        name: &spec.name,
+        range,
+        equilibrium,
+        verdict: verdict.as_str(),
+        shares: volumes.map(|v| fraction(v, &whole)),
+        sup: sup.map(|s| s.to_string()),
+    })
+}
+
 /// The certificate of a report (`excluded`: whether the equilibrium or the
 /// noise fails for some parameter, so the excluded share is stated).
 fn document(spec: &Spec, section: &BoxSection, report: &BoxReport, excluded: bool) -> BoxCertificateDocument {
@@ -319,6 +362,9 @@ fn document(spec: &Spec, section: &BoxSection, report: &BoxReport, excluded: boo
             _ => Some(x),
         })
         .map(|(v, at)| SampleRecord { sigma2: Float(v), at: exact_vec(&at) });
+    let volumes = (report.unstable_volume(), report.excluded_volume(), report.undecided_volume());
+    let stable = section.range.volume() - &volumes.0 - &volumes.1 - &volumes.2;
+    let theorem = statement(spec, section, report.verdict, [&stable, &volumes.0, &volumes.1, &volumes.2], sup.as_ref());
     BoxCertificateDocument {
         certificate_version: CERTIFICATE_VERSION,
         engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
@@ -326,6 +372,7 @@ fn document(spec: &Spec, section: &BoxSection, report: &BoxReport, excluded: boo
         kind: "box".into(),
         verdict: report.verdict.as_str().into(),
         reason: report.reason.clone(),
+        theorem,
         parameters: section.names.clone(),
         sup_sigma2: sup.as_ref().map(|s| Float(exact::rational_to_f64_up(s))),
         sup_sigma2_exact: sup.map(ExactRational),
@@ -423,6 +470,14 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             kind: "box".into(),
             verdict: "undecided".into(),
             reason: reason.clone(),
+            theorem: crate::theorem::box_theorem(&crate::theorem::BoxParts {
+                name: &spec.name,
+                range: String::new(),
+                equilibrium: String::new(),
+                verdict: "undecided",
+                shares: [0.0; 4],
+                sup: None,
+            }),
             parameters: section.names.clone(),
             sup_sigma2: None,
             sup_sigma2_exact: None,
@@ -619,7 +674,10 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                     if r.centre_verdict != derived {
                         return Err(fail(
                             &format!("{path}.centre_verdict"),
-                            format!("is not the pipeline's verdict at the centre ({derived:?})"),
+                            format!(
+                                "is not the pipeline's verdict at the centre ({})",
+                                derived.map_or("none: the pipeline could not run there", |v| v.as_str())
+                            ),
                         ));
                     }
                 }
@@ -702,6 +760,17 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
         (None, None) => {}
         (Some(stated), Some((v, at))) if close(stated.sigma2.0, *v) && &rationals(&stated.at) == at => {}
         _ => return Err(fail("$.sampled_max", "is not the largest re-derived sample".into())),
+    }
+    let stable_volume = range.volume() - &unstable_volume - &excluded_volume - &undecided;
+    let derived = statement(
+        &spec,
+        section,
+        verdict,
+        [&stable_volume, &unstable_volume, &excluded_volume, &undecided],
+        sup.as_ref(),
+    );
+    if doc.theorem != derived {
+        return Err(fail("$.theorem", "is not the statement of what the sub-boxes prove".into()));
     }
     let verdict = match verdict.at_every_point() {
         Some(v) => v,

@@ -14,7 +14,7 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// Version of the certificate format.
-pub const CERTIFICATE_VERSION: u64 = 2;
+pub const CERTIFICATE_VERSION: u64 = 3;
 
 /// The engine version written into certificates.
 pub const ENGINE_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -230,6 +230,29 @@ pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
         opt
     });
     let exact = a.stable.as_ref().and_then(|s| s.exact.as_ref());
+    let algebra = spec.builtin.clone().unwrap_or_else(|| "an algebra given by structure constants".into());
+    let subject = crate::theorem::finite_subject(
+        &spec.name,
+        &algebra,
+        system.dim(),
+        &crate::theorem::listed(system.equilibrium(), "the spec's equilibrium"),
+        system.noise().len(),
+    );
+    let bound = a.stable.as_ref().map(|s| crate::theorem::Bound {
+        sigma2: match &s.exact {
+            Some(e) if e.value.to_string().len() <= 40 => e.value.to_string(),
+            _ => crate::theorem::significant(s.sigma2_bound(), true),
+        },
+        zero: s.sigma2_bound() == 0.0,
+        stopping: stopping.as_ref().map(|st| (st.epsilon.0, st.delta.0, Some(st.t.0).filter(|t| t.is_finite()))),
+    });
+    let theorem = crate::theorem::theorem(
+        &subject,
+        a.verdict,
+        Some(verification_level(a)),
+        bound.as_ref(),
+        a.instability.as_ref().map(|i| i.eigenvalue.re),
+    );
     CertificateDocument {
         certificate_version: CERTIFICATE_VERSION,
         engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
@@ -237,6 +260,7 @@ pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
         verdict: a.verdict,
         reason: a.reason.clone(),
         level: verification_level(a),
+        theorem,
         checks: checks(a),
         sigma2: a.sigma2().map(Float),
         sigma2_exact: exact.map(|e| e.value.to_string()),

@@ -601,6 +601,7 @@ fn empty_document(spec: &FluidSpec) -> FluidCertificateDocument {
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         level: LevelOrNone(None),
+        theorem: crate::theorem::nothing(&crate::theorem::fluid_not_checked(spec.problem.ny, spec.problem.x_modes)),
         checks: None,
         sigma2: None,
         sigma2_upper: None,
@@ -771,10 +772,31 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
             drift_residual: opt(g.drift_residual),
         }),
     });
+    let subject = crate::theorem::fluid_subject(
+        &spec.name,
+        matches!(p.model, FluidModel::Compressible { .. }),
+        spec.raw.pointer("/fluid/shear_flow").and_then(Value::as_str).unwrap_or("the spec's profile"),
+        match p.profile.boundary {
+            Boundary::Walls => "between walls",
+            Boundary::Periodic => "periodic in y",
+        },
+        p.ny,
+        p.x_modes,
+    );
+    let theorem = crate::theorem::from_doubles(
+        &subject,
+        a.verdict,
+        a.verification,
+        a.sigma2_upper,
+        a.sigma2,
+        stopping.as_ref(),
+        a.instability.as_ref().map(|u| u.growth_rate),
+    );
     FluidCertificateDocument {
         verdict: a.verdict,
         reason: a.reason.clone(),
         level: LevelOrNone(a.verification),
+        theorem,
         checks: Some(checks),
         sigma2: a.sigma2.map(Float),
         sigma2_upper: a.sigma2_upper.map(Float),

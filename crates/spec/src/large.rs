@@ -224,6 +224,7 @@ pub fn large_certificate_document(
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         level: LevelOrNone(None),
+        theorem: crate::theorem::nothing(crate::theorem::FINITE_NOT_CHECKED),
         checks: BTreeMap::new(),
         sigma2: None,
         sigma2_upper: None,
@@ -330,6 +331,22 @@ pub fn large_certificate_document(
         Verdict::Inconclusive => {}
     }
     doc.checks = checks;
+    let subject = crate::theorem::finite_subject(
+        &spec.name,
+        "an algebra given by structure constants",
+        spec.system.dim(),
+        "the spec's equilibrium",
+        spec.raw.get("noise").and_then(Value::as_array).map_or(0, Vec::len),
+    );
+    doc.theorem = crate::theorem::from_doubles(
+        &subject,
+        doc.verdict,
+        doc.level.0,
+        doc.sigma2_upper.map(|x| x.0),
+        doc.sigma2.map(|x| x.0),
+        doc.stopping.as_ref(),
+        doc.analysis.growth_rate.map(|x| x.0),
+    );
     doc
 }
 

@@ -57,6 +57,7 @@ mod pretty;
 pub mod record;
 mod settings;
 mod sweep;
+pub mod theorem;
 #[cfg(feature = "fluid")]
 mod zeitlin;
 

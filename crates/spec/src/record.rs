@@ -119,6 +119,8 @@ pub struct CertificateDocument {
     pub reason: String,
     /// What the verdict rests on.
     pub level: VerificationLevel,
+    /// The statement proved (or estimated), generated from the data.
+    pub theorem: crate::theorem::TheoremRecord,
     /// What each part of the verdict rests on, part by part.
     pub checks: BTreeMap<String, String>,
     /// `Sigma^2` (stable verdicts).
@@ -463,6 +465,8 @@ pub struct FluidCertificateDocument {
     pub reason: String,
     /// What the verdict rests on (`none`: no claim).
     pub level: LevelOrNone,
+    /// The statement proved (or estimated), generated from the data.
+    pub theorem: crate::theorem::TheoremRecord,
     /// What each part rests on.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub checks: Option<BTreeMap<String, String>>,
@@ -768,6 +772,8 @@ pub struct ZeitlinCertificateDocument {
     pub reason: String,
     /// What the verdict rests on (`none`: no claim).
     pub level: LevelOrNone,
+    /// The statement proved (or estimated), generated from the data.
+    pub theorem: crate::theorem::TheoremRecord,
     /// What each part rests on.
     pub checks: BTreeMap<String, String>,
     /// `Sigma^2 = max(0, max_m lambda_max(Q_m, P_m))` at the chosen form.
@@ -1009,6 +1015,8 @@ pub struct LargeCertificateDocument {
     pub reason: String,
     /// What the verdict rests on (`none`: no claim).
     pub level: LevelOrNone,
+    /// The statement proved (or estimated), generated from the data.
+    pub theorem: crate::theorem::TheoremRecord,
     /// What each part rests on.
     pub checks: BTreeMap<String, String>,
     /// `Sigma^2` at the chosen form, when stable.

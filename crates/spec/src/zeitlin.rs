@@ -551,6 +551,7 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         level: LevelOrNone(None),
+        theorem: crate::theorem::nothing(crate::theorem::ZEITLIN_NOT_CHECKED),
         checks: BTreeMap::new(),
         sigma2: None,
         sigma2_upper: None,
@@ -596,6 +597,23 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
         }
     }
     doc.checks = checks;
+    let subject = crate::theorem::zeitlin_subject(
+        &spec.name,
+        n,
+        spec.raw.pointer("/zeitlin/equilibrium").and_then(Value::as_str).unwrap_or("the spec's equilibrium"),
+        spec.noise_coefficients
+            .len()
+            .max(spec.raw.pointer("/zeitlin/noise").and_then(Value::as_array).map_or(0, Vec::len)),
+    );
+    doc.theorem = crate::theorem::from_doubles(
+        &subject,
+        doc.verdict,
+        doc.level.0,
+        doc.sigma2_upper.map(|x| x.0),
+        doc.sigma2.map(|x| x.0),
+        doc.stopping.as_ref(),
+        doc.growth_rate.map(|x| x.0),
+    );
     doc
 }
 
