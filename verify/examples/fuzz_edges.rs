@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release -p verify --example fuzz_edges -- [--specs N] [--certs M] [--seed S]
-//!     [--time-limit SECS] [--memory-limit MB]
+//!     [--time-limit SECS] [--memory-limit MB] [--merges K]
 //! ```
 //!
 //! * **Specs** (default 100,000): mutations of every fixture spec (a random
@@ -22,6 +22,18 @@
 //!   loosest documented tolerance (`1e-9` relative to the number's array) is
 //!   counted as an accepted forgery; smaller ones, and fluid bounds that the
 //!   checker proves at the altered value, are counted apart.
+//!
+//! * **Boxes** (part of both): rigid bodies over a box of `I2` whose
+//!   equilibrium or noise depends on `I2` and vanishes inside, at the edge
+//!   of, or outside the box. A whole-box verdict that `check` confirms must
+//!   be the pipeline's verdict at the spec's own point.
+//! * **Merged sweeps** (`--merges K`, default 300): the three shards of a
+//!   small sweep, each case altering one (a result, a point, the id, a key
+//!   added, a byte-order mark, CRLF, a cut or garbage line, a missing line,
+//!   two results for one point) and merging them with the `verify` binary
+//!   beside this example, half the time with `--recheck`. An edited result
+//!   may merge only without `--recheck` and with the summary saying the
+//!   results are data; anything else merged is a forgery.
 //!
 //! Every case runs under `catch_unwind` on a pool of worker threads; a case
 //! over the time limit, or a process peak memory (VmHWM) above the memory
@@ -54,6 +66,12 @@ struct Counts {
     accepted_within_tolerance: AtomicU64,
     accepted_proved: AtomicU64,
     unchanged: AtomicU64,
+    /// Box specs whose whole-box verdict (as `check` reports it under the
+    /// spec's name) is not the pipeline's verdict at the spec's own point.
+    box_point_disagrees: AtomicU64,
+    /// Box specs certified (with a parameter-dependent residual, of them).
+    box_specs: AtomicU64,
+    box_residual_specs: AtomicU64,
     /// Slowest case, in microseconds.
     slowest_us: AtomicU64,
 }
@@ -68,10 +86,12 @@ struct Options {
     seed: u64,
     time_limit: f64,
     memory_limit_mb: f64,
+    merges: u64,
 }
 
 fn options() -> Options {
-    let mut o = Options { specs: 100_000, certs: 10_000, seed: 1, time_limit: 60.0, memory_limit_mb: 4096.0 };
+    let mut o =
+        Options { specs: 100_000, certs: 10_000, seed: 1, time_limit: 60.0, memory_limit_mb: 4096.0, merges: 300 };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i + 1 < args.len() {
@@ -82,6 +102,7 @@ fn options() -> Options {
             "--seed" => o.seed = v.parse().expect("--seed S"),
             "--time-limit" => o.time_limit = v.parse().expect("--time-limit SECS"),
             "--memory-limit" => o.memory_limit_mb = v.parse().expect("--memory-limit MB"),
+            "--merges" => o.merges = v.parse().expect("--merges K"),
             other => panic!("unknown option {other}"),
         }
         i += 2;
@@ -311,6 +332,42 @@ fn random_fluid(rng: &mut Xoshiro256PlusPlus) -> Value {
     v
 }
 
+/// A rigid body certified over a box of `I2` (and sometimes `sigma`), with
+/// an equilibrium or noise that depends on `I2` and vanishes at a random
+/// `c` inside, at the edge of, or outside the box: the verdict must be
+/// about the part of the box that is proved, never the whole box from one
+/// point.
+fn random_box(rng: &mut Xoshiro256PlusPlus) -> Value {
+    let lo = rng.random_range(1..8) as f64 / 4.0; // 1/4 .. 7/4, below I1 = 3
+    let hi = lo + rng.random_range(1..12) as f64 / 4.0;
+    let own = (lo + hi) / 2.0;
+    let c = match rng.random_range(0..4) {
+        0 => own,
+        1 => lo,
+        2 => lo + (hi - lo) * rng.random_range(1..8) as f64 / 8.0,
+        _ => hi + 1.0,
+    };
+    let mut v = json!({
+        "name": "random-box", "algebra": "so3",
+        "parameters": {"I1": 3, "I2": format!("{own}"), "I3": "1/2", "sigma": "3/10"},
+        "hamiltonian": "Pi1^2/(2*I1) + Pi2^2/(2*I2) + Pi3^2/(2*I3)",
+        "casimirs": ["(Pi1^2 + Pi2^2 + Pi3^2)/2"],
+        "equilibrium": [1, 0, 0], "noise": [["sigma", 0, 0]],
+        "box": {"parameters": {"I2": [format!("{lo}"), format!("{hi}")]},
+                "max_depth": rng.random_range(1..9), "max_boxes": rng.random_range(4..400)}
+    });
+    match rng.random_range(0..4) {
+        0 => v["equilibrium"] = json!([1, format!("I2 - {c}"), 0]),
+        1 => v["noise"] = json!([["sigma", format!("(I2 - {c})/10"), 0]]),
+        2 => v["noise"] = json!([["sigma", format!("(I2 - {c})^2"), 0]]),
+        _ => {}
+    }
+    if rng.random_bool(0.3) {
+        v["box"]["parameters"]["sigma"] = json!(["1/10", "1/2"]);
+    }
+    v
+}
+
 // ---- running a case ----------------------------------------------------------
 
 fn peak_memory_mb() -> f64 {
@@ -334,7 +391,11 @@ fn run_spec(text: &str, counts: &Counts) {
         Err(_) => None,
         Ok(s) => {
             let cert = s.certify();
-            Some(spec::check_certificate(&spec::to_pretty_json(&cert)).err().map(|e| e.to_string()))
+            let checked = spec::check_certificate(&spec::to_pretty_json(&cert));
+            if let (Ok(report), true) = (&checked, cert.get("kind").is_some_and(|k| k == "box")) {
+                box_point_agrees(text, &cert, report, counts);
+            }
+            Some(checked.err().map(|e| e.to_string()))
         }
     }));
     match outcome {
@@ -353,6 +414,27 @@ fn run_spec(text: &str, counts: &Counts) {
             bump(&counts.own_check_rejected);
             eprintln!("OWN CHECK REJECTED: {e}\n  spec: {}", &text[..text.len().min(400)]);
         }
+    }
+}
+
+/// What `check` reports under a box spec's name holds for the spec itself:
+/// a whole-box verdict is the pipeline's verdict at the spec's own values
+/// (a point of the box).
+fn box_point_agrees(text: &str, cert: &Value, report: &spec::CheckReport, counts: &Counts) {
+    bump(&counts.box_specs);
+    let Ok(mut raw) = serde_json::from_str::<Value>(text) else { return };
+    if raw["equilibrium"].to_string().contains("I2 -") || raw["noise"].to_string().contains("I2 -") {
+        bump(&counts.box_residual_specs);
+    }
+    if report.verdict == spec::Verdict::Inconclusive {
+        return;
+    }
+    raw.as_object_mut().map(|m| m.remove("box"));
+    let Ok(point) = spec::parse_spec(&raw.to_string()) else { return };
+    let at = spec::certify(&point).analysis.verdict;
+    if at != report.verdict {
+        bump(&counts.box_point_disagrees);
+        eprintln!("BOX VERDICT FALSE AT ITS OWN POINT: box {} ({:?}), point {:?}", cert["verdict"], report.verdict, at);
     }
 }
 
@@ -392,8 +474,18 @@ fn number_at(cert: &Value, pointer: &str) -> Option<(f64, f64)> {
 enum Mutation {
     /// A number changed by a relative `delta` (or set to 0 / negated).
     Number { pointer: String, before: f64, after: f64, scale: f64 },
+    /// A string or flag edited (docs/ci.md: every field is read).
+    Field { pointer: String },
     /// Anything else: any acceptance is a forgery.
     Other(String),
+}
+
+/// A box certificate's proof inputs (docs/ci.md class `witness`): any
+/// value with which the proof passes is accepted.
+fn box_witness(original: &Value, pointer: &str) -> bool {
+    original.get("kind").is_some_and(|k| k == "box")
+        && ["/M/", "/multipliers/", "/free/", "/pivot_rows/"].iter().any(|p| pointer.contains(p))
+        || original.get("kind").is_some_and(|k| k == "box") && pointer.ends_with("/sign")
 }
 
 fn mutate_certificate(cert: &Value, rng: &mut Xoshiro256PlusPlus) -> Option<(String, Mutation)> {
@@ -404,7 +496,7 @@ fn mutate_certificate(cert: &Value, rng: &mut Xoshiro256PlusPlus) -> Option<(Str
         .iter()
         .filter(|p| !p.starts_with("/spec") && !p.starts_with("/settings") && number_at(cert, p).is_some())
         .collect();
-    match rng.random_range(0..10) {
+    match rng.random_range(0..12) {
         0..=5 if !numeric.is_empty() => {
             let p = numeric[rng.random_range(0..numeric.len())].clone();
             let (before, scale) = number_at(cert, &p)?;
@@ -435,10 +527,53 @@ fn mutate_certificate(cert: &Value, rng: &mut Xoshiro256PlusPlus) -> Option<(Str
             };
             Some((spec::to_pretty_json(&c), Mutation::Number { pointer: p, before, after, scale }))
         }
+        10 | 11 => {
+            // a string or flag anywhere outside the inputs (spec, settings)
+            let fields: Vec<&String> = paths
+                .iter()
+                .filter(|p| !p.starts_with("/spec") && !p.starts_with("/settings"))
+                .filter(|p| matches!(cert.pointer(p), Some(Value::String(_) | Value::Bool(_))))
+                .collect();
+            if fields.is_empty() {
+                return None;
+            }
+            let p = fields[rng.random_range(0..fields.len())].clone();
+            let slot = c.pointer_mut(&p)?;
+            *slot = match slot {
+                Value::Bool(b) => json!(!*b),
+                Value::String(t) if exact::parse_certificate_rational(t).is_ok() => {
+                    let r = exact::parse_certificate_rational(t).ok()?;
+                    let step = exact::Rational::new(1.into(), 10_000_000.into());
+                    Value::String((&r + &step * (&r * &r + exact::Rational::from(1))).to_string())
+                }
+                Value::String(t) => Value::String(match rng.random_range(0..3) {
+                    0 => format!("{t} (edited)"),
+                    1 => String::new(),
+                    _ => t.chars().rev().collect(),
+                }),
+                _ => return None,
+            };
+            (c.pointer(&p) != cert.pointer(&p)).then(|| (spec::to_pretty_json(&c), Mutation::Field { pointer: p }))
+        }
         6 => {
-            let verdicts = ["stable", "linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"];
+            let verdicts: &[&str] = if cert.get("kind").is_some_and(|k| k == "box") {
+                &[
+                    "stable",
+                    "partly_stable",
+                    "linearly_unstable",
+                    "partly_unstable",
+                    "undecided",
+                    "not_an_equilibrium",
+                    "partly_not_an_equilibrium",
+                    "noise_incompatible",
+                    "partly_noise_incompatible",
+                ]
+            } else {
+                &["stable", "linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"]
+            };
             let now = cert["verdict"].as_str()?;
-            let other = verdicts.iter().filter(|v| **v != now).nth(rng.random_range(0..4))?;
+            let others: Vec<&&str> = verdicts.iter().filter(|v| **v != now).collect();
+            let other = others[rng.random_range(0..others.len())];
             c["verdict"] = json!(other);
             Some((spec::to_pretty_json(&c), Mutation::Other(format!("verdict {now} -> {other}"))))
         }
@@ -541,8 +676,7 @@ fn run_cert(original: &Value, text: &str, mutation: &Mutation, counts: &Counts) 
                 // redoes exactly from the embedded spec (the solved
                 // multipliers, the depth and the samples it re-derives and
                 // compares): an accepted change there is proved again.
-                let box_input = original.get("kind").is_some_and(|k| k == "box")
-                    && ["/M/", "/multipliers/", "/free/", "/pivot_rows/"].iter().any(|p| pointer.contains(p))
+                let box_input = box_witness(original, pointer)
                     || original.get("kind").is_some_and(|k| k == "box")
                         && pointer.ends_with("/sigma2_upper")
                         && after < before;
@@ -564,6 +698,11 @@ fn run_cert(original: &Value, text: &str, mutation: &Mutation, counts: &Counts) 
                     );
                 }
             }
+            Mutation::Field { pointer } if box_witness(original, pointer) => bump(&counts.accepted_proved),
+            Mutation::Field { pointer } => {
+                bump(&counts.forgeries_accepted);
+                eprintln!("FORGERY ACCEPTED: {} field {pointer} edited", original["name"]);
+            }
             // a box certificate re-proves every sub-box from the edited
             // embedded spec: accepted, its claims hold for that spec
             Mutation::Other(what)
@@ -577,6 +716,216 @@ fn run_cert(original: &Value, text: &str, mutation: &Mutation, counts: &Counts) 
             }
         },
     }
+}
+
+/// What the merge fuzz counted.
+#[derive(Default)]
+struct MergeCounts {
+    tried: u64,
+    exit0: u64,
+    exit1: u64,
+    exit2: u64,
+    panics: u64,
+    /// An edited result merged without `--recheck`, with the summary saying
+    /// the results are data (not re-derived): allowed, and counted.
+    passed_as_data: u64,
+    /// An edited result merged as checked, or an edited point, id or form
+    /// merged at all: must be 0.
+    forgeries: u64,
+    /// A harmless change (a byte-order mark, CRLF) merged, and refused.
+    harmless_merged: u64,
+    harmless_refused: u64,
+}
+
+/// Shards of a small sweep, altered once each and merged by the `verify`
+/// binary (next to this example in the target folder), half the time with
+/// `--recheck`.
+fn fuzz_merges(o: &Options) -> Option<MergeCounts> {
+    let exe = std::env::current_exe().ok()?;
+    let verify = exe.parent()?.parent()?.join("verify");
+    if !verify.is_file() {
+        eprintln!("merge fuzz skipped: no {} (build it with `cargo build --release -p verify`)", verify.display());
+        return None;
+    }
+    let dir = std::env::temp_dir().join(format!("fuzz-merge-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).ok()?;
+    let spec = fixtures_dir().join("rigid-body-major-axis.json");
+    let spec = spec.to_str()?;
+    // I2 from 2 to 4 with I1 = 3: stable, I2 = I1 inconclusive, then unstable
+    let plan = ["--param", "I2=2:4:9"];
+    let mut shards = vec![];
+    for k in 0..3 {
+        let path = dir.join(format!("shard{k}.jsonl"));
+        let status = std::process::Command::new(&verify)
+            .args(["sweep", spec, "-o", path.to_str()?, "--shard", &format!("{k}/3")])
+            .args(plan)
+            .stderr(std::process::Stdio::null())
+            .status()
+            .ok()?;
+        if !status.success() {
+            eprintln!("merge fuzz: a shard failed to run");
+            return None;
+        }
+        shards.push(std::fs::read_to_string(&path).ok()?);
+    }
+    let mut counts = MergeCounts::default();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(o.seed ^ 0x3E46E);
+    #[derive(PartialEq)]
+    enum Kind {
+        Result,
+        Point,
+        Harmless,
+        Broken,
+    }
+    for case in 0..o.merges {
+        let mut files = shards.clone();
+        let f = rng.random_range(0..files.len());
+        let mut lines: Vec<String> = files[f].lines().map(str::to_string).collect();
+        let l = rng.random_range(0..lines.len());
+        let mut v: Value = serde_json::from_str(&lines[l]).ok()?;
+        let kind = match rng.random_range(0..16) {
+            0 => {
+                let now = v["verdict"].as_str().unwrap_or("").to_string();
+                let others: Vec<&str> =
+                    ["stable", "linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"]
+                        .into_iter()
+                        .filter(|x| *x != now)
+                        .collect();
+                v["verdict"] = json!(others[rng.random_range(0..others.len())]);
+                Kind::Result
+            }
+            1 | 2 => {
+                let key = if rng.random_bool(0.5) { "sigma2" } else { "T" };
+                match v.get(key).and_then(Value::as_f64) {
+                    Some(x) => v[key] = json!(x * (1.0 + [1e-3, 1e-7, 1e-12][rng.random_range(0..3)])),
+                    None => v[key] = json!(0.5),
+                }
+                Kind::Result
+            }
+            3 => {
+                v["level"] = json!(["exact", "numerical", "verified_float", "none"][rng.random_range(0..4)]);
+                if lines[l].contains(&format!("\"level\":{}", v["level"])) {
+                    continue;
+                }
+                Kind::Result
+            }
+            4 => {
+                let x = v["parameters"]["I2"].as_f64().unwrap_or(2.0);
+                v["parameters"]["I2"] = json!(x * (1.0 + 1e-7));
+                Kind::Point
+            }
+            5 => {
+                v["exact_parameters"]["I2"] = json!(format!("{}/7", rng.random_range(14..28)));
+                Kind::Point
+            }
+            6 => {
+                v["index"] = json!(rng.random_range(0..9));
+                if lines[l].contains(&format!("\"index\":{},", v["index"])) {
+                    continue;
+                }
+                Kind::Point
+            }
+            7 => {
+                v["sweep"] = json!("0123456789abcdef");
+                Kind::Point
+            }
+            8 => {
+                v["spec"] = json!("fedcba9876543210");
+                Kind::Point
+            }
+            9 => {
+                v["checked_by"] = json!("hand");
+                Kind::Point
+            }
+            10 => {
+                files[f] = format!("\u{feff}{}", files[f]);
+                Kind::Harmless
+            }
+            11 => {
+                files[f] = files[f].replace('\n', "\r\n");
+                Kind::Harmless
+            }
+            12 => {
+                let text = files[f].trim_end().to_string();
+                files[f] = text[..text.len() - rng.random_range(1..text.len().min(60))].to_string();
+                Kind::Broken
+            }
+            13 => {
+                lines.insert(l, "{\"sweep\": [1, 2".to_string());
+                files[f] = lines.join("\n") + "\n";
+                Kind::Broken
+            }
+            14 => {
+                lines.remove(l);
+                files[f] = lines.join("\n") + "\n";
+                Kind::Broken
+            }
+            _ => {
+                // the same point twice, with two results
+                let mut w = v.clone();
+                w["verdict"] = json!(if v["verdict"] == "stable" { "inconclusive" } else { "stable" });
+                lines.push(w.to_string());
+                files[f] = lines.join("\n") + "\n";
+                Kind::Broken
+            }
+        };
+        if matches!(kind, Kind::Result | Kind::Point) {
+            lines[l] = v.to_string();
+            files[f] = lines.join("\n") + "\n";
+        }
+        if files == shards {
+            continue;
+        }
+        let paths: Vec<PathBuf> = files
+            .iter()
+            .enumerate()
+            .map(|(k, text)| {
+                let p = dir.join(format!("case{case}-{k}.jsonl"));
+                let _ = std::fs::write(&p, text);
+                p
+            })
+            .collect();
+        let recheck = rng.random_bool(0.5);
+        let out = dir.join("merged.jsonl");
+        let _ = std::fs::remove_file(&out);
+        let mut cmd = std::process::Command::new(&verify);
+        cmd.args(["merge", spec, "-o", out.to_str()?]).args(plan);
+        if recheck {
+            cmd.arg("--recheck");
+        }
+        cmd.arg("--lines").args(&paths);
+        let Ok(result) = cmd.output() else { continue };
+        for p in &paths {
+            let _ = std::fs::remove_file(p);
+        }
+        counts.tried += 1;
+        let said = String::from_utf8_lossy(&result.stderr);
+        match result.status.code() {
+            Some(0) => {
+                counts.exit0 += 1;
+                match kind {
+                    Kind::Result if !recheck && said.contains("not re-derived") => counts.passed_as_data += 1,
+                    Kind::Result | Kind::Point | Kind::Broken => {
+                        counts.forgeries += 1;
+                        eprintln!("MERGE FORGERY: case {case} (recheck {recheck}) merged: {said}");
+                    }
+                    Kind::Harmless => counts.harmless_merged += 1,
+                }
+            }
+            Some(1) => counts.exit1 += 1,
+            Some(2) => counts.exit2 += 1,
+            _ => {
+                counts.panics += 1;
+                eprintln!("MERGE PANIC (case {case}): {said}");
+            }
+        }
+        if kind == Kind::Harmless && result.status.code() != Some(0) {
+            counts.harmless_refused += 1;
+            eprintln!("MERGE REFUSED A HARMLESS CHANGE (case {case}): {said}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Some(counts)
 }
 
 fn main() {
@@ -617,7 +966,11 @@ fn main() {
     }
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(o.seed ^ 0xC0FFEE);
     while pool.len() < 200 {
-        let v = if rng.random_bool(0.8) { random_finite(&mut rng) } else { random_fluid(&mut rng) };
+        let v = match rng.random_range(0..20) {
+            0..=13 => random_finite(&mut rng),
+            14..=16 => random_box(&mut rng),
+            _ => random_fluid(&mut rng),
+        };
         if let Ok(s) = spec::parse_any_spec(&v.to_string()) {
             pool.push(s.certify());
         }
@@ -670,7 +1023,8 @@ fn main() {
                                     t
                                 }
                             }
-                            11..=16 => random_finite(&mut rng).to_string(),
+                            11..=15 => random_finite(&mut rng).to_string(),
+                            16 => random_box(&mut rng).to_string(),
                             _ => random_fluid(&mut rng).to_string(),
                         };
                         *worker.started.lock().unwrap() = Some((Instant::now(), text.clone()));
@@ -723,6 +1077,7 @@ fn main() {
         done.store(true, Ordering::Relaxed);
     });
     std::panic::set_hook(silent);
+    let merges = fuzz_merges(&o);
 
     let g = |c: &AtomicU64| c.load(Ordering::Relaxed);
     let peak = peak_memory_mb();
@@ -747,10 +1102,27 @@ fn main() {
     println!("  accepted: still true (proved)      {}", g(&counts.accepted_proved));
     println!("  accepted: forgery of a number      {}", g(&counts.forgeries_accepted));
     println!("  (draws that altered nothing, redrawn {})", g(&counts.unchanged));
+    println!("box specs certified                  {}", g(&counts.box_specs));
+    println!("  with a parameter-dependent residual {}", g(&counts.box_residual_specs));
+    println!("  whole-box verdict false at the spec's own point {}", g(&counts.box_point_disagrees));
+    let m = merges.unwrap_or_default();
+    println!("merged sweep files tried             {}", m.tried);
+    println!("  merged (exit 0)                    {}", m.exit0);
+    println!("  refused (exit 1)                   {}", m.exit1);
+    println!("  bad input (exit 2)                 {}", m.exit2);
+    println!("  panics                             {}", m.panics);
+    println!("  edited results passed as data, said so (no --recheck) {}", m.passed_as_data);
+    println!("  forgeries merged as checked        {}", m.forgeries);
+    println!("  harmless changes (BOM, CRLF) merged {}", m.harmless_merged);
+    println!("  harmless changes refused           {}", m.harmless_refused);
     println!("slowest case                         {:.2} s", g(&counts.slowest_us) as f64 / 1e6);
     println!("cases over {} s                      {}", o.time_limit, g(&counts.over_time));
     println!("peak memory over {} MB              {}", o.memory_limit_mb, over_memory);
     let must_be_zero = g(&counts.spec_panics)
+        + g(&counts.box_point_disagrees)
+        + m.panics
+        + m.forgeries
+        + m.harmless_refused
         + g(&counts.cert_panics)
         + g(&counts.own_check_rejected)
         + g(&counts.forgeries_accepted)
