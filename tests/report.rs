@@ -126,3 +126,52 @@ fn certificates_at_the_ends_of_the_double_range_still_give_a_page() {
     let html = std::fs::read_to_string(&out).unwrap();
     assert_eq!(html.matches("Re-check FAILED").count(), 2);
 }
+
+/// A box certificate's section said level "none (no claim needs a proof)"
+/// for exact proofs, Sigma^2 "-" where `sup_sigma2` is certified,
+/// "Inconclusive: nothing is claimed either way" for a `partly_stable` map
+/// with hundreds of proved sub-boxes, and only `kind: box` as key numbers.
+/// Now: the level is exact, the summary shows the proved sup, the words are
+/// the certificate's own statement, and the key numbers hold the box, the
+/// sup and where it is approached, the shares, and a map of the sub-boxes
+/// (one rectangle each).
+#[test]
+fn a_box_certificate_reads_as_what_it_proves() {
+    let cert_path = Path::new(ROOT).join("fixtures/boxes/lagrange-top-stability-map.cert.json");
+    let cert: Value = serde_json::from_str(&std::fs::read_to_string(&cert_path).unwrap()).unwrap();
+    let out = temp_dir().join("box.html");
+    let o = verify(&["report", cert_path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(&out).unwrap();
+    assert_self_contained(&html);
+    assert!(html.contains("level: exact (every claim is proved in exact rational arithmetic)"));
+    assert!(!html.contains("no claim needs a proof"));
+    assert!(!html.contains("Inconclusive: nothing is claimed"));
+    assert!(html.contains("<td>partly_stable</td><td>exact</td><td>0</td>"), "the summary row");
+    let statement = cert["theorem"]["statement"].as_str().unwrap();
+    assert!(statement.starts_with("Proved (exact), in the box"));
+    let escaped = statement
+        .replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&#39;");
+    assert!(html.contains(&escaped), "the statement, escaped");
+    for row in [
+        "box: mgl",
+        "box: p",
+        "sup Sigma^2 over the stable sub-boxes",
+        "largest Sigma^2 sampled",
+        "share of the box proved stable",
+        "share proved linearly unstable",
+        "share undecided",
+        "bisection stopped by",
+    ] {
+        assert!(html.contains(row), "{row}");
+    }
+    // 229 of the 353 sub-boxes are stable: 45.99609% of the box
+    assert!(html.contains("<td>45.99609%</td>"));
+    let subs = cert["sub_boxes"].as_array().unwrap().len();
+    let map_rects = html.matches("stroke=\"#fff\" stroke-width=\"0.4\"").count();
+    assert_eq!(map_rects, subs, "one rectangle per sub-box");
+}
