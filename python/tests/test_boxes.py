@@ -43,3 +43,23 @@ def test_a_bad_box_names_the_field():
     with pytest.raises(ec.SpecError) as e:
         ec.certify(spec)
     assert e.value.path == "$.box.parameters.I2"
+
+
+def test_a_residual_that_vanishes_in_the_box_is_a_statement_about_part_of_it():
+    # mu_e = (1, I2 - 2, 0) is an equilibrium only at I2 = 2, the spec's own
+    # value, where the body is stable: the box is not called
+    # not_an_equilibrium as a whole, and check claims nothing for the spec's
+    # own point
+    spec = rigid_body_box()
+    spec["equilibrium"] = [1, "I2-2", 0]
+    spec["box"] = {"parameters": {"I2": ["3/2", "5/2"]}}
+    cert = ec.certify(spec)
+    assert cert.verdict == "partly_not_an_equilibrium"
+    assert cert.kind == "box"
+    assert "nothing is claimed" in cert.reason
+    assert cert.theorem.startswith("Proved (exact), on part of the box")
+    assert "nonlinear" in cert.not_checked
+    assert ec.check(cert).verdict == "inconclusive"
+    point = dict(spec)
+    del point["box"]
+    assert ec.certify(point).verdict == "stable"

@@ -196,7 +196,9 @@ class Certificate:
 
     @property
     def verdict(self) -> str:
-        """``stable``, ``linearly_unstable``, ``inconclusive``, ``not_an_equilibrium`` or ``noise_incompatible``."""
+        """``stable``, ``linearly_unstable``, ``inconclusive``, ``not_an_equilibrium`` or ``noise_incompatible``;
+        a box certificate's also ``partly_stable``, ``partly_unstable``, ``partly_not_an_equilibrium``,
+        ``partly_noise_incompatible`` or ``undecided`` (docs/boxes.md)."""
         return self._data["verdict"]
 
     @property
@@ -205,13 +207,24 @@ class Certificate:
         return self._data.get("reason", "")
 
     @property
+    def theorem(self) -> str:
+        """What the certificate claims, in its own words (generated from its data and re-derived by
+        ``check``): which linearised SDE, which norm, the bound and its Markov corollary."""
+        return self._data.get("theorem", {}).get("statement", "")
+
+    @property
+    def not_checked(self) -> str:
+        """What the certificate does not check (the nonlinear system; for fluids, the PDE)."""
+        return self._data.get("theorem", {}).get("not_checked", "")
+
+    @property
     def level(self) -> Optional[str]:
         """How the claim is established: ``exact``, ``verified_float``, ``exact_structure``, ``float`` or ``numerical`` (``None``: no claim)."""
         return self._data.get("level")
 
     @property
     def kind(self) -> str:
-        """``finite`` (a Lie–Poisson system), ``fluid``, ``zeitlin`` or ``large``."""
+        """``finite`` (a Lie–Poisson system), ``fluid``, ``zeitlin``, ``large`` or ``box``."""
         return self._data.get("kind", "finite")
 
     @property
