@@ -245,27 +245,21 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
     };
     let k = r0.nrows();
     // R(t) - R(0) is linear in t; the pencil matrices are R(e_i) - R(0).
-    let raw: Vec<DMatrix<f64>> = (0..f)
+    let raw: Vec<Matrix> = (0..f)
         .map(|i| {
             let mut t = zero_t.clone();
             t[i] = Rational::one();
-            variation.restricted(&family.at(&t)).sub(&r0).to_dmatrix()
+            variation.restricted(&family.at(&t)).sub(&r0)
         })
         .collect();
-    // In an orthonormal basis of ker G^T (Z L^{-T}, Z^T Z = L L^T), so the
-    // margins do not depend on how the exact kernel basis is written.
-    let z = variation.kernel.to_dmatrix();
-    let orthonormal =
-        (z.ncols() > 0).then(|| (z.transpose() * &z).cholesky().and_then(|c| c.l().try_inverse())).flatten();
-    let whiten = |m: DMatrix<f64>| match &orthonormal {
-        Some(linv) => {
-            let w = linv * m * linv.transpose();
-            (&w + w.transpose()) * 0.5
-        }
-        None => m,
-    };
-    let raw: Vec<DMatrix<f64>> = raw.into_iter().map(whiten).collect();
-    let r0f = whiten(r0.to_dmatrix());
+    // In orthonormal coordinates of ker G^T, so the margins do not depend
+    // on the kernel basis nor on how the conserved quantities are scaled.
+    // The exact forms are rounded once, in the well-conditioned kernel
+    // basis (see `SecondVariation::orthonormal`): a form restricted with a
+    // badly scaled basis (`(-1/a, 1, 0)`, `(-1/a, 0, 1)`) and rounded has
+    // lost its O(1) eigenvalues before any whitening.
+    let raw: Vec<DMatrix<f64>> = raw.iter().map(|m| variation.orthonormal(m)).collect();
+    let r0f = variation.orthonormal(&r0);
     let scales: Vec<f64> = raw.iter().map(|m| m.norm().max(f64::MIN_POSITIVE)).collect();
     let pencil = Pencil { r0: r0f.clone(), ri: raw.iter().zip(&scales).map(|(m, s)| m / *s).collect(), scales };
     let base_radius = 4.0 * r0f.norm().max(1.0);
@@ -334,27 +328,25 @@ pub fn find_definite_choice(variation: &SecondVariation, settings: &SearchSettin
 /// `ker G^T` (so it does not depend on how `Z` is written, nor on how the
 /// conserved quantities are scaled); `|B|_2` (or 1) when `ker G^T = 0`.
 /// The Casimir function adds this size along the conserved directions, so
-/// `P` is as well conditioned as the level-set block allows.
+/// `P` is as well conditioned as the level-set block allows. `B_zz` is
+/// formed exactly and rounded once in orthonormal coordinates
+/// ([`SecondVariation::orthonormal`]).
 pub fn level_scale(variation: &SecondVariation, multipliers: &[Rational], sign: Sign) -> f64 {
-    let base = variation.base(multipliers).to_dmatrix() * sign.as_f64();
-    let z = variation.kernel.to_dmatrix();
     let fallback = || {
-        let norm = symmetric_eigen(base.clone())
-            .map(|e| e.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs())))
-            .unwrap_or(1.0);
+        let base = variation.base(multipliers).to_dmatrix();
+        let norm =
+            symmetric_eigen(base).map(|e| e.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs()))).unwrap_or(1.0);
         if norm.is_finite() && norm > 0.0 {
             norm
         } else {
             1.0
         }
     };
-    if z.ncols() == 0 {
+    if variation.kernel.ncols() == 0 {
         return fallback();
     }
-    let Some(ch) = (z.transpose() * &z).cholesky() else { return fallback() };
-    let Some(linv) = ch.l().try_inverse() else { return fallback() };
-    let r = &linv * (z.transpose() * &base * &z) * linv.transpose();
-    let Some(e) = symmetric_eigen((&r + r.transpose()) * 0.5) else { return fallback() };
+    let r = variation.orthonormal(&variation.restricted(multipliers)) * sign.as_f64();
+    let Some(e) = symmetric_eigen(r) else { return fallback() };
     let lo = e.eigenvalues.iter().fold(f64::INFINITY, |a, &b| a.min(b));
     let hi = e.eigenvalues.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
     let c = (lo.max(0.0) * hi.max(0.0)).sqrt();

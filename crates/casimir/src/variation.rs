@@ -2,6 +2,7 @@
 
 use crate::system::System;
 use exact::{Matrix, Rational};
+use nalgebra::DMatrix;
 
 /// The affine family of multipliers `lambda = particular + sum_i t_i directions[i]`
 /// solving `Dh(mu_e) + sum_j lambda_j DK_j(mu_e) = 0`.
@@ -44,7 +45,17 @@ pub struct SecondVariation {
     pub hessians: Vec<Matrix>,
     /// The multipliers.
     pub family: MultiplierFamily,
-    /// `Z`: columns form a basis of `ker G^T` (`n × (n - rank G)`).
+    /// `Z`: columns form a basis of `ker G^T` (`n × (n - rank G)`), with
+    /// every coefficient at most 1 in magnitude
+    /// ([`Matrix::bounded_null_space`]), so `Z^T Z` has its eigenvalues in
+    /// `[1, 1 + rank G * (n - rank G)]`. The plain echelon basis can be badly
+    /// scaled and nearly parallel (`(-1/a, 1, 0)`, `(-1/a, 0, 1)` for
+    /// `G = (a, 1, 1)`), and a form restricted with it, rounded to doubles,
+    /// loses the `O(1)` part of the restricted Hessian. With this basis
+    /// [`Self::orthonormal`] gives the restricted forms in orthonormal
+    /// coordinates to double precision, whatever the scale of `G`; the
+    /// basis does not change when a conserved quantity is rescaled (or the
+    /// conserved quantities are recombined).
     pub kernel: Matrix,
     /// Indices of linearly independent columns of `G` spanning its range.
     pub range_columns: Vec<usize>,
@@ -61,6 +72,10 @@ struct Frame {
     gram_inverse: Matrix,
     w: Matrix,
     z_transpose: Matrix,
+    /// `L^{-1}`, `L L^T` the Cholesky factorisation of `Z^T Z` (formed
+    /// exactly, then rounded): `Z L^{-T}` is orthonormal. Its norm is at
+    /// most 1, as `Z^T Z >= I`.
+    kernel_whitening: DMatrix<f64>,
 }
 
 impl SecondVariation {
@@ -76,14 +91,23 @@ impl SecondVariation {
         let minus_grad: Vec<Rational> = gradient_h.iter().map(|g| -g.clone()).collect();
         let solution = gradients.solve_affine(&minus_grad)?;
         let family = MultiplierFamily { particular: solution.particular, directions: solution.directions };
-        let kernel_vectors = gradients.transpose().null_space();
+        let kernel_vectors = gradients.transpose().bounded_null_space();
         let kernel = Matrix::from_columns(n, &kernel_vectors);
         let range_columns = gradients.pivot_columns();
         let y = Matrix::from_fn(n, range_columns.len(), |i, j| gradients[(i, range_columns[j])].clone());
         let gram_inverse = y.transpose().mul(&y).inverse().expect("independent columns have an invertible Gram matrix");
         let w = y.mul(&gram_inverse);
         let z_transpose = kernel.transpose();
-        let frame = Frame { y, gram_inverse, w, z_transpose };
+        // Z^T Z >= I is well conditioned (see `kernel`): its Cholesky factor
+        // in doubles cannot fail but for a kernel of dimension near 1e8.
+        let k = kernel.ncols();
+        let kernel_whitening = z_transpose
+            .mul(&kernel)
+            .to_dmatrix()
+            .cholesky()
+            .and_then(|c| c.l().try_inverse())
+            .unwrap_or_else(|| DMatrix::identity(k, k));
+        let frame = Frame { y, gram_inverse, w, z_transpose, kernel_whitening };
         Some(SecondVariation { gradient_h, hessian_h, gradients, hessians, family, kernel, range_columns, frame })
     }
 
@@ -116,6 +140,26 @@ impl SecondVariation {
     /// The restricted Hessian `Z^T (D^2h + sum_j lambda_j D^2K_j) Z` on `ker G^T`.
     pub fn restricted(&self, multipliers: &[Rational]) -> Matrix {
         self.frame.z_transpose.mul(&self.base(multipliers)).mul(&self.kernel)
+    }
+
+    /// A form on `ker G^T` given in the basis `Z` (such as
+    /// [`Self::restricted`]), in orthonormal coordinates of `ker G^T`, in
+    /// floating point: `L^{-1} R L^{-T}` (`Z^T Z = L L^T`), symmetrised. Its
+    /// eigenvalues are the Euclidean Rayleigh quotients of the form on
+    /// `ker G^T`: they do not depend on the basis, nor on how the conserved
+    /// quantities are scaled. `R` is formed exactly and rounded once, and
+    /// `Z` is well conditioned (see [`Self::kernel`]), so the result is
+    /// accurate to about `(1 + rank G * k) * k` units of the last place
+    /// relative to `|R|` (`k` the dimension of `ker G^T`).
+    ///
+    /// # Panics
+    /// If `r` is not `k × k`.
+    pub fn orthonormal(&self, r: &Matrix) -> DMatrix<f64> {
+        let linv = &self.frame.kernel_whitening;
+        let k = linv.nrows();
+        assert_eq!((r.nrows(), r.ncols()), (k, k), "a form on ker G^T");
+        let m = linv * r.to_dmatrix() * linv.transpose();
+        (&m + m.transpose()) * 0.5
     }
 
     /// `Y`: the independent conserved gradients (columns

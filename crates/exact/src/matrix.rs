@@ -331,6 +331,89 @@ impl Matrix {
             .collect()
     }
 
+    /// A basis of the null space `{x : A x = 0}` with bounded coefficients:
+    /// like [`Self::null_space`] (one vector `e_f - sum_i c_if e_{p_i}` per
+    /// free column `f`, `p_i` the pivot columns), but with the pivot columns
+    /// chosen so that every coefficient satisfies `|c_if| <= 1`.
+    ///
+    /// The pivots of the row echelon form are the first independent
+    /// columns, and the coefficients can be as large as the rows are badly
+    /// scaled: the null space of `(a, 1, 1)` comes out as `(-1/a, 1, 0)`,
+    /// `(-1/a, 0, 1)`, nearly parallel, with the Gram matrix
+    /// `1/a^2 + [[1, 0], [0, 1]]` that rounds to a singular matrix of doubles
+    /// once `1/a^2 >= 2^53`. Here, while some `|c_if| > 1`, the free column
+    /// `f` replaces the pivot `p_i` (the largest such coefficient first): each
+    /// exchange multiplies the magnitude of the determinant of the pivot
+    /// columns of `A` by `|c_if| > 1`, so the exchanges end, at a choice of
+    /// pivots of locally maximal volume. The basis matrix is then
+    /// `Z = [I; -C]` up to a permutation of the rows, with `|C| <= 1`
+    /// entrywise, so the eigenvalues of `Z^T Z = I + C^T C` lie in
+    /// `[1, 1 + rank * nullity]`: well conditioned, whatever the scale of
+    /// `A`'s rows (which does not change the basis: neither does any
+    /// invertible combination of the rows), and as sparse as the echelon
+    /// basis.
+    ///
+    /// ```
+    /// use exact::{Matrix, Rational};
+    /// let q = |n: i64| Rational::from(n);
+    /// let a = Rational::new_small(1, 1_000_000_000);
+    /// let g = Matrix::from_rows(&[vec![a.clone(), q(1), q(1)]]);
+    /// assert_eq!(g.null_space()[0], vec![q(-1_000_000_000), q(1), q(0)]);
+    /// let basis = g.bounded_null_space();
+    /// assert_eq!(basis, vec![vec![q(1), -a.clone(), q(0)], vec![q(0), q(-1), q(1)]]);
+    /// ```
+    pub fn bounded_null_space(&self) -> Vec<Vec<Rational>> {
+        let mut m = self.clone();
+        let mut pivots = m.rref_in_place();
+        let rank = pivots.len();
+        let one = Rational::one();
+        loop {
+            // The largest coefficient above 1 in magnitude, if any.
+            let mut best: Option<(usize, usize, Rational)> = None;
+            for (i, _) in pivots.iter().enumerate() {
+                for j in (0..self.cols).filter(|j| !pivots.contains(j)) {
+                    let v = m[(i, j)].abs();
+                    if v > one && best.as_ref().is_none_or(|(_, _, b)| &v > b) {
+                        best = Some((i, j, v));
+                    }
+                }
+            }
+            let Some((i, j, _)) = best else { break };
+            // Gauss–Jordan step on (i, j): column j becomes the pivot of row i.
+            let inv = m[(i, j)].recip();
+            for c in 0..self.cols {
+                if !m[(i, c)].is_zero() {
+                    let v = &m[(i, c)] * &inv;
+                    m[(i, c)] = v;
+                }
+            }
+            for r in (0..rank).filter(|&r| r != i) {
+                let f = m[(r, j)].clone();
+                if f.is_zero() {
+                    continue;
+                }
+                for c in 0..self.cols {
+                    if !m[(i, c)].is_zero() {
+                        let v = &m[(i, c)] * &f;
+                        m[(r, c)] -= v;
+                    }
+                }
+            }
+            pivots[i] = j;
+        }
+        (0..self.cols)
+            .filter(|c| !pivots.contains(c))
+            .map(|f| {
+                let mut v = vec![Rational::zero(); self.cols];
+                v[f] = Rational::one();
+                for (r, &pc) in pivots.iter().enumerate() {
+                    v[pc] = -m[(r, f)].clone();
+                }
+                v
+            })
+            .collect()
+    }
+
     /// All solutions of `A x = b`, or `None` when the system is inconsistent.
     ///
     /// ```
@@ -695,6 +778,35 @@ mod tests {
         // A zero diagonal with a nonzero off-diagonal in the same row is indefinite.
         let d = Matrix::from_rows(&[vec![q(1), q(0), q(0)], vec![q(0), q(0), q(1)], vec![q(0), q(1), q(0)]]);
         assert!(!d.is_positive_semidefinite());
+    }
+
+    #[test]
+    fn bounded_null_space_has_coefficients_at_most_one() {
+        let tiny = Rational::new(1.into(), num_bigint::BigInt::from(10).pow(300));
+        let third = Rational::new_small(1, 3);
+        // Two rows whose echelon pivots (columns 0 and 1) give coefficients
+        // of size 1e300 and 3e300; the row scales differ by 1e300 too.
+        let a = Matrix::from_rows(&[
+            vec![tiny.clone(), q(0), q(1), q(2), third.clone()],
+            vec![q(0), tiny.recip(), tiny.recip() * q(3), q(-1), q(7)],
+        ]);
+        let basis = a.bounded_null_space();
+        assert_eq!(basis.len(), 3);
+        for v in &basis {
+            assert!(a.mul_vec(v).iter().all(Zero::is_zero));
+            assert!(v.iter().all(|x| x.abs() <= q(1)), "{v:?}");
+        }
+        assert_eq!(Matrix::from_rows(&basis).rank(), 3);
+        // Invariant under scaling and combining the rows.
+        let b = Matrix::from_rows(&[
+            a.row(0).iter().map(|x| x * &tiny).collect(),
+            a.row(1).iter().zip(a.row(0)).map(|(x, y)| x + &y * q(5)).collect(),
+        ]);
+        assert_eq!(b.bounded_null_space(), basis);
+        // Already bounded: the echelon basis is kept.
+        let c = Matrix::from_rows(&[vec![q(1), q(1), q(-1)]]);
+        assert_eq!(c.bounded_null_space(), c.null_space());
+        assert_eq!(Matrix::zeros(1, 2).bounded_null_space(), Matrix::zeros(1, 2).null_space());
     }
 
     #[test]
