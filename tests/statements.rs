@@ -247,14 +247,17 @@ fn every_field_of_every_kind_is_read_by_check() {
 #[test]
 fn messages_say_what_is_the_case() {
     // degree 19 in the box parameter I2: beyond the symbolic parser's 16
-    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(fixture_path("rigid-body-major-axis.json")).unwrap())
-        .unwrap();
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(fixture_path("rigid-body-major-axis.json")).unwrap()).unwrap();
     v["hamiltonian"] = json!("Pi1^2/(2*I1) + Pi2^2/(2*I2) + Pi3^2/(2*I3) + Pi1^2*(I2 - 2)^19");
     v["box"] = json!({"parameters": {"I2": ["3/2", "5/2"]}});
     let cert = spec::box_cert::certify_box_spec(&spec::spec_from_value(v).unwrap());
     let reason = cert["reason"].as_str().unwrap();
     assert_eq!(cert["verdict"], "undecided");
-    assert!(reason.starts_with("the expressions cannot be kept symbolic") && !reason.contains("not the same"), "{reason}");
+    assert!(
+        reason.starts_with("the expressions cannot be kept symbolic") && !reason.contains("not the same"),
+        "{reason}"
+    );
     assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Inconclusive);
 
     // c^k_(a,a) in a large algebra (90 coordinates)
@@ -303,4 +306,36 @@ fn a_form_below_the_definiteness_tolerance_is_called_a_conditioning_limit() {
     v["settings"] = json!({"exact": false});
     let cert = spec::certify(&spec::spec_from_value(v).unwrap());
     assert!(cert.analysis.reason.contains("conditioning limit"), "{}", cert.analysis.reason);
+}
+
+/// The Bickley jet `sech^2 y` between walls at -8 and 8, x-period
+/// `2 pi / 1.9`, ny = 512, was `inconclusive` (level none) without a word
+/// about its search, although mode k = 1.9 grows: an independent shooting
+/// solve of Rayleigh's equation gives `k Im c = 0.0220919428`
+/// (`crates/fluid/tests/reference/bickley_shooting.py`). Now it is found
+/// (converged between ny = 2048 and 4096), and at the neutral wavenumber
+/// k = 2 the inconclusive certificate says what it searched.
+#[test]
+fn the_bickley_jet_instability_is_found_or_its_search_reported() {
+    let spec = |period: &str| {
+        json!({"name": "bickley-jet", "fluid": {"model": "incompressible", "x_period": period,
+            "y_interval": [-8, 8], "boundary": "walls", "shear_flow": "4/(exp(y) + exp(-y))^2",
+            "noise": [], "ny": 512, "x_modes": 1}})
+    };
+    let cert = spec::parse_any_spec(&spec("2*pi/1.9").to_string()).unwrap().certify();
+    assert_eq!(cert["verdict"], "linearly_unstable", "{}", cert["reason"]);
+    let rate = cert["instability"]["growth_rate"].as_f64().unwrap();
+    assert!((rate / 0.0220919428 - 1.0).abs() < 1e-4, "{rate}");
+    assert!(spec::check_certificate_value(&cert).is_ok());
+    let grids = cert["instability_search"][0]["grids"].as_array().unwrap();
+    assert!(grids.iter().any(|g| g["tracked"] == true), "past the dense grids");
+    assert_eq!(cert["instability_search"][0]["outcome"], "converged");
+
+    // k = 2: the sinuous mode is neutral there
+    let cert = spec::parse_any_spec(&spec("pi").to_string()).unwrap().certify();
+    assert_eq!(cert["verdict"], "inconclusive", "{}", cert["reason"]);
+    let reason = cert["reason"].as_str().unwrap();
+    assert!(reason.contains("no growing mode was confirmed") && reason.contains("instability_search"), "{reason}");
+    assert_eq!(cert["instability_search"][0]["outcome"], "below_floor");
+    assert!(spec::check_certificate_value(&cert).is_ok());
 }

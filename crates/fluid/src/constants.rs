@@ -38,10 +38,26 @@ pub const VERIFY_RITZ_WEIGHT: f64 = 1e-3;
 pub const INSTABILITY_FLOOR: f64 = 1e-6;
 /// ... and when the rates on two grids agree to this, relative.
 pub const INSTABILITY_AGREEMENT: f64 = 1e-3;
-/// The finest grid of the instability search: a rate that has not
-/// converged at `instability_ny` is refined by doubling up to this (a
-/// critical layer can be far thinner than the user's grid).
+/// The finest grid of the instability search's dense stage: a rate that
+/// has not converged at `instability_ny` is refined by doubling up to this
+/// (a critical layer can be far thinner than the user's grid) with all the
+/// eigenvalues of the drift, the largest `Im c` the candidate ...
 pub const INSTABILITY_MAX_NY: f64 = 1024.0;
+/// ... and beyond it, up to this, with the one eigenvalue nearest the
+/// last candidate above the floor (shift-invert on the banded pencil,
+/// `analysis::instability` docs): the weakly growing modes near a neutral
+/// wavenumber have critical layers of width about `Im c / |U'|`. Measured
+/// 2026-11-29 for the Bickley jet `sech^2 y` on `[-8, 8]`
+/// (`examples/instability_rates.rs`; shooting values in the regression
+/// test `the_bickley_jet_sinuous_mode_is_found`): the rates agree to
+/// `1e-3` between 2048 and 4096 at `k = 1.9` (`Im c = 0.0116`), 4096 and
+/// 8192 at 1.95 (`0.0057`), 32768 and 65536 at 1.99 (`0.0011`) and 1.995
+/// (`0.00056`, `8e-4` apart). A tracked grid costs 9 ms at 2048 and 77 ms
+/// at 65536 (26 MB; grid, coefficients, banded LU, 3 to 60 inverse
+/// iteration steps), where the dense eigenvalues cost 4 s at 2048 and
+/// 0.4 s at 1024: the six tracked grids add about 0.2 s to the 0.5 s of
+/// the dense stage.
+pub const INSTABILITY_TRACK_MAX_NY: f64 = 65536.0;
 /// A zero of `U''` is multiple (no forced shift) when `|U'''|` there is below
 /// this times `max |U''| / length`.
 pub const MULTIPLE_ZERO: f64 = 1e-8;
@@ -64,6 +80,7 @@ pub fn all() -> Vec<(&'static str, f64)> {
         ("instability_floor", INSTABILITY_FLOOR),
         ("instability_agreement", INSTABILITY_AGREEMENT),
         ("instability_max_ny", INSTABILITY_MAX_NY),
+        ("instability_track_max_ny", INSTABILITY_TRACK_MAX_NY),
         ("multiple_zero", MULTIPLE_ZERO),
     ]
 }

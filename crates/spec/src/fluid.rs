@@ -26,7 +26,8 @@ use crate::parse::Stopping;
 use crate::record::{
     CompressibleRecord, ConvergenceRecord, DefectPoint, DiscretePseudomomentumRecord, DiscreteSdeRecord,
     DiscretisationRecord, Engine, Float, FluidCertificateDocument, FluidFormRecord, FluidOptimisationRecord,
-    GeneratorRecord, LevelOrNone, ModeRecord, PaperRecord, PseudomomentumRowRecord, ShiftPoint, UnstableModeRecord,
+    GeneratorRecord, LevelOrNone, ModeRecord, ModeSearchRecord, PaperRecord, PseudomomentumRowRecord,
+    SearchedGridRecord, ShiftPoint, UnstableModeRecord,
 };
 use fluid::analysis::{
     analyse, analyse_with, prove_mode_bounds, table_resolutions, FluidAnalysis, FluidModel, FluidProblem, FluidSettings,
@@ -601,7 +602,7 @@ fn empty_document(spec: &FluidSpec) -> FluidCertificateDocument {
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         level: LevelOrNone(None),
-        theorem: crate::theorem::nothing(&crate::theorem::fluid_not_checked(spec.problem.ny, spec.problem.x_modes)),
+        theorem: crate::theorem::nothing(&crate::theorem::fluid_not_checked(spec.problem.x_modes)),
         checks: None,
         sigma2: None,
         sigma2_upper: None,
@@ -617,6 +618,7 @@ fn empty_document(spec: &FluidSpec) -> FluidCertificateDocument {
         optimisation: None,
         drift_residual: None,
         instability: None,
+        instability_search: None,
         compressible: None,
         settings: settings_document(&spec.settings),
         constants: fluid::constants::all().into_iter().map(|(k, v)| (k.to_string(), Float(v))).collect(),
@@ -747,6 +749,27 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         growth_rate_half_resolution: Float(u.growth_rate_coarse),
         ny: u.ny as u64,
     });
+    let instability_search = (!a.instability_search.is_empty()).then(|| {
+        a.instability_search
+            .iter()
+            .map(|s| ModeSearchRecord {
+                m: s.m as u64,
+                k: Float(s.k),
+                floor: Float(s.floor),
+                grids: s
+                    .grids
+                    .iter()
+                    .map(|g| SearchedGridRecord {
+                        ny: g.ny as u64,
+                        growth_rate: opt(g.growth_rate),
+                        phase_speed: opt(g.phase_speed),
+                        tracked: g.tracked,
+                    })
+                    .collect(),
+                outcome: s.outcome.as_str().to_string(),
+            })
+            .collect()
+    });
     let compressible = a.compressible.as_ref().map(|cr| CompressibleRecord {
         sound_speed: Float(cr.sound_speed),
         noise_residuals: cr.noise_residuals.iter().map(|x| Float(*x)).collect(),
@@ -782,6 +805,7 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         },
         p.ny,
         p.x_modes,
+        a.instability.as_ref().map(|u| (u.m, u.k, u.ny)),
     );
     let theorem = crate::theorem::from_doubles(
         &subject,
@@ -811,6 +835,7 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         optimisation: Some(optimisation),
         drift_residual: a.drift_residual.map(Float),
         instability,
+        instability_search,
         compressible,
         ..empty_document(spec)
     }

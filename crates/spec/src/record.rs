@@ -511,6 +511,10 @@ pub struct FluidCertificateDocument {
     /// The growing mode, when linearly unstable.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub instability: Option<UnstableModeRecord>,
+    /// What the instability search tried, per x-mode, when no definite form
+    /// was found: the grids, the candidate on each and why it stopped.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub instability_search: Option<Vec<ModeSearchRecord>>,
     /// The compressible model's noise-compatibility test.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub compressible: Option<CompressibleRecord>,
@@ -651,7 +655,9 @@ pub struct PseudomomentumRowRecord {
     pub norm_of_one: Float,
 }
 
-/// The fastest-growing mode.
+/// The fastest-growing mode whose rate converged between two grids (on a
+/// grid past the dense ones, the eigenvalue followed from the coarser grids:
+/// a lower bound on that grid's fastest growth).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct UnstableModeRecord {
@@ -665,6 +671,42 @@ pub struct UnstableModeRecord {
     pub growth_rate_half_resolution: Float,
     /// Resolution.
     pub ny: u64,
+}
+
+/// The instability search of one x-mode.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ModeSearchRecord {
+    /// Mode number.
+    pub m: u64,
+    /// Wavenumber.
+    pub k: Float,
+    /// The growth rate a candidate must exceed to count.
+    pub floor: Float,
+    /// The grids tried, in order, each twice the one before.
+    pub grids: Vec<SearchedGridRecord>,
+    /// `converged`, `below_floor`, `not_converged` (up to the resolution
+    /// limit) or `solve_failed`.
+    pub outcome: String,
+}
+
+/// One grid of an instability search and its candidate eigenvalue
+/// `c` of the drift (`exp(ik(x - c t))`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SearchedGridRecord {
+    /// Resolution.
+    pub ny: u64,
+    /// The candidate's growth rate `k Im c` (absent: the solve failed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth_rate: Option<Float>,
+    /// Its phase speed `Re c`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phase_speed: Option<Float>,
+    /// `false`: the eigenvalue of largest `Im c` (dense); `true`: the one
+    /// nearest the coarser grids' candidate (shift-invert on the banded
+    /// pencil).
+    pub tracked: bool,
 }
 
 /// The compressible model's noise-compatibility test.

@@ -206,7 +206,7 @@ pub(crate) fn theorem(
             format!(
                 "{head}: {} has an eigenvalue with positive real part{}, so the equilibrium is linearly (spectrally) unstable; {x} grows exponentially along its eigenvector without noise.",
                 subject.drift,
-                growth_rate.map_or(String::new(), |g| format!(" (largest real part {})", significant(g, false)))
+                growth_rate.map_or(String::new(), |g| format!(" (real part {})", significant(g, false)))
             ),
         ),
         (Verdict::NotAnEquilibrium, _) => (
@@ -317,8 +317,8 @@ pub(crate) fn nothing(not_checked: &str) -> TheoremRecord {
 }
 
 /// What fluid certificates do not check.
-pub(crate) fn fluid_not_checked(ny: usize, x_modes: usize) -> String {
-    format!("The PDE and the nonlinear system: every statement is about the linearised SDE discretised in y ({ny} nodes) for the x-modes m = 1..{x_modes} only; the convergence table shows how Sigma^2 moves under refinement, and no bound is claimed for the continuum or for higher modes. The bound is at each fixed time, not on the probability of ever leaving the ball.")
+pub(crate) fn fluid_not_checked(x_modes: usize) -> String {
+    format!("The PDE and the nonlinear system: every statement is about the linearised SDE discretised in y, on the grid the statement names, for the x-modes m = 1..{x_modes} only; the convergence table shows how Sigma^2 moves under refinement, and no bound is claimed for the continuum or for higher modes. The bound is at each fixed time, not on the probability of ever leaving the ball.")
 }
 
 /// The subject of a fluid certificate.
@@ -329,6 +329,7 @@ pub(crate) fn fluid_subject(
     boundary: &str,
     ny: usize,
     x_modes: usize,
+    unstable: Option<(usize, f64, usize)>,
 ) -> Subject {
     let model = if compressible {
         "the linearised compressible (barotropic) Stratonovich SDE in (dm, drho), noise ((eta_j, 0), r_j) acting by the coadjoint action,"
@@ -344,8 +345,16 @@ pub(crate) fn fluid_subject(
         state: "dw",
         norm: "V",
         norm_is: "|x|_V^2 = x^* V x with V the discretised energy–Casimir(–momentum) form of the certificate's `form`, positive definite per mode".into(),
-        drift: "the discretised linearised drift of one x-mode (the certificate's `instability`)".into(),
-        not_checked: fluid_not_checked(ny, x_modes),
+        drift: match unstable {
+            Some((m, k, grid)) => format!(
+                "the linearised drift of '{}' about U(y) = {} for x-mode m = {m} (k = {}), discretised in y on {grid} nodes (the certificate's `instability`)",
+                exact::cut(name, 80),
+                exact::cut(shear_flow, 80),
+                significant(k, false)
+            ),
+            None => "the discretised linearised drift of one x-mode (the certificate's `instability`)".into(),
+        },
+        not_checked: fluid_not_checked(x_modes),
     }
 }
 

@@ -245,6 +245,7 @@ pub(super) fn analyse_normalised(
         shift_curve,
         drift_residual,
         instability: None,
+        instability_search: vec![],
         compressible: None,
     }
 }

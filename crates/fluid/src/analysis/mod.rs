@@ -19,6 +19,7 @@ mod incompressible;
 mod instability;
 mod pseudomomentum;
 mod scaling;
+mod shift_invert;
 mod simulation;
 
 use compressible::*;
@@ -149,6 +150,75 @@ pub struct UnstableMode {
     pub ny: usize,
 }
 
+/// What the linear-instability search tried for one x-mode
+/// ([`FluidAnalysis::instability_search`]): each grid's best candidate and
+/// why the search stopped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModeSearch {
+    /// Index `m`.
+    pub m: usize,
+    /// Wavenumber.
+    pub k: f64,
+    /// The floor a growth rate must exceed to count:
+    /// [`crate::constants::INSTABILITY_FLOOR`] `k max |U|`.
+    pub floor: f64,
+    /// The grids tried, in order (each twice the one before, from half of
+    /// `instability_ny`).
+    pub grids: Vec<SearchedGrid>,
+    /// Why the search stopped.
+    pub outcome: SearchOutcome,
+}
+
+/// One grid of the instability search and its best candidate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SearchedGrid {
+    /// Resolution.
+    pub ny: usize,
+    /// The candidate's growth rate `k Im c` (`c` an eigenvalue of the drift
+    /// `R`, the phase speed); `None` if the eigenvalue solve failed.
+    pub growth_rate: Option<f64>,
+    /// Its phase speed `Re c`.
+    pub phase_speed: Option<f64>,
+    /// `false`: the eigenvalue of largest `Im c` of all (dense, up to
+    /// [`crate::constants::INSTABILITY_MAX_NY`]); `true`: the eigenvalue
+    /// nearest the previous grids' candidate (shift-invert on the banded
+    /// pencil, beyond it, up to [`crate::constants::INSTABILITY_TRACK_MAX_NY`]).
+    pub tracked: bool,
+}
+
+/// Why the instability search of one x-mode stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SearchOutcome {
+    /// The rates of the last two grids are above the floor and agree to
+    /// [`crate::constants::INSTABILITY_AGREEMENT`]: evidence of
+    /// instability (the fastest such mode is [`FluidAnalysis::instability`]).
+    Converged,
+    /// The rates of the last two grids are both at or below the floor.
+    BelowFloor,
+    /// A rate above the floor never agreed with the previous grid's, up to
+    /// the finest grid allowed (the resolution limit,
+    /// [`crate::constants::INSTABILITY_TRACK_MAX_NY`]).
+    NotConverged,
+    /// The last grid's eigenvalue solve failed: the operator is not finite
+    /// (`U` or `k` beyond doubles), the dense eigensolver failed, or the
+    /// inverse iteration did not converge to a small residual (two
+    /// eigenvalues about as near the candidate).
+    SolveFailed,
+}
+
+impl SearchOutcome {
+    /// Name, for certificates: `converged`, `below_floor`,
+    /// `not_converged`, `solve_failed`.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            SearchOutcome::Converged => "converged",
+            SearchOutcome::BelowFloor => "below_floor",
+            SearchOutcome::NotConverged => "not_converged",
+            SearchOutcome::SolveFailed => "solve_failed",
+        }
+    }
+}
+
 /// The compressible noise-compatibility test.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CompressibleReport {
@@ -229,6 +299,9 @@ pub struct FluidAnalysis {
     pub drift_residual: Option<f64>,
     /// Evidence of linear instability, if found.
     pub instability: Option<UnstableMode>,
+    /// What the instability search tried, per x-mode (empty where it did
+    /// not run: a definite form was found, or the model is compressible).
+    pub instability_search: Vec<ModeSearch>,
     /// The compressible part, if the model is compressible.
     pub compressible: Option<CompressibleReport>,
 }
@@ -250,6 +323,7 @@ impl FluidAnalysis {
             shift_curve: vec![],
             drift_residual: None,
             instability: None,
+            instability_search: vec![],
             compressible: None,
         }
     }
