@@ -339,3 +339,38 @@ fn the_bickley_jet_instability_is_found_or_its_search_reported() {
     assert_eq!(cert["instability_search"][0]["outcome"], "below_floor");
     assert!(spec::check_certificate_value(&cert).is_ok());
 }
+
+/// The matrix-free growth rate of the Rossby–Haurwitz wave at N = 64 was
+/// printed as 1.927101650e-1, two digits past its backward error 8.5e-8
+/// (the true value is 1.927101643e-1): the reason prints the digits the
+/// backward error supports.
+#[test]
+fn a_matrix_free_eigenvalue_is_printed_to_the_digits_it_supports() {
+    let cert = committed("zeitlin/rossby-haurwitz-l3-n64.cert.json");
+    let reason = cert["reason"].as_str().unwrap();
+    assert!(reason.contains("the eigenvalue 1.92710e-1 ±"), "{reason}");
+    assert!(!reason.contains("1.927101650"), "{reason}");
+}
+
+/// The exact pipeline lost the definite form of `h = |Pi|^2/2 + (Pi2 -
+/// Pi3)^2/2 + (2 Pi1 - a Pi2 - a Pi3)^2/2` at `mu_e = (a, 1, 1)` for
+/// `a <= 2^-26` (its kernel basis `(-1/a, 1, 0), (-1/a, 0, 1)` rounded to
+/// a singular Gram matrix). Through the spec, exactly: stable, with the
+/// restricted Hessian `diag(2, 4 + 2 a^2)` on an orthonormal basis of
+/// `ker G^T` (by hand: `u = (0, 1, -1)`, `w = (2, -a, -a)`), so the
+/// relative margin is `2 / (4 + 2 a^2)`, 1/2 to double precision.
+#[test]
+fn a_badly_scaled_kernel_keeps_the_definite_form_through_the_spec() {
+    for a in ["1/67108864", "1/1073741824", "1e-9", "1e-20", "1e-300"] {
+        let v = json!({"name": "scaled-kernel", "algebra": "so3", "parameters": {"a": a, "sigma": "3/10"},
+            "hamiltonian": "(Pi1^2 + Pi2^2 + Pi3^2)/2 + (Pi2 - Pi3)^2/2 + (2*Pi1 - a*Pi2 - a*Pi3)^2/2",
+            "casimirs": ["(Pi1^2 + Pi2^2 + Pi3^2)/2"], "equilibrium": ["a", 1, 1],
+            "noise": [["sigma*a", "sigma", "sigma"]]});
+        let cert = spec::certify(&spec::spec_from_value(v).unwrap());
+        assert_eq!(cert.analysis.verdict, spec::Verdict::Stable, "a = {a}: {}", cert.analysis.reason);
+        assert_eq!(cert.json["level"], "exact", "a = {a}");
+        let margin = cert.json["casimir_choice"]["relative_margin"].as_f64().unwrap();
+        assert!((margin - 0.5).abs() < 1e-12, "a = {a}: {margin}");
+        assert!(spec::check_certificate_value(&cert.json).is_ok(), "a = {a}");
+    }
+}

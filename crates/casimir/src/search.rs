@@ -185,8 +185,10 @@ pub type Objective<'a> = dyn Fn(&[Rational]) -> Option<f64> + 'a;
 /// objective is given) does not raise it above `limit`: first the simplest
 /// rationals within `1e-9` of each entry (relative to `1 + |t_i|` in units
 /// of the normalised direction: an optimum at a simple rational, as in the
-/// closed-form examples, is found exactly), then decimals of 8, 12, 15 and
-/// 17 significant digits (relative, so independent of how the conserved
+/// closed-form examples, is found exactly), with an objective also those
+/// within `1e-6` with denominators up to 1000 (a minimiser is located only
+/// to about the square root of the rounding), then decimals of 8, 12, 15
+/// and 17 significant digits (relative, so independent of how the conserved
 /// quantities are scaled). `units` are the sizes of the family directions
 /// (a parameter is compared in units of its direction); simple rationals
 /// have denominators at most `max_denominator`.
@@ -198,20 +200,26 @@ pub fn round_family_parameters(
     max_denominator: u64,
     objective: Option<(&Objective, f64)>,
 ) -> Option<Vec<Rational>> {
-    let simple = |denominator: u64| -> Option<Vec<Rational>> {
+    let simple = |denominator: u64, tolerance: f64| -> Option<Vec<Rational>> {
         t.iter()
             .zip(units)
             .map(|(&x, &unit)| {
                 let r = if x == 0.0 { Rational::zero() } else { best_rational_approximation(x, denominator)? };
-                ((exact::rational_to_f64(&r) - x).abs() * unit <= 1e-9 * (1.0 + x.abs() * unit)).then_some(r)
+                ((exact::rational_to_f64(&r) - x).abs() * unit <= tolerance * (1.0 + x.abs() * unit)).then_some(r)
             })
             .collect()
     };
     let decimal = |digits: u32| t.iter().map(|&x| exact::decimal_near(x, digits)).collect::<Option<Vec<Rational>>>();
+    // A minimiser of a smooth objective is found only to about the square
+    // root of the rounding (the objective is flat there): with an
+    // objective to guard the value, simple rationals (denominators up to
+    // 1000) within 1e-6 are tried too, and kept only if they do not raise it.
+    let loose = objective.is_some().then_some([1u64, 10, 100, 1000]).into_iter().flatten();
     let candidates = [1u64, 10, 100, 1000, 10_000, 100_000, 1_000_000]
         .into_iter()
         .filter(|&d| d <= max_denominator.max(1))
-        .filter_map(simple)
+        .filter_map(|d| simple(d, 1e-9))
+        .chain(loose.filter(|&d| d <= max_denominator.max(1)).filter_map(|d| simple(d, 1e-6)))
         .chain([8u32, 12, 15, 17].into_iter().filter_map(decimal));
     for candidate in candidates {
         let r = variation.restricted(&variation.family.at(&candidate));

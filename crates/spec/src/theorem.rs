@@ -225,32 +225,6 @@ pub(crate) fn theorem(
     TheoremRecord { status, statement, not_checked: subject.not_checked.clone() }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Printed bounds round outward: never below a bound, never above a
-    /// time.
-    #[test]
-    fn printed_numbers_round_outward() {
-        for &x in &[0.27, 1.0 / 3.0, 17.056185874029936, 4.034662e-7, 1.141402e7, 123456789.0, 2.0 / 3.0, 1e-300, 5e300]
-        {
-            let up: f64 = significant(x, true).parse().unwrap();
-            let down: f64 = significant(x, false).parse().unwrap();
-            assert!(up >= x && down <= x, "{x}: {up} {down}");
-            assert!((up - x) <= 1.1e-6 * x && (x - down) <= 1.1e-6 * x, "{x}: {up} {down}");
-        }
-        assert_eq!(significant(0.27, true), "0.27");
-        assert_eq!(significant(1.0 / 3.0, false), "0.3333333");
-        assert_eq!(significant(1.141402e7, false), "1.141402e7");
-        assert_eq!(significant(1141402.7, false), "1141402");
-        assert_eq!(significant(1e-300, true), "1e-300");
-        assert_eq!(significant(-2.5, true), "-2.5");
-        // 9.9999999 rounded up carries into the next decade
-        assert_eq!(significant(9.99999999, true), "10");
-    }
-}
-
 /// A vector for a statement: its entries when there are at most 8, else
 /// `what` (the certificate holds it).
 pub(crate) fn listed<T: std::fmt::Display>(v: &[T], what: &str) -> String {
@@ -443,4 +417,30 @@ pub(crate) fn box_theorem(b: &BoxParts<'_>) -> TheoremRecord {
         _ => (TheoremStatus::None, "Nothing is claimed on any part of the box (the reason says why).".to_string()),
     };
     TheoremRecord { status, statement, not_checked: BOX_NOT_CHECKED.into() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Printed bounds round outward: never below a bound, never above a
+    /// time.
+    #[test]
+    fn printed_numbers_round_outward() {
+        for &x in &[0.27, 1.0 / 3.0, 17.056185874029936, 4.034662e-7, 1.141402e7, 123456789.0, 2.0 / 3.0, 1e-300, 5e300]
+        {
+            let up: f64 = significant(x, true).parse().unwrap();
+            let down: f64 = significant(x, false).parse().unwrap();
+            assert!(up >= x && down <= x, "{x}: {up} {down}");
+            assert!((up - x) <= 1.1e-6 * x && (x - down) <= 1.1e-6 * x, "{x}: {up} {down}");
+        }
+        assert_eq!(significant(0.27, true), "0.27");
+        assert_eq!(significant(1.0 / 3.0, false), "0.3333333");
+        assert_eq!(significant(1.141402e7, false), "1.141402e7");
+        assert_eq!(significant(1141402.7, false), "1141402");
+        assert_eq!(significant(1e-300, true), "1e-300");
+        assert_eq!(significant(-2.5, true), "-2.5");
+        // 9.9999999 rounded up carries into the next decade
+        assert_eq!(significant(9.99999999, true), "10");
+    }
 }

@@ -522,7 +522,7 @@ pub fn analyse_general_with(
 /// assert_eq!(zeitlin::general::supported_digits(1.9271016504435295e-1, 8.499851366887463e-8), "1.92710e-1");
 /// ```
 pub fn supported_digits(x: f64, e: f64) -> String {
-    let digits = if x == 0.0 || !(e > 0.0) || !x.is_finite() {
+    let digits = if x == 0.0 || e.is_nan() || e <= 0.0 || !x.is_finite() {
         9
     } else {
         ((x.abs() / e).log10().floor() as i64).clamp(1, 9) as usize

@@ -180,6 +180,34 @@ pub(super) fn inconclusive_or_unstable(
     }
 }
 
+/// What an inconclusive search tried, for the reason: the mode whose last
+/// grid came nearest to growing, its rate there and why it was not
+/// accepted (the certificate's `instability_search` has every mode and
+/// grid).
+fn search_summary(searches: &[ModeSearch]) -> String {
+    let last = |s: &ModeSearch| s.grids.iter().rev().find_map(|g| g.growth_rate.map(|r| (r, g.ny)));
+    let best = searches
+        .iter()
+        .filter_map(|s| last(s).map(|(r, ny)| (s, r, ny)))
+        .max_by(|a, b| (a.1 / a.0.floor.max(f64::MIN_POSITIVE)).total_cmp(&(b.1 / b.0.floor.max(f64::MIN_POSITIVE))));
+    match best {
+        None if searches.is_empty() => String::new(),
+        None => "; the instability search found no growth rate on any grid".into(),
+        Some((s, rate, ny)) => format!(
+            "; no growing mode was confirmed: the instability search's best candidate, x-mode m = {} (k = {:.6}), has growth rate {rate:.3e} at ny = {ny} ({}; floor {:.3e}; every mode and grid in instability_search)",
+            s.m,
+            s.k,
+            match s.outcome {
+                SearchOutcome::Converged => "converged",
+                SearchOutcome::BelowFloor => "below the floor on the last two grids",
+                SearchOutcome::NotConverged => "not converged between two grids up to the resolution limit",
+                SearchOutcome::SolveFailed => "the last eigenvalue solve failed",
+            },
+            s.floor
+        ),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -292,33 +320,5 @@ mod tests {
         assert_eq!(s.grids.last().map(|g| (g.ny, g.tracked)), Some((16384, true)));
         let rate = s.grids.last().unwrap().growth_rate.unwrap();
         assert!((rate - 0.0022166).abs() < 0.01 * rate, "{rate}");
-    }
-}
-
-/// What an inconclusive search tried, for the reason: the mode whose last
-/// grid came nearest to growing, its rate there and why it was not
-/// accepted (the certificate's `instability_search` has every mode and
-/// grid).
-fn search_summary(searches: &[ModeSearch]) -> String {
-    let last = |s: &ModeSearch| s.grids.iter().rev().find_map(|g| g.growth_rate.map(|r| (r, g.ny)));
-    let best = searches
-        .iter()
-        .filter_map(|s| last(s).map(|(r, ny)| (s, r, ny)))
-        .max_by(|a, b| (a.1 / a.0.floor.max(f64::MIN_POSITIVE)).total_cmp(&(b.1 / b.0.floor.max(f64::MIN_POSITIVE))));
-    match best {
-        None if searches.is_empty() => String::new(),
-        None => "; the instability search found no growth rate on any grid".into(),
-        Some((s, rate, ny)) => format!(
-            "; no growing mode was confirmed: the instability search's best candidate, x-mode m = {} (k = {:.6}), has growth rate {rate:.3e} at ny = {ny} ({}; floor {:.3e}; every mode and grid in instability_search)",
-            s.m,
-            s.k,
-            match s.outcome {
-                SearchOutcome::Converged => "converged",
-                SearchOutcome::BelowFloor => "below the floor on the last two grids",
-                SearchOutcome::NotConverged => "not converged between two grids up to the resolution limit",
-                SearchOutcome::SolveFailed => "the last eigenvalue solve failed",
-            },
-            s.floor
-        ),
     }
 }
