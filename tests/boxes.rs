@@ -280,7 +280,7 @@ fn a_box_verdict_is_never_stated_for_the_whole_box_from_one_witness() {
     let cert = certify(v.clone());
     assert_eq!(cert["verdict"], "partly_not_an_equilibrium", "{}", cert["reason"]);
     let reason = cert["reason"].as_str().unwrap();
-    assert!(reason.contains("nothing is claimed there") && !reason.contains("every parameter in the box"), "{reason}");
+    assert!(reason.contains("nothing is claimed on the other") && !reason.contains("every parameter in the box"), "{reason}");
     let (mut proved, mut open) = (0, 0);
     for sub in cert["sub_boxes"].as_array().unwrap() {
         let (lo, hi) = side(sub);
@@ -507,6 +507,8 @@ fn a_box_is_about_its_spec_and_never_where_it_is_undefined() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let cert: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(cert["spec"]["parameters"]["I2"], "2");
+    // named after the move: check reports under this name what holds for it
+    assert_eq!(cert["name"], "rigid-body-major-axis (I2 = 2)");
     assert!(String::from_utf8_lossy(&out.stderr).contains("note: I2 = 4 lies outside"));
     std::fs::remove_dir_all(&dir).unwrap();
 

@@ -425,3 +425,61 @@ fn every_certificate_states_the_theorem_it_proves_in_the_readme_words() {
     }
     assert!(!readme.contains("certifies stability in probability"));
 }
+
+/// A review's findings on this round: an epsilon rounded down next to a
+/// delta rounded up printed as equal ("for epsilon = 0.1, delta = 0.1 it
+/// stays below 1 for t < T"); an exact-structure Zeitlin certificate said
+/// "Estimated"; a box whose budget leaves were moved, whose partition was
+/// not the bisection's, or whose fractions moved by 9e-10 passed `check`.
+#[test]
+fn a_review_of_the_statements_found_these_and_they_hold_now() {
+    // epsilon and delta as the spec's doubles
+    let mut v = committed("rigid-body-major-axis.json");
+    v["stopping"] = json!({"epsilon": 0.10000005, "delta": 0.1});
+    let cert = spec::certify(&spec::spec_from_value(v).unwrap()).json;
+    let statement = cert["theorem"]["statement"].as_str().unwrap();
+    assert!(statement.contains("for epsilon = 0.10000005, delta = 0.1 it stays below 1"), "{statement}");
+    // every proved level reads as proved
+    let zeitlin = committed("zeitlin/monotone-n256.cert.json");
+    assert_eq!(zeitlin["level"], "exact_structure");
+    assert_eq!(zeitlin["theorem"]["status"], "proved");
+    assert!(zeitlin["theorem"]["statement"].as_str().unwrap().starts_with("Proved (exact structure)"));
+
+    let name = "boxes/rigid-body-equilibrium-at-one-inertia.cert.json";
+    let cert = committed(name);
+    // the two undecided sub-boxes called left by the budget, with a budget
+    // that counts: they are not the last of the bisection's order
+    let mut forged = cert.clone();
+    let subs = forged["sub_boxes"].as_array_mut().unwrap();
+    for s in subs.iter_mut().filter(|s| s["verdict"] == "undecided") {
+        s["reason"] = json!("the box budget was spent before this sub-box");
+    }
+    let l = subs.len();
+    forged["spec"]["box"]["max_boxes"] = json!(2 * l - 1 - 2);
+    forged["spec_sha256"] = json!(spec::spec_digest(&forged["spec"]));
+    forged["limit"] = json!("max_boxes");
+    let Err(CheckError::Failed { message, .. }) = check(name, &forged) else { panic!("accepted") };
+    assert!(message.contains("comes after a sub-box left by the budget"), "{message}");
+    // a partition the bisection never makes: [3/2, 5/2] as [3/2, 13/8],
+    // [13/8, 15/8], [15/8, 5/2] (volumes add up, interiors disjoint)
+    let mut forged = cert.clone();
+    forged["sub_boxes"] = json!([
+        {"lo": ["3/2"], "hi": ["13/8"], "depth": 3, "verdict": "undecided", "reason": "any"},
+        {"lo": ["13/8"], "hi": ["15/8"], "depth": 2, "verdict": "undecided", "reason": "any"},
+        {"lo": ["15/8"], "hi": ["5/2"], "depth": 1, "verdict": "undecided", "reason": "any"},
+    ]);
+    let Err(CheckError::Failed { message, .. }) = check(name, &forged) else { panic!("accepted") };
+    assert!(message.contains("bisection") || message.contains("cover"), "{message}");
+    // the shares are exact volumes: 9e-10 off is refused
+    for key in ["excluded_fraction", "undecided_fraction"] {
+        let mut forged = cert.clone();
+        let x = cert[key].as_f64().unwrap();
+        forged[key] = json!(x * (1.0 + 9e-10));
+        assert!(check(name, &forged).is_err(), "{key}");
+    }
+    // the limit's message names it, not Some(..)
+    let mut forged = cert.clone();
+    forged.as_object_mut().unwrap().remove("limit");
+    let Err(CheckError::Failed { message, .. }) = check(name, &forged) else { panic!("accepted") };
+    assert!(message.contains("max_depth stopped") && !message.contains("Some("), "{message}");
+}

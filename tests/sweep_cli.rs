@@ -802,3 +802,76 @@ fn plot_sweep_refuses_lines_of_another_spec() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// A review found lines that contradict themselves merging without
+/// `--recheck` (a negative T, T infinite with Sigma^2 > 0, T far past its
+/// own Sigma^2's time, a negative Sigma^2), a duplicated key read as its
+/// last value, CR-only line ends and a cut multi-byte character called
+/// other things, and a byte-order mark mid-file (`cat` of two shards)
+/// refused.
+#[test]
+fn merge_refuses_lines_that_contradict_themselves() {
+    let spec = fixture_path("rigid-body-major-axis.json");
+    let spec_s = spec.to_str().unwrap();
+    let plan = ["--param", "I2=2:4:5"];
+    let whole = tmp("self-whole.jsonl");
+    let mut args = vec!["sweep", spec_s, "-o", whole.to_str().unwrap()];
+    args.extend_from_slice(&plan);
+    assert!(verify(&args).status.success());
+    let merge = |file: &Path| -> Output {
+        let out = tmp("self-out.jsonl");
+        let mut args = vec!["merge", spec_s, "-o", out.to_str().unwrap()];
+        args.extend_from_slice(&plan);
+        args.push("--lines");
+        args.push(file.to_str().unwrap());
+        verify(&args)
+    };
+    let lines = lines_of(&whole);
+    let stable = lines.iter().position(|l| l.contains("\"verdict\":\"stable\"")).unwrap();
+    let edit = |f: &dyn Fn(&mut Value)| -> PathBuf {
+        let mut l = lines.clone();
+        let mut v: Value = serde_json::from_str(&l[stable]).unwrap();
+        f(&mut v);
+        l[stable] = v.to_string();
+        let p = tmp("self-edited.jsonl");
+        std::fs::write(&p, l.join("\n") + "\n").unwrap();
+        p
+    };
+    for (what, f) in [
+        ("T negative", &(|v: &mut Value| v["T"] = serde_json::json!(-5.0)) as &dyn Fn(&mut Value)),
+        ("T infinite", &|v: &mut Value| v["T"] = serde_json::json!("infinity")),
+        ("T past its own Sigma^2", &|v: &mut Value| v["T"] = serde_json::json!(1e6)),
+        ("Sigma^2 negative", &|v: &mut Value| v["sigma2"] = serde_json::json!(-1.0)),
+    ] {
+        let o = merge(&edit(f));
+        assert_eq!(o.status.code(), Some(1), "{what}: {}", stderr(&o));
+        assert!(stderr(&o).contains("contradicts itself"), "{what}: {}", stderr(&o));
+    }
+    // a duplicated key
+    let mut l = lines.clone();
+    l[stable] = l[stable].replacen("{\"sweep\"", "{\"verdict\":\"linearly_unstable\",\"sweep\"", 1);
+    let dup = tmp("self-dup.jsonl");
+    std::fs::write(&dup, l.join("\n") + "\n").unwrap();
+    let o = merge(&dup);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("verdict"), "{}", stderr(&o));
+    // CR-only line ends
+    let cr = tmp("self-cr.jsonl");
+    std::fs::write(&cr, lines.join("\r") + "\r").unwrap();
+    let o = merge(&cr);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("CR alone"), "{}", stderr(&o));
+    // a byte-order mark at the start of the second half (cat of two shards)
+    let mid = tmp("self-bom.jsonl");
+    let (a, b) = lines.split_at(2);
+    std::fs::write(&mid, format!("{}\n\u{feff}{}\n", a.join("\n"), b.join("\n"))).unwrap();
+    assert!(merge(&mid).status.success(), "{}", stderr(&merge(&mid)));
+    // cut inside a multi-byte character: an interrupted shard
+    let cut = tmp("self-cut.jsonl");
+    let mut bytes = (lines.join("\n") + "\n{\"sweep\":\"é").into_bytes();
+    bytes.pop();
+    std::fs::write(&cut, bytes).unwrap();
+    let o = merge(&cut);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("interrupted shard"), "{}", stderr(&o));
+}

@@ -239,6 +239,7 @@ fn certify_box_command(
         return Err(bad("certify-box takes a finite-dimensional spec (a Lie algebra, a Hamiltonian, ...)".into()));
     }
     let mut sides = serde_json::Map::new();
+    let mut moved: Vec<String> = vec![];
     for p in params {
         let (name, range) = p
             .split_once('=')
@@ -262,8 +263,16 @@ fn certify_box_command(
                 let centre = (&a + &b) / exact::Rational::from(2);
                 eprintln!("note: {name} = {own} lies outside [{a}, {b}]: the certificate's spec has {name} = {centre}");
                 value["parameters"][name] = Value::String(centre.to_string());
+                moved.push(format!("{name} = {centre}"));
             }
         }
+    }
+    // The certificate's name says the spec was moved: what `check` reports
+    // under it holds for the moved spec, not for the original one.
+    if !moved.is_empty() {
+        let old = value["name"].as_str().unwrap_or("").to_string();
+        value["name"] = Value::String(format!("{old} ({})", moved.join(", ")));
+        eprintln!("note: the certificate is named '{}'", messages::excerpt(value["name"].as_str().unwrap_or("")));
     }
     let mut section = serde_json::json!({"parameters": sides});
     if let Some(d) = max_depth {
@@ -308,8 +317,8 @@ fn summary(cert: &Value) -> String {
     if let Some(st) = cert.get("stopping") {
         s.push_str(&format!(
             ", T({}, {}) = {}",
-            table::format_number(&st["epsilon"]),
-            table::format_number(&st["delta"]),
+            st["epsilon"].as_f64().map_or_else(|| table::format_number(&st["epsilon"]), spec::theorem::shortest),
+            st["delta"].as_f64().map_or_else(|| table::format_number(&st["delta"]), spec::theorem::shortest),
             table::format_number(&st["T"])
         ));
     }

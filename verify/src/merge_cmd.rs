@@ -87,16 +87,36 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
     let mut points: BTreeMap<u64, (String, String)> = BTreeMap::new();
     let mut dropped = 0u64;
     let spec_tag = evaluator.spec_tag();
+    let stopping = evaluator.spec().stopping();
     for path in &args.lines {
         let bytes = std::fs::read(path).map_err(|e| bad(format!("{}: cannot read: {e}", path.display())))?;
         let complete = bytes.last().is_none_or(|&b| b == b'\n');
+        if !bytes.contains(&b'\n') && bytes.iter().filter(|&&b| b == b'\r').count() > 1 {
+            return Err(bad(format!(
+                "{}: its lines end in CR alone (an old Mac text format), not LF or CRLF: convert the line ends",
+                path.display()
+            )));
+        }
         let chunks: Vec<&[u8]> = bytes.split(|&b| b == b'\n').collect();
         let last = chunks.len().saturating_sub(1);
+        let interrupted = |at: &str, what: String| {
+            bad(format!(
+                "{at}: the file ends in a partial line ({what}): an interrupted shard; finish it with `verify sweep --resume`"
+            ))
+        };
         for (n, line) in chunks.into_iter().enumerate() {
             let at = format!("{}:{}", path.display(), n + 1);
-            let mut line = String::from_utf8(line.to_vec()).map_err(|_| bad(format!("{at}: not UTF-8 text")))?;
-            if n == 0 && line.starts_with('\u{feff}') {
-                line.remove(0); // a byte-order mark an editor added: not part of the line
+            let cut = n == last && !complete;
+            let mut line = match String::from_utf8(line.to_vec()) {
+                Ok(l) => l,
+                // a shard cut inside a multi-byte character
+                Err(_) if cut => return Err(interrupted(&at, "not UTF-8 text".into())),
+                Err(_) => return Err(bad(format!("{at}: not UTF-8 text"))),
+            };
+            // A byte-order mark an editor added (at the start of any line:
+            // `cat` of two such shards puts one mid-file): not part of it.
+            if line.starts_with('\u{feff}') {
+                line.remove(0);
             }
             if line.ends_with('\r') {
                 line.pop(); // a CRLF file (copied through Windows): the same line
@@ -104,13 +124,13 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
             if line.trim().is_empty() {
                 continue;
             }
-            let value: Value = serde_json::from_str(&line).map_err(|e| {
-                if n == last && !complete {
-                    bad(format!(
-                        "{at}: the file ends in a partial line ({e}): an interrupted shard; finish it with `verify sweep --resume`"
-                    ))
+            // Duplicated keys are refused, as in certificates: the last
+            // one would silently win.
+            let value: Value = spec::parse_json(&line).map_err(|e| {
+                if cut {
+                    interrupted(&at, e.message.clone())
                 } else {
-                    bad(format!("{at}: not a sweep line: {e}"))
+                    bad(format!("{at}: not a sweep line: {} ({})", e.message, e.path))
                 }
             })?;
             let Some(line_id) = value.get("sweep").and_then(Value::as_str) else {
@@ -158,6 +178,9 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
                     "{at}: the line differs from what `verify sweep` writes for point {index} with these results (at \"{key}\"{})",
                     if key == "parameters" { ": the float parameters are not the exact ones rounded" } else { "" }
                 )));
+            }
+            if let Some(why) = inconsistent(&outcome, stopping) {
+                return Err(Failure::Failed(format!("{at}: the line contradicts itself: {why}")));
             }
             // The merged file holds the canonical text (keys in the order
             // `verify sweep` writes them).
@@ -283,4 +306,49 @@ fn recheck(
         examples.join("; "),
         if differing.len() > 5 { "; ..." } else { "" }
     )))
+}
+
+/// What a line states that cannot all be true (a result is data, but not
+/// nonsense): a stable point without a finite `Sigma^2 >= 0`; a stopping
+/// time that is not positive, present without the spec's question,
+/// infinite with `Sigma^2 > 0`, or beyond
+/// `ln(epsilon/delta)/Sigma^2` of its own `Sigma^2` (the engine's `T`
+/// comes from a proved bound at or above it: the exact value rounded up, a
+/// fluid's `sigma2_upper`); a growth rate that is not positive, or on a
+/// stable point; `Sigma^2` or `T` on a linearly unstable point.
+fn inconsistent(o: &sweep::Outcome, stopping: Option<spec::Stopping>) -> Option<String> {
+    use sweep::Verdict;
+    match o.verdict {
+        Some(Verdict::Stable) => {
+            let s = o.sigma2.filter(|s| s.is_finite() && *s >= 0.0);
+            let Some(s) = s else { return Some("a stable point without a finite Sigma^2 >= 0".into()) };
+            match (stopping, o.stopping_time) {
+                (None, Some(_)) => return Some("a stopping time, but the spec asks for none".into()),
+                // no T: nothing proved bounds Sigma^2 (a fluid's unverified
+                // estimate), which a line may say
+                (Some(_), None) => {}
+                (Some(st), Some(t)) => {
+                    let own = generator::StoppingTime::new(st.epsilon, st.delta, s).time();
+                    let fine = match (t, own) {
+                        (None, None) => true,
+                        (None, Some(_)) => false,
+                        (Some(t), None) => t.is_finite() && t > 0.0,
+                        (Some(t), Some(d)) => t.is_finite() && t > 0.0 && t <= d * (1.0 + 1e-9),
+                    };
+                    if !fine {
+                        return Some("T is not at most ln(epsilon/delta)/Sigma^2 of its own Sigma^2".into());
+                    }
+                }
+                (None, None) => {}
+            }
+            o.growth_rate.is_some().then(|| "a growth rate on a stable point".into())
+        }
+        Some(Verdict::LinearlyUnstable) => {
+            if o.sigma2.is_some() || o.stopping_time.is_some() {
+                return Some("Sigma^2 or T on a linearly unstable point".into());
+            }
+            o.growth_rate.filter(|g| !(g.is_finite() && *g > 0.0)).map(|_| "a growth rate that is not positive".into())
+        }
+        _ => None,
+    }
 }

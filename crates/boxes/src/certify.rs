@@ -544,7 +544,6 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
     let mut leaves = Vec::new();
     let mut analysed = 0usize;
     let mut limit = None;
-    let width: Vec<Rational> = (0..range.dim()).map(|i| &range.hi[i] - &range.lo[i]).collect();
     while let Some((b, depth)) = queue.pop_front() {
         if analysed >= settings.max_boxes {
             limit = Some("max_boxes");
@@ -592,14 +591,7 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
             leaves.push(Leaf { range: b, depth, outcome: undecided(reason, centre_verdict) });
             continue;
         }
-        // Bisect the side widest relative to the whole box's (every side
-        // has positive width: LO < HI).
-        let i = (0..b.dim())
-            .max_by(|&x, &y| {
-                ((&b.hi[x] - &b.lo[x]) / &width[x]).cmp(&((&b.hi[y] - &b.lo[y]) / &width[y])).then(y.cmp(&x))
-            })
-            .unwrap_or(0);
-        let (lo, hi) = b.split(i);
+        let (lo, hi) = b.split(bisection_side(&b, range));
         queue.push_back((lo, depth + 1));
         queue.push_back((hi, depth + 1));
     }
@@ -608,6 +600,19 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
     }
     let (verdict, reason) = verdict_of(&LeafCounts::of(&leaves));
     Ok(BoxReport { verdict, reason, leaves, limit })
+}
+
+/// The side along which a sub-box `b` of `whole` is bisected: the widest
+/// relative to the whole box's, the first such on a tie (every side has
+/// positive width: LO < HI). The bisection and the tightening use it, and
+/// `check` rebuilds the bisection tree with it.
+pub fn bisection_side(b: &ParamBox, whole: &ParamBox) -> usize {
+    (0..b.dim())
+        .max_by(|&x, &y| {
+            let relative = |k: usize| (&b.hi[k] - &b.lo[k]) / (&whole.hi[k] - &whole.lo[k]);
+            relative(x).cmp(&relative(y)).then(y.cmp(&x))
+        })
+        .unwrap_or(0)
 }
 
 /// Whether the pipeline proves `A` unstable (exact Sturm test) at the
@@ -671,10 +676,7 @@ fn tighten(
             return;
         }
         let leaf = &leaves[i];
-        // the side widest relative to the box's, as in the bisection
-        let relative = |k: usize| (&leaf.range.hi[k] - &leaf.range.lo[k]) / (&range.hi[k] - &range.lo[k]);
-        let d = (0..leaf.range.dim()).max_by(|&x, &y| relative(x).cmp(&relative(y)).then(y.cmp(&x))).unwrap_or(0);
-        let (lo, hi) = leaf.range.split(d);
+        let (lo, hi) = leaf.range.split(bisection_side(&leaf.range, range));
         let depth = leaf.depth + 1;
         let mut halves = Vec::new();
         for half in [lo, hi] {
@@ -759,7 +761,7 @@ pub fn verdict_of(c: &LeafCounts) -> (BoxVerdict, String) {
         (
             BoxVerdict::PartlyNotAnEquilibrium,
             format!(
-                "mu_e is proved not an equilibrium on {} (for every parameter in them); the other {} are undecided: they hold the parameters where ad*_{{Dh(mu_e)}} mu_e may vanish, and nothing is claimed there",
+                "mu_e is proved not an equilibrium on {} (for every parameter in them); nothing is claimed on the other {}, which hold the parameters where ad*_{{Dh(mu_e)}} mu_e may vanish or the system is undefined",
                 of(c.not_equilibrium),
                 c.undecided
             ),
@@ -768,7 +770,7 @@ pub fn verdict_of(c: &LeafCounts) -> (BoxVerdict, String) {
         (
             BoxVerdict::PartlyNoiseIncompatible,
             format!(
-                "the noise is proved to move mu_e on {} (for every parameter in them); the other {} are undecided: they hold the parameters where it may keep mu_e, and nothing is claimed there",
+                "the noise is proved to move mu_e on {} (for every parameter in them); nothing is claimed on the other {}, which hold the parameters where it may keep mu_e or the system is undefined",
                 of(c.noise_incompatible),
                 c.undecided
             ),

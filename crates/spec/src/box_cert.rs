@@ -514,7 +514,7 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     let np = section.names.len();
     let range = &section.range;
     let settings = &section.settings;
-    check_partition(&doc, range, np)?;
+    let order = check_partition(&doc, range, np)?;
     let excluded = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
     let unresolved = if sym.equilibrium_holds() {
         ::boxes::certify::NOISE_UNRESOLVED
@@ -695,8 +695,19 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     }
     // The bisection analyses every node of its binary tree but the sub-boxes
     // left by the budget: 2 L - 1 nodes for L sub-boxes. Sub-boxes left by
-    // the budget mean that exactly max_boxes were analysed.
+    // the budget mean that exactly max_boxes were analysed, and they are the
+    // last sub-boxes of the breadth-first order (no tightening follows a
+    // spent budget).
     let nodes = (2 * doc.sub_boxes.len()).saturating_sub(1);
+    let spent = |i: usize| doc.sub_boxes[i].reason.as_deref() == Some(::boxes::certify::BUDGET_SPENT);
+    if let Some(first) = order.iter().position(|&i| spent(i)) {
+        if let Some(&i) = order[first..].iter().find(|&&i| !spent(i)) {
+            return Err(fail(
+                &format!("$.sub_boxes[{i}]"),
+                "comes after a sub-box left by the budget in the bisection's order, so it was not analysed".into(),
+            ));
+        }
+    }
     if budget > 0 && nodes - budget != settings.max_boxes {
         return Err(fail(
             "$.sub_boxes",
@@ -721,7 +732,10 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
         None
     };
     if doc.limit.as_deref() != limit {
-        return Err(fail("$.limit", format!("the sub-boxes show {limit:?} stopped the bisection")));
+        return Err(fail(
+            "$.limit",
+            format!("the sub-boxes show that {} stopped the bisection", limit.unwrap_or("no limit")),
+        ));
     }
     let (verdict, reason) = ::boxes::verdict_of(&counts);
     if doc.verdict != verdict.as_str() {
@@ -744,16 +758,17 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     if doc.sup_sigma2.map(|x| x.0) != sup_f {
         return Err(fail("$.sup_sigma2", "is not the exact bound rounded up".into()));
     }
-    if !close(doc.undecided_fraction.0, fraction(&undecided, &range.volume())) {
+    // the shares are exact volumes rounded once: compared exactly
+    if doc.undecided_fraction.0 != fraction(&undecided, &range.volume()) {
         return Err(fail("$.undecided_fraction", "is not the undecided sub-boxes' share".into()));
     }
-    if !close(doc.unstable_fraction.0, fraction(&unstable_volume, &range.volume())) {
+    if doc.unstable_fraction.0 != fraction(&unstable_volume, &range.volume()) {
         return Err(fail("$.unstable_fraction", "is not the unstable sub-boxes' share".into()));
     }
     let excluded_fraction = excluded.then(|| fraction(&excluded_volume, &range.volume()));
     match (doc.excluded_fraction, excluded_fraction) {
         (None, None) => {}
-        (Some(x), Some(y)) if close(x.0, y) => {}
+        (Some(x), Some(y)) if x.0 == y => {}
         _ => return Err(fail("$.excluded_fraction", "is not the excluded sub-boxes' share (present exactly when the equilibrium or the noise fails for some parameter)".into())),
     }
     match (&doc.sampled_max, &sampled_max) {
@@ -784,49 +799,75 @@ fn close(a: f64, b: f64) -> bool {
     a == b || (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
 }
 
-/// The sub-boxes lie in the box, their interiors are disjoint, and their
-/// volumes add up to the box's: so (being closed) they cover it.
-fn check_partition(doc: &BoxCertificateDocument, range: &ParamBox, np: usize) -> std::result::Result<(), CheckError> {
-    let boxes: Vec<ParamBox> =
-        doc.sub_boxes.iter().map(|r| ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) }).collect();
-    let mut volume = Rational::zero();
-    let whole = range.volume();
-    for (i, b) in boxes.iter().enumerate() {
+/// The sub-boxes are the leaves of the bisection tree of the box: starting
+/// from the box, a node that is not a recorded sub-box is halved along
+/// [`::boxes::certify::bisection_side`], exactly as certify and its
+/// tightening split, and every recorded sub-box must be reached, at its
+/// recorded depth. So they lie in the box, their interiors are disjoint and
+/// they cover it, and their corners and depths are what the bisection
+/// gives. Returns the indices of the sub-boxes in the tree's breadth-first
+/// order (the bisection's order of analysis, when no tightening followed).
+fn check_partition(
+    doc: &BoxCertificateDocument,
+    range: &ParamBox,
+    np: usize,
+) -> std::result::Result<Vec<usize>, CheckError> {
+    let mut index: std::collections::HashMap<(Vec<Rational>, Vec<Rational>), usize> = Default::default();
+    for (i, r) in doc.sub_boxes.iter().enumerate() {
         let path = format!("$.sub_boxes[{i}]");
+        let b = ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) };
         if b.lo.len() != np || b.hi.len() != np {
             return Err(fail(&path, format!("expected {np} bounds per corner")));
         }
-        if (0..np).any(|k| b.lo[k] >= b.hi[k]) || !range.contains_box(b) {
+        if (0..np).any(|k| b.lo[k] >= b.hi[k]) || !range.contains_box(&b) {
             return Err(fail(&path, "not a non-empty sub-box of the box".into()));
         }
-        // `depth` bisections halve the volume `depth` times
-        let depth = doc.sub_boxes[i].depth;
-        if depth > MAX_BOX_DEPTH || b.volume() * Rational::from_integer(exact::BigInt::from(1u64 << depth)) != whole {
-            return Err(fail(
-                &format!("{path}.depth"),
-                "is not the number of bisections that gives this sub-box".into(),
-            ));
+        if r.depth > MAX_BOX_DEPTH {
+            return Err(fail(&format!("{path}.depth"), format!("at most {MAX_BOX_DEPTH}")));
         }
-        volume += b.volume();
-    }
-    // Sorted by the first lower bound, only boxes that overlap in the first
-    // parameter are compared.
-    let mut order: Vec<usize> = (0..boxes.len()).collect();
-    order.sort_by(|&a, &b| boxes[a].lo[0].cmp(&boxes[b].lo[0]));
-    for (k, &i) in order.iter().enumerate() {
-        for &j in &order[k + 1..] {
-            if boxes[j].lo[0] >= boxes[i].hi[0] {
-                break;
-            }
-            if boxes[i].interiors_meet(&boxes[j]) {
-                return Err(fail(&format!("$.sub_boxes[{j}]"), format!("overlaps sub-box {i}")));
-            }
+        if index.insert((b.lo, b.hi), i).is_some() {
+            return Err(fail(&path, "the same sub-box is recorded twice".into()));
         }
     }
-    if volume != range.volume() {
+    // Breadth first; a tree with L leaves has 2 L - 1 nodes, so a walk
+    // past that many (or below the largest depth) is not this partition's.
+    let leaves = doc.sub_boxes.len();
+    let mut order = Vec::with_capacity(leaves);
+    let mut queue = std::collections::VecDeque::from([(range.clone(), 0u64)]);
+    let mut nodes = 0usize;
+    while let Some((b, depth)) = queue.pop_front() {
+        nodes += 1;
+        if nodes > 2 * leaves {
+            break;
+        }
+        match index.remove(&(b.lo.clone(), b.hi.clone())) {
+            Some(i) => {
+                if doc.sub_boxes[i].depth != depth {
+                    return Err(fail(
+                        &format!("$.sub_boxes[{i}].depth"),
+                        format!("is not the number of bisections that gives this sub-box ({depth})"),
+                    ));
+                }
+                order.push(i);
+            }
+            None if depth < MAX_BOX_DEPTH => {
+                let (lo, hi) = b.split(::boxes::certify::bisection_side(&b, range));
+                queue.push_back((lo, depth + 1));
+                queue.push_back((hi, depth + 1));
+            }
+            None => break,
+        }
+    }
+    if let Some(&i) = index.values().min() {
+        return Err(fail(
+            &format!("$.sub_boxes[{i}]"),
+            "is not a sub-box of the box's bisection, or the sub-boxes do not cover the box".into(),
+        ));
+    }
+    if !queue.is_empty() || order.len() != leaves {
         return Err(fail("$.sub_boxes", "the sub-boxes do not cover the box".into()));
     }
-    Ok(())
+    Ok(order)
 }
 
 fn record_choice(r: &SubBoxRecord, path: &str) -> std::result::Result<BoxChoice, CheckError> {

@@ -163,6 +163,19 @@ impl AnySpec {
         }
     }
 
+    /// The stopping question, if the spec asks it.
+    pub fn stopping(&self) -> Option<Stopping> {
+        match self {
+            AnySpec::Lie(s) => s.stopping,
+            #[cfg(feature = "fluid")]
+            AnySpec::Fluid(s) => s.stopping,
+            #[cfg(feature = "fluid")]
+            AnySpec::Zeitlin(s) => s.stopping,
+            #[cfg(feature = "fluid")]
+            AnySpec::Large(s) => s.stopping,
+        }
+    }
+
     /// The spec's parameter values, exactly (a fluid spec's constant
     /// expressions that are not plain numbers are left out).
     pub fn parameters(&self) -> std::collections::BTreeMap<String, exact::Rational> {

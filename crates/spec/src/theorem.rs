@@ -86,12 +86,20 @@ pub fn significant(x: f64, up: bool) -> String {
     let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
     let mut digits: u64 = mantissa.replace('.', "").parse().unwrap_or(0);
     let mut e: i32 = exponent.parse().unwrap_or(0);
-    let nearest: f64 = text.parse().unwrap_or(x.abs());
+    // The decimal against the double's exact value, in rationals: a
+    // decimal that parses back to the double can still lie on the wrong
+    // side of it (subnormals have few digits).
+    let exact_x = exact::rational_from_f64(x.abs());
+    let printed = exact::parse_number(&text).ok();
+    let order = match (&printed, &exact_x) {
+        (Some(p), Some(v)) => p.cmp(v),
+        _ => std::cmp::Ordering::Equal,
+    };
     // away from zero for an upper bound of a positive number, and so on
     let outward = (up && x > 0.0) || (!up && x < 0.0);
-    if outward && nearest < x.abs() {
+    if outward && order == std::cmp::Ordering::Less {
         digits += 1;
-    } else if !outward && nearest > x.abs() {
+    } else if !outward && order == std::cmp::Ordering::Greater {
         digits -= 1;
     }
     if digits >= 10_000_000 {
@@ -126,6 +134,13 @@ pub fn significant(x: f64, up: bool) -> String {
         }
     };
     format!("{sign}{body}")
+}
+
+/// A double as the shortest decimal that reads back to it (`0.1`,
+/// `5e-324`), without a trailing `.0`.
+pub fn shortest(x: f64) -> String {
+    let t = format!("{x:?}");
+    t.strip_suffix(".0").map(str::to_string).unwrap_or(t)
 }
 
 /// The status a level gives a claim.
@@ -181,15 +196,18 @@ pub(crate) fn theorem(
             } else {
                 format!("P({n_t} > epsilon) <= (delta/epsilon) exp(Sigma^2 t) at each fixed time t when {n_0} = delta")
             };
+            // epsilon and delta exactly as the spec's doubles (the
+            // shortest text that reads back to them): rounded, two close
+            // values could print equal and the sentence would be false
             let time = match b.stopping {
                 Some((e, d, Some(t))) => format!(
                     "; for epsilon = {}, delta = {} it stays below 1 for t < T = {}",
-                    significant(e, false),
-                    significant(d, true),
+                    shortest(e),
+                    shortest(d),
                     significant(t, false)
                 ),
                 Some((e, d, None)) => {
-                    format!("; for epsilon = {}, delta = {} it is below 1 for all t", significant(e, false), significant(d, true))
+                    format!("; for epsilon = {}, delta = {} it is below 1 for all t", shortest(e), shortest(d))
                 }
                 None => String::new(),
             };
@@ -265,9 +283,16 @@ pub(crate) fn from_doubles(
     stopping: Option<&crate::record::StoppingRecord>,
     growth_rate: Option<f64>,
 ) -> TheoremRecord {
-    let proved = status_of(level) == TheoremStatus::Proved;
-    let s = if proved { sigma2_upper.or(sigma2) } else { sigma2 };
-    let level = if proved && sigma2_upper.is_none() && verdict == Verdict::Stable {
+    // The bound a proof stands behind: the proved sigma2_upper, or, at the
+    // exact-structure level, Sigma^2 = 0 itself (Q = 0 by the form's
+    // structure). A stable verdict without one is an estimate.
+    let proved_bound = match level {
+        Some(VerificationLevel::ExactStructure) => sigma2_upper.or(sigma2),
+        Some(VerificationLevel::Exact | VerificationLevel::VerifiedFloat) => sigma2_upper,
+        _ => None,
+    };
+    let s = proved_bound.or(sigma2);
+    let level = if status_of(level) == TheoremStatus::Proved && proved_bound.is_none() && verdict == Verdict::Stable {
         Some(VerificationLevel::Numerical)
     } else {
         level
@@ -374,7 +399,9 @@ pub(crate) const BOX_NOT_CHECKED: &str = "The nonlinear stochastic system (the p
 
 /// The statement of a box certificate.
 pub(crate) fn box_theorem(b: &BoxParts<'_>) -> TheoremRecord {
+    // a proved share rounded down, an unclaimed one up: neither overstated
     let pct = |x: f64| format!("{}% of the box by volume", significant(100.0 * x, false));
+    let pct_up = |x: f64| format!("{}% of the box by volume", significant(100.0 * x, true));
     let [stable, unstable, excluded, undecided] = b.shares;
     let sde = format!(
         "the linearised Stratonovich SDE d(dmu) = A(theta) dmu dt + sum_i B_i(theta) dmu o dW^i of '{}' about mu_e(theta) = {}, at the parameter value theta (the other parameters at the spec's values)",
@@ -408,12 +435,12 @@ pub(crate) fn box_theorem(b: &BoxParts<'_>) -> TheoremRecord {
                     "Proved (exact), in the box {}: {}; nothing is claimed on the undecided sub-boxes ({}).",
                     b.range,
                     parts.join("; "),
-                    pct(undecided)
+                    pct_up(undecided)
                 ),
             )
         }
-        "partly_not_an_equilibrium" => (TheoremStatus::Proved, format!("Proved (exact), on part of the box {} ({}): for every theta there, mu_e(theta) is not an equilibrium. Nothing is claimed on the rest ({}), which holds the parameters where it may be one.", b.range, pct(excluded), pct(undecided))),
-        "partly_noise_incompatible" => (TheoremStatus::Proved, format!("Proved (exact), on part of the box {} ({}): for every theta there, the noise moves the equilibrium mu_e(theta). Nothing is claimed on the rest ({}), which holds the parameters where the noise may keep it.", b.range, pct(excluded), pct(undecided))),
+        "partly_not_an_equilibrium" => (TheoremStatus::Proved, format!("Proved (exact), on part of the box {} ({}): for every theta there, mu_e(theta) is not an equilibrium. Nothing is claimed on the rest ({}), which holds the parameters where it may be one (or where the system is undefined).", b.range, pct(excluded), pct_up(undecided))),
+        "partly_noise_incompatible" => (TheoremStatus::Proved, format!("Proved (exact), on part of the box {} ({}): for every theta there, the noise moves the equilibrium mu_e(theta). Nothing is claimed on the rest ({}), which holds the parameters where the noise may keep it (or where the system is undefined).", b.range, pct(excluded), pct_up(undecided))),
         _ => (TheoremStatus::None, "Nothing is claimed on any part of the box (the reason says why).".to_string()),
     };
     TheoremRecord { status, statement, not_checked: BOX_NOT_CHECKED.into() }
@@ -440,6 +467,13 @@ mod tests {
         assert_eq!(significant(1141402.7, false), "1141402");
         assert_eq!(significant(1e-300, true), "1e-300");
         assert_eq!(significant(-2.5, true), "-2.5");
+        // the smallest subnormal, 4.9406564584e-324: rounded as a decimal,
+        // not through the double it parses back to
+        assert_eq!(significant(5e-324, true), "4.940657e-324");
+        assert_eq!(significant(5e-324, false), "4.940656e-324");
+        assert_eq!(shortest(0.10000005), "0.10000005");
+        assert_eq!(shortest(5e-324), "5e-324");
+        assert_eq!(shortest(1.0), "1");
         // 9.9999999 rounded up carries into the next decade
         assert_eq!(significant(9.99999999, true), "10");
     }
