@@ -280,7 +280,10 @@ fn a_box_verdict_is_never_stated_for_the_whole_box_from_one_witness() {
     let cert = certify(v.clone());
     assert_eq!(cert["verdict"], "partly_not_an_equilibrium", "{}", cert["reason"]);
     let reason = cert["reason"].as_str().unwrap();
-    assert!(reason.contains("nothing is claimed on the other") && !reason.contains("every parameter in the box"), "{reason}");
+    assert!(
+        reason.contains("nothing is claimed on the other") && !reason.contains("every parameter in the box"),
+        "{reason}"
+    );
     let (mut proved, mut open) = (0, 0);
     for sub in cert["sub_boxes"].as_array().unwrap() {
         let (lo, hi) = side(sub);

@@ -270,12 +270,12 @@ fn messages_say_what_is_the_case() {
     let name = "boxes/lagrange-top-stability-map.cert.json";
     let mut c = committed(name);
     let subs = c["sub_boxes"].as_array().unwrap();
-    let k = subs.iter().position(|s| s["verdict"] == "undecided" && s["centre_verdict"].is_string()).unwrap();
-    let now = subs[k]["centre_verdict"].as_str().unwrap().to_string();
-    c["sub_boxes"][k]["centre_verdict"] = json!(if now == "stable" { "inconclusive" } else { "stable" });
+    let k = subs.iter().position(|s| s["verdict"] == "undecided" && s["anchor_verdict"].is_string()).unwrap();
+    let now = subs[k]["anchor_verdict"].as_str().unwrap().to_string();
+    c["sub_boxes"][k]["anchor_verdict"] = json!(if now == "stable" { "inconclusive" } else { "stable" });
     match check(name, &c) {
         Err(CheckError::Failed { path, message }) => {
-            assert!(path.ends_with("centre_verdict") && message.contains(&format!("({now})")), "{path}: {message}");
+            assert!(path.ends_with("anchor_verdict") && message.contains(&format!("({now})")), "{path}: {message}");
             assert!(!message.contains("Some("), "{message}");
         }
         other => panic!("{other:?}"),
@@ -482,4 +482,26 @@ fn a_review_of_the_statements_found_these_and_they_hold_now() {
     forged.as_object_mut().unwrap().remove("limit");
     let Err(CheckError::Failed { message, .. }) = check(name, &forged) else { panic!("accepted") };
     assert!(message.contains("max_depth stopped") && !message.contains("Some("), "{message}");
+}
+
+/// A fuzzed box from `p = 1e-308` to `7/2` (the fluctuating-gravity top)
+/// took four minutes: every centre carried the bound's 10^308 denominator
+/// into the exact pipeline and the Bernstein proofs. The budget of
+/// sub-boxes now scales with the numbers' length: 10^308 has 1024 bits
+/// (308 log2 10 = 1023.2), so the budget is `4096 (128/1024)^2 = 64`
+/// sub-boxes analysed, and the sub-boxes left by it say so.
+#[test]
+fn a_box_with_long_bounds_spends_a_budget_scaled_to_their_length() {
+    let mut v = committed("boxes/lagrange-top-fluctuating-gravity-box.json");
+    v["box"]["parameters"]["p"] = json!([1e-308, "7/2"]);
+    let cert = spec::box_cert::certify_box_spec(&spec::spec_from_value(v).unwrap());
+    let subs = cert["sub_boxes"].as_array().unwrap();
+    let spent: Vec<&Value> =
+        subs.iter().filter(|s| s["reason"].as_str().is_some_and(|r| r.starts_with("the box budget"))).collect();
+    assert!(!spent.is_empty());
+    assert_eq!(2 * subs.len() - 1 - spent.len(), 64, "sub-boxes analysed");
+    let reason = spent[0]["reason"].as_str().unwrap();
+    assert!(reason.contains("the budget is 64 sub-boxes") && reason.contains("1024 bits"), "{reason}");
+    assert_eq!(cert["limit"], "max_boxes");
+    assert!(spec::check_certificate_value(&cert).is_ok());
 }

@@ -44,6 +44,41 @@ impl ParamBox {
         self.lo.iter().zip(&self.hi).map(|(a, b)| (a + b) * &half).collect()
     }
 
+    /// The anchor: the point where the pipeline runs to choose a sub-box's
+    /// functional. The centre, unless one of its coordinates is longer than
+    /// 128 bits (numerator or denominator); then, per side, the simplest
+    /// rational (smallest denominator, then smallest magnitude) of the
+    /// side's middle half `[lo + w/4, hi - w/4]`: as good a place to choose
+    /// from, with short numbers (the centres of `[1e-308, 7/2]` carry its
+    /// 10^308 denominator and made the exact pipeline there hundreds of
+    /// times slower; its anchors do not).
+    ///
+    /// ```
+    /// use boxes::ParamBox;
+    /// use exact::Rational;
+    /// let r = |n: i64, d: i64| Rational::new(n.into(), d.into());
+    /// let b = ParamBox { lo: vec![r(3, 2), r(-1, 3)], hi: vec![r(5, 2), r(1, 7)] };
+    /// assert_eq!(b.anchor(), b.centre());
+    /// let tiny = Rational::new(1.into(), exact::BigInt::from(10).pow(308));
+    /// let b = ParamBox { lo: vec![tiny], hi: vec![r(7, 2)] };
+    /// assert_eq!(b.anchor(), vec![r(1, 1)]);
+    /// ```
+    pub fn anchor(&self) -> Vec<Rational> {
+        let centre = self.centre();
+        if centre.iter().all(|c| c.numer().bits() <= 128 && c.denom().bits() <= 128) {
+            return centre;
+        }
+        let quarter = Rational::new(1.into(), 4.into());
+        self.lo
+            .iter()
+            .zip(&self.hi)
+            .map(|(a, b)| {
+                let w = (b - a) * &quarter;
+                simplest_between(&(a + &w), &(b - &w))
+            })
+            .collect()
+    }
+
     /// The `2^p` corners.
     pub fn corners(&self) -> Vec<Vec<Rational>> {
         let p = self.dim();
@@ -83,6 +118,30 @@ impl ParamBox {
     pub fn contains(&self, x: &[Rational]) -> bool {
         (0..self.dim()).all(|i| self.lo[i] <= x[i] && x[i] <= self.hi[i])
     }
+}
+
+/// The simplest rational in `[a, b]` (`a <= b`): the smallest
+/// denominator, then the smallest magnitude (by continued fractions).
+pub fn simplest_between(a: &Rational, b: &Rational) -> Rational {
+    let zero = Rational::zero();
+    if a <= &zero && &zero <= b {
+        return zero;
+    }
+    if b < &zero {
+        return -simplest_between(&-b.clone(), &-a.clone());
+    }
+    // 0 < a <= b: the floor of a is its integer part
+    let fa = Rational::from_integer(a.to_integer());
+    if &fa == a {
+        return fa;
+    }
+    let next = &fa + Rational::one();
+    if &next <= b {
+        return next;
+    }
+    // a, b in (fa, fa + 1): fa + 1/x with x the simplest in [1/(b - fa), 1/(a - fa)]
+    let x = simplest_between(&(b - &fa).recip(), &(a - &fa).recip());
+    fa + x.recip()
 }
 
 /// The degree of `p` in each parameter (variables `offset..offset + p`).

@@ -1,5 +1,5 @@
 //! The box certificate: bisection of the box, a choice at each sub-box's
-//! centre, and an exact proof over the whole sub-box (docs/boxes.md).
+//! anchor, and an exact proof over the whole sub-box (docs/boxes.md).
 
 use crate::bernstein::{matrix_positive_on_box, sign_on_box, ParamBox};
 use crate::frac::{common_denominator, times_denominator, Frac};
@@ -43,7 +43,7 @@ pub enum LeafOutcome {
     /// parameter in the sub-box: stable in probability with
     /// `Sigma^2 <= sigma2_upper`.
     Stable {
-        /// The choice, fixed at the sub-box's centre.
+        /// The choice, fixed at the sub-box's anchor ([`ParamBox::anchor`]).
         choice: BoxChoice,
         /// The proved bound `S`.
         sigma2_upper: Rational,
@@ -78,8 +78,9 @@ pub enum LeafOutcome {
     Undecided {
         /// Why.
         reason: String,
-        /// The pointwise verdict at the sub-box's centre, if analysed.
-        centre: Option<Verdict>,
+        /// The pointwise verdict at the sub-box's anchor
+        /// ([`ParamBox::anchor`]), if analysed.
+        anchor: Option<Verdict>,
     },
 }
 
@@ -397,20 +398,22 @@ pub fn analyse_at(system: &BoxSystem, theta: &[Rational]) -> Option<(casimir::Sy
     let noise =
         system.noise.iter().map(|s| s.iter().map(value).collect::<Option<Vec<_>>>()).collect::<Option<Vec<_>>>()?;
     let s = casimir::System::new(system.algebra.clone(), h, casimirs, first, mu, noise).ok()?;
-    let a = generator::analyse(&s, &generator::Settings::default());
+    // The box proves its own bound over each sub-box: only the choice, the
+    // verdict and the exact spectral test are taken from here.
+    let a = generator::analyse(&s, &generator::Settings { prove_bound: false, ..generator::Settings::default() });
     Some((s, a))
 }
 
-/// The choices to try on a sub-box whose centre is stable: the optimised
+/// The choices to try on a sub-box whose anchor is stable: the optimised
 /// one, then the first definite one (a wider margin, a larger `Sigma^2`).
-fn centre_choices(analysis: &generator::Analysis) -> Vec<BoxChoice> {
+fn anchor_choices(analysis: &generator::Analysis) -> Vec<BoxChoice> {
     let (Some(stable), Some(variation)) = (&analysis.stable, &analysis.variation) else {
         return vec![];
     };
     let n = variation.dim();
     let r = variation.num_conserved();
     let free: Vec<usize> = (0..r).filter(|j| !variation.range_columns.contains(j)).collect();
-    // Rows of G[:, range] that are independent at the centre.
+    // Rows of G[:, range] that are independent at the anchor.
     let g = &variation.gradients;
     let cols = &variation.range_columns;
     let sub_t = Matrix::from_fn(cols.len(), n, |j, i| g[(i, cols[j])].clone());
@@ -526,6 +529,58 @@ pub const EQUILIBRIUM_UNRESOLVED: &str = "ad*_{Dh(mu_e)} mu_e is not proved nonz
 /// The same for noise that moves `mu_e` for some parameters.
 pub const NOISE_UNRESOLVED: &str = "no ad*_sigma mu_e is proved nonzero on this sub-box at the largest depth: the noise may keep mu_e at some of its parameters (or the system is undefined at some), and nothing is claimed here";
 
+/// The bit size of a rational: of its numerator or denominator, the larger.
+fn rational_bits(r: &Rational) -> u64 {
+    r.numer().bits().max(r.denom().bits())
+}
+
+/// The largest bit size of the numbers the box's proofs compute with: the
+/// box's bounds and the coefficients of the system's functions.
+pub fn input_bits(system: &BoxSystem, range: &ParamBox) -> u64 {
+    let poly_bits = |p: &Poly| p.terms().map(|(_, c)| rational_bits(c)).max().unwrap_or(0);
+    let frac_bits = |f: &Frac| f.den().iter().map(|(g, _)| poly_bits(g)).fold(poly_bits(f.num()), u64::max);
+    let functions = std::iter::once(&system.hamiltonian)
+        .chain(&system.casimirs)
+        .chain(&system.first_integrals)
+        .chain(&system.equilibrium)
+        .chain(system.noise.iter().flatten());
+    functions
+        .map(frac_bits)
+        .chain(system.divisors.iter().map(poly_bits))
+        .chain(range.lo.iter().chain(&range.hi).map(rational_bits))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Numbers up to this many bits cost the box proofs nothing extra.
+pub const SHORT_BITS: u64 = 128;
+
+/// The number of sub-boxes the bisection may analyse: `max_boxes`, scaled
+/// down by `(SHORT_BITS / bits)^2` (at least 16) when the inputs carry
+/// numbers longer than [`SHORT_BITS`] bits. Exact arithmetic on them costs
+/// about the square of their length per operation (a box from `1e-308`,
+/// about 1030 bits, took four minutes for 740 sub-boxes): the work, not
+/// the count, is what a user waits for. Deterministic, so `check` derives
+/// the same budget.
+pub fn sub_box_budget(system: &BoxSystem, range: &ParamBox, max_boxes: usize) -> (usize, u64) {
+    let bits = input_bits(system, range);
+    if bits <= SHORT_BITS {
+        return (max_boxes, bits);
+    }
+    let scale = (SHORT_BITS as f64 / bits as f64).powi(2);
+    (((max_boxes as f64 * scale).floor() as usize).max(16).min(max_boxes), bits)
+}
+
+/// Why a sub-box is undecided when the budget was spent: the plain reason,
+/// or, when long numbers scaled the budget down, one that says so.
+pub fn budget_reason(budget: usize, max_boxes: usize, bits: u64) -> String {
+    if budget < max_boxes {
+        format!("{BUDGET_SPENT} (the budget is {budget} sub-boxes: max_boxes = {max_boxes} scaled down for numbers of {bits} bits in the inputs)")
+    } else {
+        BUDGET_SPENT.to_string()
+    }
+}
+
 /// Certify the box: bisection until every sub-box is proved (stable,
 /// linearly unstable, or, when the equilibrium or the noise fails for some
 /// parameters, not an equilibrium or noise-incompatible) or left undecided
@@ -544,29 +599,31 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
     let mut leaves = Vec::new();
     let mut analysed = 0usize;
     let mut limit = None;
+    let (budget, bits) = sub_box_budget(system, range, settings.max_boxes);
+    let spent = budget_reason(budget, settings.max_boxes, bits);
+    let settings = &BoxSettings { max_boxes: budget, ..settings.clone() };
     while let Some((b, depth)) = queue.pop_front() {
         if analysed >= settings.max_boxes {
             limit = Some("max_boxes");
-            leaves.push(Leaf { range: b, depth, outcome: undecided(BUDGET_SPENT, None) });
+            leaves.push(Leaf { range: b, depth, outcome: undecided(&spent, None) });
             continue;
         }
         analysed += 1;
-        let centre_verdict = if excluded {
+        let anchor_verdict = if excluded {
             if let Some(outcome) = prove_excluded(&sym, &b) {
                 leaves.push(Leaf { range: b, depth, outcome });
                 continue;
             }
             None
         } else {
-            let centre = b.centre();
-            let analysis = analyse_at(system, &centre);
-            let centre_verdict = analysis.as_ref().map(|(_, a)| a.verdict);
+            let analysis = analyse_at(system, &b.anchor());
+            let anchor_verdict = analysis.as_ref().map(|(_, a)| a.verdict);
             let proved = analysis.as_ref().and_then(|(_, a)| prove_stable(&sym, a, &b, &settings.margin));
             if let Some(outcome) = proved {
                 leaves.push(Leaf { range: b, depth, outcome });
                 continue;
             }
-            if centre_verdict == Some(Verdict::LinearlyUnstable) {
+            if anchor_verdict == Some(Verdict::LinearlyUnstable) {
                 if let Some(criterion) =
                     prove_unstable(&sym, charpoly.get_or_init(|| sym.characteristic_polynomial()), &b)
                 {
@@ -574,21 +631,21 @@ pub fn certify_box(system: &BoxSystem, range: &ParamBox, settings: &BoxSettings)
                     continue;
                 }
             }
-            // A sub-box unstable at its centre and every corner (each proved
+            // A sub-box unstable at its anchor and every corner (each proved
             // pointwise by the exact Sturm test) is not split further: that
             // saves the bisection of unstable regions down to the largest
             // depth. Nothing is claimed for it (instability throughout is not
             // proved), and a stable island inside it would stay undecided.
-            if centre_verdict == Some(Verdict::LinearlyUnstable) && unstable_at_centre_and_corners(system, &b) {
-                leaves.push(Leaf { range: b, depth, outcome: undecided(UNSTABLE_CORNERS, centre_verdict) });
+            if anchor_verdict == Some(Verdict::LinearlyUnstable) && unstable_at_anchor_and_corners(system, &b) {
+                leaves.push(Leaf { range: b, depth, outcome: undecided(UNSTABLE_CORNERS, anchor_verdict) });
                 continue;
             }
-            centre_verdict
+            anchor_verdict
         };
         if depth >= settings.max_depth {
             limit.get_or_insert("max_depth");
             let reason = if excluded { unresolved } else { LARGEST_DEPTH };
-            leaves.push(Leaf { range: b, depth, outcome: undecided(reason, centre_verdict) });
+            leaves.push(Leaf { range: b, depth, outcome: undecided(reason, anchor_verdict) });
             continue;
         }
         let (lo, hi) = b.split(bisection_side(&b, range));
@@ -616,20 +673,20 @@ pub fn bisection_side(b: &ParamBox, whole: &ParamBox) -> usize {
 }
 
 /// Whether the pipeline proves `A` unstable (exact Sturm test) at the
-/// sub-box's centre and at every corner: such a sub-box is left whole
+/// sub-box's anchor and at every corner: such a sub-box is left whole
 /// ([`UNSTABLE_CORNERS`]).
-pub fn unstable_at_centre_and_corners(system: &BoxSystem, b: &ParamBox) -> bool {
-    std::iter::once(b.centre())
+pub fn unstable_at_anchor_and_corners(system: &BoxSystem, b: &ParamBox) -> bool {
+    std::iter::once(b.anchor())
         .chain(b.corners())
         .all(|p| analyse_at(system, &p).is_some_and(|(_, a)| unstable_exactly(&a)))
 }
 
 /// The stable outcome on sub-box `b` from the pipeline's analysis at its
-/// centre: its choices in turn, each with the bound sampled on `b`, until
+/// anchor: its choices in turn, each with the bound sampled on `b`, until
 /// one is proved.
 fn prove_stable(sym: &Symbolic, a: &generator::Analysis, b: &ParamBox, margin: &Rational) -> Option<LeafOutcome> {
     let n = sym.dim();
-    for choice in centre_choices(a) {
+    for choice in anchor_choices(a) {
         let Ok(forms) = sym.forms(&choice) else { continue };
         let Some((s, sampled, at)) = sampled_bound(&forms, n, b, margin) else { continue };
         // Q = 0 identically: Sigma^2 = 0 needs no margin.
@@ -645,7 +702,7 @@ fn prove_stable(sym: &Symbolic, a: &generator::Analysis, b: &ParamBox, margin: &
 /// stable sub-box with the largest bound `S` has `S` above `1 +
 /// sup_tolerance` times the pipeline's own `Sigma^2` at the point where its
 /// largest sample was taken, split it and prove both halves (each with the
-/// choice at its own centre, nearer the worst point). Stops at the depth
+/// choice at its own anchor, nearer the worst point). Stops at the depth
 /// or box limit, or when a half is not proved (the sub-box is then kept).
 fn tighten(
     system: &BoxSystem,
@@ -682,7 +739,7 @@ fn tighten(
         for half in [lo, hi] {
             *analysed += 1;
             let outcome =
-                analyse_at(system, &half.centre()).and_then(|(_, a)| prove_stable(sym, &a, &half, &settings.margin));
+                analyse_at(system, &half.anchor()).and_then(|(_, a)| prove_stable(sym, &a, &half, &settings.margin));
             match outcome {
                 Some(outcome) => halves.push(Leaf { range: half, depth, outcome }),
                 None => return,
@@ -788,14 +845,14 @@ pub fn verdict_of(c: &LeafCounts) -> (BoxVerdict, String) {
     }
 }
 
-/// Why a sub-box unstable at its centre and corners is left whole.
-pub const UNSTABLE_CORNERS: &str = "linearly unstable at its centre and every corner (proved exactly at each point); not split further, and instability throughout the sub-box is not proved";
+/// Why a sub-box unstable at its anchor and corners is left whole.
+pub const UNSTABLE_CORNERS: &str = "linearly unstable at its anchor and every corner (proved exactly at each point); not split further, and instability throughout the sub-box is not proved";
 
 fn unstable_exactly(a: &generator::Analysis) -> bool {
     a.verdict == Verdict::LinearlyUnstable
         && matches!(a.spectral_proof, Some(generator::SpectralProof::Unstable { .. }))
 }
 
-fn undecided(reason: &str, centre: Option<Verdict>) -> LeafOutcome {
-    LeafOutcome::Undecided { reason: reason.to_string(), centre }
+fn undecided(reason: &str, anchor: Option<Verdict>) -> LeafOutcome {
+    LeafOutcome::Undecided { reason: reason.to_string(), anchor }
 }

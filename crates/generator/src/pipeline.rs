@@ -33,6 +33,13 @@ pub struct Settings {
     /// defective zero eigenvalue (Jordan block of size `k`) by about
     /// `eps^{1/k} |A|`, which stays below this for `k <= 2`.
     pub instability_tolerance: f64,
+    /// Whether to prove `Sigma^2` exactly when `exact` is set (default
+    /// true): the rational bound and, with free multipliers, the certified
+    /// lower bound over the family. Off, a stable verdict keeps its exact
+    /// `P` and spectral test but states `Sigma^2` in floating point only: a
+    /// box certificate takes only the choice from a sub-box's point and
+    /// proves its own bound over the sub-box.
+    pub prove_bound: bool,
 }
 
 impl Default for Settings {
@@ -43,6 +50,7 @@ impl Default for Settings {
             exact: true,
             optimisation: OptimiseSettings::default(),
             instability_tolerance: 1e-6,
+            prove_bound: true,
         }
     }
 }
@@ -301,7 +309,7 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         }
         None => (choice.clone(), form, first_growth.clone(), None),
     };
-    let exact = if settings.exact {
+    let exact = if settings.exact && settings.prove_bound {
         certify_sigma2(&best_choice.p, &best_form.q, best_choice.sign, best_growth.largest_eigenvalue.max(0.0))
     } else {
         None

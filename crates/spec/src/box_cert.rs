@@ -221,13 +221,14 @@ pub struct SubBoxRecord {
     /// Why undecided, or what proves the sub-box's verdict (not stable).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
-    /// The pointwise verdict at the centre (undecided sub-boxes).
+    /// The pointwise verdict at the sub-box's anchor (undecided sub-boxes):
+    /// per side, the simplest rational of its middle half.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub centre_verdict: Option<Verdict>,
+    pub anchor_verdict: Option<Verdict>,
     /// Stable: the sign of `P`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sign: Option<i64>,
-    /// Stable: the multipliers at the centre (Casimirs, then first integrals).
+    /// Stable: the multipliers at the anchor (Casimirs, then first integrals).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub multipliers: Option<Vec<ExactRational>>,
     /// Stable: the conserved quantities whose multipliers stay fixed.
@@ -263,7 +264,7 @@ fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
         depth: leaf.depth as u64,
         verdict: String::new(),
         reason: None,
-        centre_verdict: None,
+        anchor_verdict: None,
         sign: None,
         multipliers: None,
         free: None,
@@ -289,10 +290,10 @@ fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
             r.verdict = leaf.outcome.verdict_name().into();
             r.reason = Some(criterion.clone());
         }
-        LeafOutcome::Undecided { reason, centre } => {
+        LeafOutcome::Undecided { reason, anchor } => {
             r.verdict = "undecided".into();
             r.reason = Some(reason.clone());
-            r.centre_verdict = *centre;
+            r.anchor_verdict = *anchor;
         }
     }
     r
@@ -314,13 +315,21 @@ fn statement(
     volumes: [&Rational; 4],
     sup: Option<&Rational>,
 ) -> crate::theorem::TheoremRecord {
-    let range = section
-        .names
-        .iter()
-        .enumerate()
-        .map(|(i, n)| format!("{n} in [{}, {}]", section.range.lo[i], section.range.hi[i]))
-        .collect::<Vec<_>>()
-        .join(", ");
+    // Bounds too long to print are referred to, not cut: a cut number
+    // would read as another box.
+    let sides: Vec<(String, String)> =
+        (0..section.names.len()).map(|i| (section.range.lo[i].to_string(), section.range.hi[i].to_string())).collect();
+    let range = if sides.iter().any(|(a, b)| a.len() > 40 || b.len() > 40) {
+        "of the spec's box section (its bounds are too long to print here)".to_string()
+    } else {
+        section
+            .names
+            .iter()
+            .zip(&sides)
+            .map(|(n, (a, b))| format!("{} in [{a}, {b}]", exact::cut(n, 40)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     let equilibrium = spec
         .raw
         .get("equilibrium")
@@ -515,6 +524,9 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     let range = &section.range;
     let settings = &section.settings;
     let order = check_partition(&doc, range, np)?;
+    // the budget of sub-boxes, scaled down for long numbers as certify does
+    let (budget_size, bits) = ::boxes::certify::sub_box_budget(&system, range, settings.max_boxes);
+    let spent_reason = ::boxes::certify::budget_reason(budget_size, settings.max_boxes, bits);
     let excluded = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
     let unresolved = if sym.equilibrium_holds() {
         ::boxes::certify::NOISE_UNRESOLVED
@@ -563,15 +575,15 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                     .ok_or_else(|| fail(&path, "no sigma2_upper".into()))?;
                 let forms = ::boxes::prove_leaf(&sym, &b, &choice, &s)
                     .map_err(|e| fail(&format!("{path}.sigma2_upper"), format!("not proved: {e}")))?;
-                // The recorded multipliers are the centre's: the free
+                // The recorded multipliers are the anchor's: the free
                 // ones are used as given, the solved ones must be the
                 // solution there (nothing stated goes unchecked).
-                let centre = b.centre();
+                let anchor = b.anchor();
                 for (j, (l, stated)) in forms.multipliers.iter().zip(&choice.multipliers).enumerate() {
-                    if value_at(l, n, &centre).as_ref() != Some(stated) {
+                    if value_at(l, n, &anchor).as_ref() != Some(stated) {
                         return Err(fail(
                             &format!("{path}.multipliers[{j}]"),
-                            "is not the multiplier at the sub-box's centre".into(),
+                            "is not the multiplier at the sub-box's anchor".into(),
                         ));
                     }
                 }
@@ -584,8 +596,8 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                         format!("{stated:e} differs from the re-derived {sampled:e}"),
                     ));
                 }
-                if r.reason.is_some() || r.centre_verdict.is_some() {
-                    return Err(fail(&path, "a stable sub-box has no reason or centre_verdict".into()));
+                if r.reason.is_some() || r.anchor_verdict.is_some() {
+                    return Err(fail(&path, "a stable sub-box has no reason or anchor_verdict".into()));
                 }
                 if sampled_max.as_ref().is_none_or(|m| sampled > m.0) {
                     sampled_max = Some((sampled, at.clone()));
@@ -609,8 +621,8 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                     return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
                 }
                 proved_only("linearly unstable")?;
-                if r.centre_verdict.is_some() {
-                    return Err(fail(&format!("{path}.centre_verdict"), "only undecided sub-boxes state one".into()));
+                if r.anchor_verdict.is_some() {
+                    return Err(fail(&format!("{path}.anchor_verdict"), "only undecided sub-boxes state one".into()));
                 }
                 unstable_volume += b.volume();
                 LeafOutcome::LinearlyUnstable { criterion }
@@ -628,8 +640,8 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                     return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
                 }
                 proved_only("not stable")?;
-                if r.centre_verdict.is_some() {
-                    return Err(fail(&format!("{path}.centre_verdict"), "only undecided sub-boxes state one".into()));
+                if r.anchor_verdict.is_some() {
+                    return Err(fail(&format!("{path}.anchor_verdict"), "only undecided sub-boxes state one".into()));
                 }
                 excluded_volume += b.volume();
                 outcome
@@ -641,7 +653,7 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                 // Each reason is a statement about how the bisection ended
                 // there, and it is checked as one.
                 match reason.as_str() {
-                    ::boxes::certify::BUDGET_SPENT => budget += 1,
+                    r if r == spent_reason => budget += 1,
                     ::boxes::certify::LARGEST_DEPTH | ::boxes::certify::EQUILIBRIUM_UNRESOLVED | ::boxes::certify::NOISE_UNRESOLVED => {
                         let expected = if excluded { unresolved } else { ::boxes::certify::LARGEST_DEPTH };
                         if reason != expected {
@@ -653,36 +665,36 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
                         at_depth_limit += 1;
                     }
                     ::boxes::certify::UNSTABLE_CORNERS => {
-                        if excluded || !::boxes::certify::unstable_at_centre_and_corners(&system, &b) {
-                            return Err(fail(&rpath, "the pipeline does not prove A unstable at the sub-box's centre and every corner".into()));
+                        if excluded || !::boxes::certify::unstable_at_anchor_and_corners(&system, &b) {
+                            return Err(fail(&rpath, "the pipeline does not prove A unstable at the sub-box's anchor and every corner".into()));
                         }
                     }
                     _ => return Err(fail(&rpath, "is not a reason this engine gives for an undecided sub-box".into())),
                 }
-                // the pointwise verdict stated at the centre is the
+                // the pointwise verdict stated at the anchor is the
                 // pipeline's; sub-boxes left by the budget or bisected for
                 // a failing equilibrium or noise state none
-                if excluded || reason == ::boxes::certify::BUDGET_SPENT {
-                    if r.centre_verdict.is_some() {
+                if excluded || reason == spent_reason {
+                    if r.anchor_verdict.is_some() {
                         return Err(fail(
-                            &format!("{path}.centre_verdict"),
-                            "this sub-box was not analysed at its centre".into(),
+                            &format!("{path}.anchor_verdict"),
+                            "this sub-box was not analysed at its anchor".into(),
                         ));
                     }
                 } else {
-                    let derived = ::boxes::certify::analyse_at(&system, &b.centre()).map(|(_, a)| a.verdict);
-                    if r.centre_verdict != derived {
+                    let derived = ::boxes::certify::analyse_at(&system, &b.anchor()).map(|(_, a)| a.verdict);
+                    if r.anchor_verdict != derived {
                         return Err(fail(
-                            &format!("{path}.centre_verdict"),
+                            &format!("{path}.anchor_verdict"),
                             format!(
-                                "is not the pipeline's verdict at the centre ({})",
+                                "is not the pipeline's verdict at the anchor ({})",
                                 derived.map_or("none: the pipeline could not run there", |v| v.as_str())
                             ),
                         ));
                     }
                 }
                 undecided += b.volume();
-                LeafOutcome::Undecided { reason, centre: r.centre_verdict }
+                LeafOutcome::Undecided { reason, anchor: r.anchor_verdict }
             }
             other => {
                 return Err(fail(
@@ -699,7 +711,7 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     // last sub-boxes of the breadth-first order (no tightening follows a
     // spent budget).
     let nodes = (2 * doc.sub_boxes.len()).saturating_sub(1);
-    let spent = |i: usize| doc.sub_boxes[i].reason.as_deref() == Some(::boxes::certify::BUDGET_SPENT);
+    let spent = |i: usize| doc.sub_boxes[i].reason.as_deref() == Some(spent_reason.as_str());
     if let Some(first) = order.iter().position(|&i| spent(i)) {
         if let Some(&i) = order[first..].iter().find(|&&i| !spent(i)) {
             return Err(fail(
@@ -708,20 +720,20 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             ));
         }
     }
-    if budget > 0 && nodes - budget != settings.max_boxes {
+    if budget > 0 && nodes - budget != budget_size {
         return Err(fail(
             "$.sub_boxes",
             format!(
-                "{budget} sub-boxes say the budget was spent, but {} were analysed, not max_boxes = {}",
+                "{budget} sub-boxes say the budget was spent, but {} were analysed, not the budget of {}",
                 nodes - budget,
-                settings.max_boxes
+                budget_size
             ),
         ));
     }
-    if nodes > settings.max_boxes + budget {
+    if nodes > budget_size + budget {
         return Err(fail(
             "$.sub_boxes",
-            format!("{} sub-boxes need more than max_boxes = {} analysed", doc.sub_boxes.len(), settings.max_boxes),
+            format!("{} sub-boxes need more than the budget of {budget_size} analysed", doc.sub_boxes.len()),
         ));
     }
     let limit = if budget > 0 {
