@@ -461,11 +461,17 @@ mod tests {
             assert!(up >= x && down <= x, "{x}: {up} {down}");
             assert!((up - x) <= 1.1e-6 * x && (x - down) <= 1.1e-6 * x, "{x}: {up} {down}");
         }
-        assert_eq!(significant(0.27, true), "0.27");
+        // the double 0.27 is 0.27000000000000001776...: a bound on it
+        // rounds up past 0.27; 0.25 is exact
+        assert_eq!(significant(0.27, true), "0.2700001");
+        assert_eq!(significant(0.27, false), "0.27");
+        assert_eq!(significant(0.25, true), "0.25");
         assert_eq!(significant(1.0 / 3.0, false), "0.3333333");
         assert_eq!(significant(1.141402e7, false), "1.141402e7");
         assert_eq!(significant(1141402.7, false), "1141402");
-        assert_eq!(significant(1e-300, true), "1e-300");
+        // the double 1e-300 is 1.0000000000000000250...e-300
+        assert_eq!(significant(1e-300, true), "1.000001e-300");
+        assert_eq!(significant(1e-300, false), "1e-300");
         assert_eq!(significant(-2.5, true), "-2.5");
         // the smallest subnormal, 4.9406564584e-324: rounded as a decimal,
         // not through the double it parses back to
