@@ -271,6 +271,7 @@ pub(crate) fn finite_subject(name: &str, algebra: &str, dim: usize, equilibrium:
     }
 }
 
+#[cfg(feature = "fluid")]
 /// The theorem of a certificate whose `Sigma^2` is a double: the proved
 /// `sigma2_upper` when there is one, else the estimate `sigma2` (the
 /// statement then says it is not proved).
@@ -305,6 +306,7 @@ pub(crate) fn from_doubles(
     theorem(subject, verdict, level, bound.as_ref(), growth_rate)
 }
 
+#[cfg(feature = "fluid")]
 /// The statement of a certificate that claims nothing (a spec the analysis
 /// could not run on).
 pub(crate) fn nothing(not_checked: &str) -> TheoremRecord {
@@ -315,11 +317,13 @@ pub(crate) fn nothing(not_checked: &str) -> TheoremRecord {
     }
 }
 
+#[cfg(feature = "fluid")]
 /// What fluid certificates do not check.
 pub(crate) fn fluid_not_checked(x_modes: usize) -> String {
     format!("The PDE and the nonlinear system: every statement is about the linearised SDE discretised in y, on the grid the statement names, for the x-modes m = 1..{x_modes} only; the convergence table shows how Sigma^2 moves under refinement, and no bound is claimed for the continuum or for higher modes. The bound is at each fixed time, not on the probability of ever leaving the ball.")
 }
 
+#[cfg(feature = "fluid")]
 /// The subject of a fluid certificate.
 pub(crate) fn fluid_subject(
     name: &str,
@@ -357,9 +361,11 @@ pub(crate) fn fluid_subject(
     }
 }
 
+#[cfg(feature = "fluid")]
 /// What Zeitlin certificates do not check.
 pub(crate) const ZEITLIN_NOT_CHECKED: &str = "The nonlinear Zeitlin SDE and the continuum limit N -> infinity: every statement is about the linearisation of the su(N) model at W_e. The bound is at each fixed time, not on the probability of ever leaving the ball.";
 
+#[cfg(feature = "fluid")]
 /// The subject of a Zeitlin certificate.
 pub(crate) fn zeitlin_subject(name: &str, n: usize, equilibrium: &str, noise_fields: usize) -> Subject {
     Subject {
