@@ -100,7 +100,7 @@ def test_fluid_specs_go_to_simulate_fluid():
 
 
 def test_simulate_fluid_matches_the_command_line():
-    """The same study as `verify simulate` (tests/fluid_cli.rs): near
+    """The same study as `verify simulate` (tests/it/fluid_cli.rs): near
     Arnold's boundary the exact moment stays under exp(Sigma_k^2 t) with
     Sigma_k^2 = 0.2626 (docs/errata.md) and far above the paper's
     exp(0.01 t); the Monte Carlo agrees with it."""

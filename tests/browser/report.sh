@@ -6,7 +6,7 @@
 # makes the browser refuse and log, as a console message, any fetch the
 # page would make; the network goes to a closed local port besides. Fails
 # if the browser logs any console message or load error, or if the DOM lost
-# a section. (tests/report.rs checks the text itself: no script, link,
+# a section. (tests/it/report.rs checks the text itself: no script, link,
 # image, import or url().)
 # Usage: tests/browser/report.sh [OUT_DIR]   (default target/report-browser)
 set -euo pipefail

@@ -141,7 +141,7 @@ impl UPoly {
     /// (`positive_remainder` below): Euclid's sequence over the rationals
     /// reduces every product to lowest terms, and on a characteristic
     /// polynomial of dimension 63 with 50-bit entries (the su(8) model of
-    /// `tests/zeitlin_generic_n8.rs`) it ran for over 15 minutes inside one
+    /// the su(8) comparison in `tests/it/zeitlin_su_n.rs`) it ran for over 15 minutes inside one
     /// gcd; the primitive sequence keeps each remainder's content divided
     /// out and works in integers. Hand-written: no crate on the project's
     /// list has polynomial gcds over big integers.

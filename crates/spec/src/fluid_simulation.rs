@@ -445,7 +445,7 @@ pub fn simulate_fluid_with(
     // What the run shows.
     let exact_over_bound = exact.as_ref().map(|e| e.iter().zip(&bound).map(|(e, b)| e / b).fold(0.0, f64::max));
     // The splitting's bias is O(dt^2); 4 standard errors plus 1e-3 of the
-    // value (as in tests/fluid.rs) is the agreement asked of each time.
+    // value (as in tests/it/fluid.rs) is the agreement asked of each time.
     let agreeing = exact.as_ref().map(|e| {
         e.iter().zip(&mean).zip(&std_error).filter(|((e, m), s)| (*m - *e).abs() <= 4.0 * *s + 1e-3 * e.abs()).count()
     });

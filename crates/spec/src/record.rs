@@ -12,7 +12,7 @@
 //! let doc: spec::record::CertificateDocument = spec::document::from_value(&value).unwrap();
 //! assert_eq!(doc.verdict, spec::Verdict::Stable);
 //! // The rigid body about its major axis (I = 3, 2, 1, sigma = 3/10):
-//! // Sigma^2 = sigma^2 I1 (I2 - I3) / (I3 (I1 - I2)) = 27/100 (tests/library.rs).
+//! // Sigma^2 = sigma^2 I1 (I2 - I3) / (I3 (I1 - I2)) = 27/100 (tests/it/library.rs).
 //! assert_eq!(doc.sigma2_exact.as_deref(), Some("27/100"));
 //! assert_eq!(doc.p.unwrap().len(), 3);
 //! ```

@@ -153,7 +153,7 @@ struct Frame<'a> {
 /// stays sequential), reading nalgebra's column-major storage in place.
 /// Each column block is an independent product with the same summation
 /// order per entry, so the result does not depend on the number of threads
-/// (a certificate is re-derived bit for bit; `tests/zeitlin_matrix_free.rs`
+/// (a certificate is re-derived bit for bit; `crates/zeitlin/tests/it/general.rs`
 /// compares one thread with two).
 fn product(a: &DMatrix<C>, b: &DMatrix<C>) -> DMatrix<C> {
     use rayon::prelude::*;

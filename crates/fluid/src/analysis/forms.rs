@@ -49,7 +49,7 @@ pub(super) fn form_and_reason(
 /// let problem = FluidProblem { model: FluidModel::Incompressible, profile, x_period: 6.283185307179586, ny: 32, x_modes: 1 };
 /// let (grid, coef, form) = chosen_form(&problem).unwrap();
 /// let s = Mode::new(&grid, 1.0).sigma2(&form, &coef, 1e-12).unwrap();
-/// assert!((s.lambda_max - 0.0142173139187).abs() < 1e-10); // the sine-Galerkin value (tests/fluid.rs)
+/// assert!((s.lambda_max - 0.0142173139187).abs() < 1e-10); // the sine-Galerkin value (tests/it/fluid.rs)
 /// ```
 pub fn chosen_form(problem: &FluidProblem) -> Option<(YGrid, Coefficients, Form)> {
     let profile = &problem.profile;

@@ -2,7 +2,7 @@
 //! (exit status 2 and the JSON path in the message), the fixture table, and
 //! tampered certificates (exit status 1).
 
-mod common;
+use crate::common;
 
 use common::*;
 use serde_json::Value;
@@ -548,7 +548,7 @@ fn help_describes_the_no_argument_run_and_subcommands_do_not_offer_fixtures() {
 #[test]
 fn simulate_says_when_the_default_final_time_was_clamped() {
     // Sigma^2 = 0.072 for this fixture (4 sigma^2 / (p^2 - 4 mgl I1), the
-    // closed form of tests/closed_forms.rs), so T(0.1, 0.001) = ln(100)/0.072
+    // closed form of tests/it/closed_forms.rs), so T(0.1, 0.001) = ln(100)/0.072
     // = 63.9607 and the default 8 T = 511.685576 is clamped to 200; the
     // level alpha = 0.1 is certified until ln(alpha eps/delta)/Sigma^2 =
     // ln(10)/0.072 = 31.980349.

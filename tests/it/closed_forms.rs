@@ -4,7 +4,7 @@
 //! rationals here, so the 1e-12 tolerance measures only the engine's
 //! floating-point eigen-solve.
 
-mod common;
+use crate::common;
 
 use common::*;
 use exact::Rational;
@@ -242,7 +242,7 @@ proptest! {
 }
 
 /// An infimum that is approached but not attained: on this rescaled so3
-/// system (found by tests/random_systems.rs) Sigma^2 -> 0 as the Casimir
+/// system (found by tests/it/random_systems.rs) Sigma^2 -> 0 as the Casimir
 /// term M grows, so no finite choice attains it. The certificate must say so,
 /// certify a value far below the first choice's, and still pass the check.
 #[test]

@@ -2,7 +2,7 @@
 //! never a false one: moments of inertia equal to 1e-12 relative, a nearly
 //! singular P, the fast-top threshold approached to 1e-12.
 
-mod common;
+use crate::common;
 
 use common::*;
 use exact::Rational;

@@ -2,7 +2,7 @@
 //! adversarial review found, named after what broke. Every constant asserted
 //! is derived in the comment beside it.
 
-mod common;
+use crate::common;
 
 use common::*;
 use proptest::prelude::*;

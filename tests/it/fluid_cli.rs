@@ -1,7 +1,7 @@
 //! Fluid specs through the `verify` binary: verdicts, bad input (exit 2,
 //! the JSON path named), and tampered fluid certificates (exit 1).
 
-mod common;
+use crate::common;
 
 use common::*;
 use serde_json::Value;
@@ -242,7 +242,7 @@ fn simulate_sets_a_fluid_modes_monte_carlo_and_exact_moments_beside_its_certifie
     // Near Arnold's boundary (fixture arnold-boundary-sin: U = sin y, walls
     // at -3 and 3, noise 0.1 y, x-period 7.3): the gravest mode's Sigma^2 is
     // 0.2626, 26 times the paper's 0.01 (docs/errata.md; the dense
-    // generalised eigenvalue at ny = 64 in tests/fluid.rs).
+    // generalised eigenvalue at ny = 64 in tests/it/fluid.rs).
     let spec = fixture_path("fluids/arnold-boundary-sin.json");
     let args = ["--ny", "32", "--paths", "400", "--t-end", "2", "--outputs", "10", "--npz"];
     let (out, dir) = simulate_fluid(&spec, "arnold", &args);
@@ -306,7 +306,7 @@ fn simulate_runs_the_compressible_generators_discrete_sde() {
     // ny = 16, the gravest mode by default. From the top eigenvector of
     // (Q_B, K), the discrete SDE's own rate lambda_B, the exact second moment
     // grows no faster than exp(lambda_B t) from any start
-    // (fluid::barotropic_sde; tests/barotropic.rs).
+    // (fluid::barotropic_sde; tests/it/barotropic.rs).
     let spec = fixture_path("fluids/compressible-compatible-noise.json");
     let (out, dir) = simulate_fluid(&spec, "compressible", &["--paths", "300", "--t-end", "1", "--outputs", "5"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));

@@ -40,7 +40,7 @@ fn the_completion_pasted_back_keeps_the_equilibrium() {
     assert_ne!(again["verdict"], "noise_incompatible");
     assert_eq!(again["compressible"]["noise_residuals"][0].as_f64(), Some(0.0));
     assert!(again["compressible"].get("compatible_completion").is_none());
-    // The compressible generator certifies it (tests/barotropic.rs checks
+    // The compressible generator certifies it (tests/it/barotropic.rs checks
     // its numbers against an independent computation). Its continuum bound
     // S(c) = sup eta'^2 c_s^2/(c_s^2 - (U + c)^2) is at least the value at
     // y = 0, 0.09 c_s^2/(c_s^2 - (c - 1)^2) >= 0.09, and above Sigma^2.

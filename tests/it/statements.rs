@@ -2,7 +2,7 @@
 //! free text: the regressions of an adversarial round (a stopping time past
 //! its proof, fields `check` never read), one test per thing that broke.
 
-mod common;
+use crate::common;
 
 use common::fixture_path;
 use serde_json::{json, Value};

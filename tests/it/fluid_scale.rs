@@ -146,7 +146,7 @@ fn a_periodic_certificate_at_ny_4096_is_verified_and_agrees_with_the_fixture() {
     assert!(upper >= s && upper <= s * (1.0 + 3e-4), "{s} {upper}");
     // Mode 1 (k = 2) sets Sigma^2. The Fourier collocation used until
     // 2026-11-28 gave 0.012258079762316933 at ny = 256 (the fixture's old
-    // certificate), the Fourier-Galerkin reference of tests/fluid.rs agrees
+    // certificate), the Fourier-Galerkin reference of tests/it/fluid.rs agrees
     // with it to 1e-9: measured, the elements at ny = 4096 differ from it
     // by 1.1e-10 (the Lanczos value at this resolution; 5e-13 at ny = 256).
     assert!((s - 0.012258079762316933).abs() <= 1e-9 * s, "{s}");

@@ -1,7 +1,7 @@
 //! No input makes the engine panic or hang: random text, and random mutations
 //! of a valid spec, go through parsing and (when valid) certification.
 
-mod common;
+use crate::common;
 
 use common::*;
 use proptest::prelude::*;

@@ -3,7 +3,7 @@
 //! expectation), the linearised ensemble against the exact second moments
 //! for every stable fixture, thread-count independence, and bad parameters.
 
-mod common;
+use crate::common;
 
 use common::*;
 use generator::SecondMoments;

@@ -4,7 +4,7 @@
 //! `Sigma^2`, the same answer whatever the scaling of the Casimirs, and the
 //! exact pipeline taken where floating point cannot decide.
 
-mod common;
+use crate::common;
 
 use common::*;
 use generator::{analyse, analyse_numeric, NumericRoute, Verdict};
@@ -70,7 +70,7 @@ fn every_fixture_agrees_with_the_exact_pipeline() {
         }
     }
     // The floating-point route itself reached four verdicts (all but
-    // `inconclusive`, which the random systems of tests/random_systems.rs
+    // `inconclusive`, which the random systems of tests/it/random_systems.rs
     // reach on it).
     assert_eq!(verdicts.len(), 4, "{verdicts:?}");
 }

@@ -15,7 +15,7 @@
 //!
 //! 24 cases by default; `--features heavy-tests` runs 400 (CI, release).
 
-mod common;
+use crate::common;
 
 use common::*;
 use exact::{Matrix, Rational};

@@ -8,7 +8,7 @@
 //!
 //! 64 cases by default; `--features heavy-tests` runs 10,000 (CI, release).
 
-mod common;
+use crate::common;
 
 use algebra::{builtin, LieAlgebra};
 use common::*;

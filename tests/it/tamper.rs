@@ -4,7 +4,7 @@
 //! fails `check` with a `Failed` error naming a field; the untouched
 //! certificate passes.
 
-mod common;
+use crate::common;
 
 use common::*;
 use exact::{parse_number, Rational};

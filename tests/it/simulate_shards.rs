@@ -4,7 +4,7 @@
 //! merge refuses what is not exactly that study (another seed or spec, a
 //! missing shard, two different copies of one shard, a malformed file).
 
-mod common;
+use crate::common;
 
 use common::*;
 use serde_json::Value;

@@ -4,7 +4,7 @@
 //! input (exit 2); a failed write leaves no partial file and keeps the old
 //! certificate.
 
-mod common;
+use crate::common;
 
 use common::fixture_path;
 use serde_json::Value;

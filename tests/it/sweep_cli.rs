@@ -3,7 +3,7 @@
 //! the closed form, resume after a real kill, shards, random sampling, bad
 //! ranges, and the charts.
 
-mod common;
+use crate::common;
 
 use common::fixture_path;
 use exact::{parse_number, Rational};

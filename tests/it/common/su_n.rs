@@ -1,8 +1,7 @@
 //! The Zeitlin model on su(N) written as an ordinary finite-dimensional spec
 //! for the generic engine, and the checks that compare it with the Zeitlin
-//! pipeline, for any `N >= 4` (shared by `tests/zeitlin_generic_n4.rs`,
-//! `tests/zeitlin_generic_n5.rs` and `tests/zeitlin_generic_n6.rs`;
-//! `tests/zeitlin_generic.rs` keeps its own fixed-size N = 3 version, where
+//! pipeline, for any `N >= 4` (used by `zeitlin_su_n`; `zeitlin_generic`
+//! keeps its own fixed-size N = 3 version, where
 //! every block is rational).
 //!
 //! The construction (docs/zeitlin.md, "Agreement with the generic engine"):
@@ -425,7 +424,7 @@ pub struct Perturbation {
     /// Give only the Casimirs `tr W^2` to `tr W^d` (`None`: to `tr W^N`,
     /// all of them). Not a departure from the model's dynamics, only from
     /// its full set of conserved quantities: for a state whose functional
-    /// needs no higher power (solid-body rotation, `tests/zeitlin_generic_n8.rs`)
+    /// needs no higher power (solid-body rotation, `zeitlin_su_n`)
     /// the generic engine sees the same family of forms.
     pub casimir_degree: Option<usize>,
 }
@@ -805,7 +804,7 @@ fn all_zero(v: &[Rational]) -> bool {
 /// and at the Zeitlin pipeline's own `(eps, beta)` the generic engine's
 /// exact `P`, `Q` give the Zeitlin `lambda_max` of every block to
 /// `tolerance` relative (to the Zeitlin `Sigma^2`). The reasons behind each
-/// assertion are in `tests/zeitlin_generic_n4.rs`. The exact level's
+/// assertion are in `zeitlin_su_n`'s module documentation. The exact level's
 /// analysis is checked on either route, and its certificate's record of
 /// the same on [`Route::Spec`].
 pub fn check_monotone(omega: &[Rational], y: &[Rational], tolerance: f64, route: Route) -> MonotoneReport {

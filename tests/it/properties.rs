@@ -3,7 +3,7 @@
 //! the ad/ad* duality, Casimirs Poisson-commuting, Casimir discovery, and
 //! analytic derivatives against finite differences.
 
-mod common;
+use crate::common;
 
 use algebra::{builtin, builtin_names, LieAlgebra};
 use casimir::{discover_casimirs, lie_poisson_bracket};

@@ -6,7 +6,7 @@
 //! sigma'^a = sigma^a / s_a. P and Q transform by congruence, so the
 //! generalized eigenvalues, hence Sigma^2, are invariant.
 
-mod common;
+use crate::common;
 
 use common::*;
 

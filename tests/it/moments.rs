@@ -4,7 +4,7 @@
 //! t -> 0: from the fastest direction v, (E|x_h|_P^2 - 1)/h -> Sigma^2, so any
 //! smaller constant is violated at small h.
 
-mod common;
+use crate::common;
 
 use common::*;
 use generator::SecondMoments;
