@@ -2,7 +2,7 @@
 """Cross-check of hand-derived closed forms against the independent pipeline.
 
 For each claim (a)-(d) we (1) redo the computation symbolically in sympy,
-straight from the formulas of DESIGN.md section 3 (own code path: exact
+straight from the formulas of docs/architecture.md §2 (own code path: exact
 multipliers, exact ker G^T basis, exact A, B, Q; Sigma^2 from the roots of
 det(Z^T Q Z - s Z^T P0 Z) = 0), and (2) run numpy_pipeline.certify on random
 parameter sets and compare with the claimed formula.  As extra independent

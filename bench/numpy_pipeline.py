@@ -6,15 +6,16 @@ This script is the *independent* Python implementation used for two things:
   (a) cross-checking the numbers produced by the Rust engine (`verify`), and
   (b) the side-by-side speed baseline (``--bench N``).
 
-It was written from DESIGN.md (sections 2, 3, 5) and the paper only, without
-reading the Rust code.  Conventions (DESIGN.md section 2):
+It was written from the conventions, pipeline and contract (docs/architecture.md
+§1, §2, §4) and the paper only, without
+reading the Rust code.  Conventions (docs/architecture.md §1):
 
   * structure constants  [e_a, e_b] = c^k_ab e_k, stored as ``c[a, b, k]``;
   * (ad*_xi mu)_b = c^k_ab xi^a mu_k, i.e. ad*_xi is the matrix
     ``(ad*_xi)[b, k] = sum_a c[a, b, k] xi[a]``;
   * Stratonovich SDE  d mu = ad*_{Dh(mu)} mu dt + sum_i ad*_{sigma_i} mu o dW^i.
 
-Pipeline per spec (DESIGN.md section 3, steps 1-8 without the exact level):
+Pipeline per spec (docs/architecture.md §2, steps 1-8 without the exact level):
 
   1. equilibrium residual  ad*_{Dh(mu_e)} mu_e            -> not_an_equilibrium
   2. noise residuals       ad*_{sigma_i} mu_e              -> noise_incompatible
@@ -270,7 +271,7 @@ def prepare(spec):
             raise SpecError(f"noise[{i}]: expected {n} components")
         sig.append([ex(v, f"noise[{i}][{j}]") for j, v in enumerate(s)])
 
-    # exact checks (DESIGN 3.1)
+    # exact checks (docs/architecture.md §2, step 1)
     grad = lambda f: [sympy.diff(f, x) for x in mus]  # noqa: E731
     dh = grad(h)
     checks = {"casimir_source": cas_source, "casimirs": [], "first_integrals": []}

@@ -59,7 +59,7 @@ Usage (see --help):
   python3 bench/random_study.py --only-generate DIR --count 50 --seed 3
   python3 bench/random_study.py --self-test
 
-Conventions (DESIGN.md section 2): [e_a, e_b] = c^k_ab e_k,
+Conventions (docs/architecture.md §1): [e_a, e_b] = c^k_ab e_k,
 (ad*_xi mu)_b = c^k_ab xi^a mu_k, d mu = ad*_{Dh(mu)} mu dt + sum_i ad*_{sigma_i} mu o dW^i.
 
 Change of basis.  Take a new basis e'_a = sum_b T_ab e_b with T an integer

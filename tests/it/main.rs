@@ -16,6 +16,7 @@ mod charts;
 mod cli;
 mod closed_forms;
 mod degenerate;
+mod docs;
 mod fluid;
 mod fluid_cli;
 mod fluid_scale;

@@ -1,5 +1,5 @@
 //! Independent evidence for every stable fixture: the exact second-moment
-//! equation dS/dt = A~ S + S A~^T + sum B S B^T (DESIGN.md step 9) confirms
+//! equation dS/dt = A~ S + S A~^T + sum B S B^T (docs/architecture.md §2, step 9) confirms
 //! E|x_t|_P^2 <= |x_0|_P^2 e^{Sigma^2 t}, and shows the constant is sharp at
 //! t -> 0: from the fastest direction v, (E|x_h|_P^2 - 1)/h -> Sigma^2, so any
 //! smaller constant is violated at small h.

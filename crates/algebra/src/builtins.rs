@@ -132,7 +132,7 @@ mod tests {
 
     #[test]
     fn se3_matches_the_design_convention() {
-        // DESIGN.md: ad*_(xi,u)(Pi,Gamma) = (Pi x xi + Gamma x u, Gamma x xi).
+        // docs/architecture.md §1: ad*_(xi,u)(Pi,Gamma) = (Pi x xi + Gamma x u, Gamma x xi).
         let se3 = builtin("se3").unwrap().algebra;
         let xi_u = [q(1), q(2), q(3), q(-1), q(4), q(2)];
         let mu = [q(2), q(-1), q(5), q(3), q(1), q(-2)];

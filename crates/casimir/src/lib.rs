@@ -2,7 +2,7 @@
 //!
 //! For a Lie–Poisson system on `g*` with Hamiltonian `h`, Casimirs `C_j` and
 //! first integrals `F_j` (conserved by `h` only), and an equilibrium `mu_e`,
-//! this crate implements steps 1–3 of the method (DESIGN.md §3):
+//! this crate implements steps 1–3 of the method (docs/architecture.md §2):
 //!
 //! 1. **Conserved quantities.** The Lie–Poisson bracket
 //!    `{F, G}(mu) = <mu, [DF, DG]> = c^k_ab mu_k ∂_a F ∂_b G` as an exact

@@ -1,6 +1,6 @@
 //! The linearised stochastic dynamics and the growth constant `Sigma^2`.
 //!
-//! Steps 4–9 of the stochastic energy–Casimir method (DESIGN.md §3):
+//! Steps 4–9 of the stochastic energy–Casimir method (docs/architecture.md §2):
 //!
 //! * [`linearise`]: `A` (the Jacobian of `mu -> ad*_{Dh(mu)} mu` at `mu_e`),
 //!   `B_i = ad*_{sigma_i}` and the Itô drift `A~ = A + 1/2 sum B_i^2`, exactly;

@@ -2,7 +2,7 @@
 //! [`crate::analyse`] without exact proofs, for sweeps at the numeric level
 //! and for library users who want the verdict and `Sigma^2` fast.
 //!
-//! DESIGN.md §4 allows a `numerical` level with "eigenvalues only, no
+//! docs/architecture.md §3 allows a `numerical` level with "eigenvalues only, no
 //! proof". [`crate::analyse`] with `exact = false` still proves `P` definite
 //! in rational arithmetic and forms `P` and `Q` exactly (the certificate
 //! contract); [`analyse_numeric`] does none of that. What stays exact is

@@ -165,7 +165,7 @@ impl Analysis {
     }
 }
 
-/// Run the pipeline (DESIGN.md §3, steps 2–8).
+/// Run the pipeline (docs/architecture.md §2, steps 2–8).
 ///
 /// ```
 /// use algebra::builtin;

@@ -1,6 +1,6 @@
 //! The energy–Casimir method for large systems, in floating point.
 //!
-//! Steps (DESIGN.md §3, with the exact engine's choices where they carry
+//! Steps (docs/architecture.md §2, with the exact engine's choices where they carry
 //! over; every dense operation by faer):
 //!
 //! 1. the equilibrium and noise residuals, exactly ([`LargeSystem`]);

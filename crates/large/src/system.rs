@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 /// A stochastic Lie–Poisson system on the dual of a sparse algebra:
 /// `d mu = ad*_{Dh(mu)} mu dt + sum_i ad*_{sigma_i} mu o dW^i`
-/// (`(ad*_xi mu)_b = c^k_ab xi^a mu_k`, DESIGN.md §2).
+/// (`(ad*_xi mu)_b = c^k_ab xi^a mu_k`, docs/architecture.md §1).
 #[derive(Clone, Debug)]
 pub struct LargeSystem {
     algebra: SparseAlgebra,

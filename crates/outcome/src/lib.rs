@@ -105,7 +105,7 @@ named!(Verdict, "verdict", [
     NoiseIncompatible => "noise_incompatible",
 ]);
 
-/// How firmly a verdict's claims are established (DESIGN.md §4).
+/// How firmly a verdict's claims are established (docs/architecture.md §3).
 ///
 /// Strongest first: [`VerificationLevel::Exact`] and
 /// [`VerificationLevel::ExactStructure`] are proofs in exact arithmetic,

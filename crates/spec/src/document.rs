@@ -272,7 +272,7 @@ mod objects {
 }
 
 /// A finite-dimensional spec: a Lie–Poisson system with its equilibrium and
-/// noise (DESIGN.md §5). Required: `name`, `algebra`, `hamiltonian`,
+/// noise (docs/architecture.md §4). Required: `name`, `algebra`, `hamiltonian`,
 /// `equilibrium`, `noise`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]

@@ -1,4 +1,4 @@
-//! The engine's public contract: spec in, certificate out (DESIGN.md §5).
+//! The engine's public contract: spec in, certificate out (docs/architecture.md §4).
 //!
 //! * [`parse_spec`] reads the JSON spec (algebra, parameters, Hamiltonian,
 //!   Casimirs, first integrals, equilibrium, noise, stopping, settings) into a

@@ -99,7 +99,7 @@ impl JsonSchema for ExactRational {
 /// A matrix of exact rationals, by rows.
 pub type RationalMatrix = Vec<Vec<ExactRational>>;
 
-/// The certificate of a finite-dimensional spec (DESIGN.md §5). Optional
+/// The certificate of a finite-dimensional spec (docs/architecture.md §4). Optional
 /// parts are present when the verdict has them: `casimir_choice`, `P`, `Q`,
 /// `growth`, `optimisation` for `stable`; `instability` for a floating-point
 /// `linearly_unstable`; `search` for `inconclusive`.
