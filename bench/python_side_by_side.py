@@ -1,5 +1,5 @@
 """Cost of calling the engine from Python against the Rust engine itself, in
-one script (issue 15's speed targets):
+one script, against the speed targets below:
 
 * ``certify`` of the rigid body from Python (spec text in, certificate
   object out, the JSON parsed by ``json.loads``) against the Rust end-to-end

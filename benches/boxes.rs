@@ -1,5 +1,5 @@
-//! Criterion benchmarks of box certificates (docs/boxes.md), for the
-//! targets of issue 17 on the 2-core machine:
+//! Criterion benchmarks of box certificates (docs/boxes.md), against their
+//! speed targets on the 2-core machine:
 //!
 //! * `box-certify/rigid-body-inertia-box`: a two-parameter rigid-body box
 //!   certified whole (target: under 1 s);

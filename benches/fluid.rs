@@ -1,7 +1,7 @@
 //! Criterion benchmark of one fluid x-mode: the Lanczos estimate of Sigma^2
 //! (banded operators in vorticity coordinates), the banded verified check
-//! (`fluid::walls_check`, `O(ny)`; walls and, since 2026-11-28, periodic
-//! grids) and the dense verified check, grouped by
+//! (`fluid::walls_check`, `O(ny)`; walls and periodic grids) and the dense
+//! verified check, grouped by
 //! the number of unknowns; and one compressible mode (Lanczos, the banded
 //! verified check, and the discrete SDE's own constant `lambda_max(Q_B, K)`).
 //! The scipy comparison on the same matrices is `bench/fluid_side_by_side.sh`.

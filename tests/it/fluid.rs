@@ -1,4 +1,4 @@
-//! The fluid pipeline (issue 5): discretisation checks, Sigma^2 against an
+//! The fluid pipeline: discretisation checks, Sigma^2 against an
 //! independent Galerkin computation, convergence, the Casimir's zero
 //! contribution to Q, Monte Carlo against the certified growth, and the
 //! compressible model.
@@ -408,8 +408,7 @@ fn compressible_noise_residual_and_admissible_shifts_match_closed_forms() {
 /// The tanh mixing layer at the spec's ny = 128 has a critical layer about
 /// 0.02 wide that 128 points do not resolve; the instability search refines
 /// past the user's grid until the growth rate converges. The reference
-/// 0.02189 at k = 0.952 is the independent Legendre-Galerkin value reported
-/// with issue 13.
+/// 0.02189 at k = 0.952 is an independent Legendre-Galerkin value.
 #[test]
 fn the_instability_search_refines_past_the_users_grid() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/fluids/tanh-mixing-layer.json");

@@ -83,7 +83,7 @@ fn fluid_bad_input_is_exit_2_with_the_json_path() {
         ),
         ("ny not an integer", spec_with(|v| v["fluid"]["ny"] = 32.5.into()), "$.fluid.ny", "positive integer"),
         (
-            // even was enough for the Fourier collocation used until 2026-11-28
+            // even is not enough: periodic grids are made of elements too
             "periodic ny not a multiple of the degree",
             spec_with(|v| {
                 v["fluid"]["boundary"] = "periodic".into();

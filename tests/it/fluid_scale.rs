@@ -22,9 +22,8 @@ fn ny_4096_with_32_modes_is_accepted_on_both_boundaries_and_the_dense_fallback_k
     // The banded check is O(ny): the dense work limit applies neither above
     // the dense fallback's 1023 unknowns nor on periodic grids, which have
     // no fallback (fluid::modes::Mode::verify); the banded limits (next
-    // test) allow these. (Until 2026-11-28 periodic
-    // grids were dense and refused here: 32 * 2 * 4096^3 / 3 = 1.5e12 > 1e12
-    // operations.)
+    // test) allow these. (A dense periodic check would be refused here:
+    // 32 * 2 * 4096^3 / 3 = 1.5e12 > 1e12 operations.)
     spec::parse_fluid_spec(&cubic(4096, "walls")).expect("walls at ny = 4096 are accepted");
     spec::parse_fluid_spec(&kolmogorov(4096, 32)).expect("periodic at ny = 4096 is accepted");
     spec::parse_fluid_spec(&kolmogorov(1016, 2048)).expect("periodic grids have no dense fallback");
@@ -59,7 +58,7 @@ fn many_noise_fields_on_a_fine_grid_are_refused_with_the_field_named() {
     // 1e12 (MAX_BANDED_WORK). Walls at ny = 4096 (4095 unknowns): J = 28
     // gives 122850 rows of width 270, 8 * 122850 * 270 = 2.65e8 bytes, and
     // 4 modes 4 * 122850 * 270^2 = 3.6e10: accepted (certified in 11 s,
-    // 3.18 GB, 2026-11-28). J = 29: 126945 rows of width 279, 2.83e8 bytes.
+    // 3.18 GB). J = 29: 126945 rows of width 279, 2.83e8 bytes.
     let parse = |text: String| spec::parse_fluid_spec(&text);
     parse(noisy(4096, 28, 4, "walls", "incompressible")).expect("28 fields at ny = 4096 fit");
     let err = parse(noisy(4096, 29, 4, "walls", "incompressible")).unwrap_err();
@@ -84,8 +83,7 @@ fn many_noise_fields_on_a_fine_grid_are_refused_with_the_field_named() {
     parse(noisy(16, 256, 64, "walls", "incompressible")).expect("the dense check at ny = 16");
     parse(noisy(1024, 100, 4, "walls", "incompressible")).expect("the dense check at ny = 1024");
     // The compressible model runs the incompressible analysis first (its
-    // checks included), so the same limits hold (found in review,
-    // 2026-11-28: 64 fields at ny = 4096 were accepted).
+    // checks included), so the same limits hold.
     let err = parse(noisy(4096, 64, 32, "walls", "compressible")).unwrap_err();
     assert_eq!(err.path, "$.fluid.noise", "{err}");
     parse(noisy(4096, 28, 4, "walls", "compressible")).expect("28 fields at ny = 4096 fit");
@@ -93,8 +91,8 @@ fn many_noise_fields_on_a_fine_grid_are_refused_with_the_field_named() {
 
 #[test]
 fn simulating_at_another_ny_keeps_the_work_limits() {
-    // `verify simulate --ny` re-runs the analysis at its own grid (found in
-    // review, 2026-11-28: it did not re-check the limits). Periodic grids
+    // `verify simulate --ny` re-runs the analysis at its own grid, so the
+    // limits are checked again for that grid. Periodic grids
     // have no dense check: 61 fields at ny = 16 (1008 rows of bandwidth
     // 1070, 8.6e6 bytes a copy) are accepted, but at ny = 512 they make
     // 32256 rows, 8 * 32256 * 1071 = 2.76e8 bytes > 2^28 = 2.68e8; at
@@ -144,11 +142,11 @@ fn a_periodic_certificate_at_ny_4096_is_verified_and_agrees_with_the_fixture() {
     let s = fine["sigma2"].as_f64().unwrap();
     let upper = fine["sigma2_upper"].as_f64().unwrap();
     assert!(upper >= s && upper <= s * (1.0 + 3e-4), "{s} {upper}");
-    // Mode 1 (k = 2) sets Sigma^2. The Fourier collocation used until
-    // 2026-11-28 gave 0.012258079762316933 at ny = 256 (the fixture's old
-    // certificate), the Fourier-Galerkin reference of tests/it/fluid.rs agrees
-    // with it to 1e-9: measured, the elements at ny = 4096 differ from it
-    // by 1.1e-10 (the Lanczos value at this resolution; 5e-13 at ny = 256).
+    // Mode 1 (k = 2) sets Sigma^2. Fourier collocation gives
+    // 0.012258079762316933 at ny = 256, and the Fourier-Galerkin reference
+    // of tests/it/fluid.rs agrees with it to 1e-9: measured, the elements
+    // at ny = 4096 differ from it by 1.1e-10 (the Lanczos value at this
+    // resolution; 5e-13 at ny = 256).
     assert!((s - 0.012258079762316933).abs() <= 1e-9 * s, "{s}");
     // it sets the overall bound, so it is narrowed from the first rung at
     // 4096 unknowns, 9e-6 (first_rung, tighten_overall_bound;
@@ -186,12 +184,9 @@ fn a_walls_certificate_at_ny_4096_is_verified_and_converged() {
 /// walls, `c = 0` is forced and `w = -1`, so the form is `-(K + M w)`
 /// (`s = -1`, Arnold's second theorem). At ny = 4096 the banded check's own
 /// ladder (up to `8.1e-3` relative) proves nothing for some modes (measured
-/// with `walls_margins` since `omega` is eliminated before the
-/// factorisation, fifth session of 2026-11-27: modes 21, 22, 26 and 28 of
-/// 32, against 16, 17, 27, 29, 31 and 32 before; the first 22 modes are
-/// certified here; at ny = 2048 every mode proves a rung, so this test
-/// moved from 2048 to 4096); they are
-/// tried on the ladder continued (`Sigma^2_k` times
+/// with `walls_margins`: modes 21, 22, 26 and 28 of 32; the first 22 modes
+/// are certified here; at ny = 2048 every mode proves a rung, hence
+/// ny = 4096); they are tried on the ladder continued (`Sigma^2_k` times
 /// `1.243`, then `8.29`) and then at the largest bound the other modes
 /// proved (`fluid::analysis::prove_remaining_modes`), which is all the
 /// certificate's claim about `max_k Sigma^2_k` needs.

@@ -1,4 +1,4 @@
-//! Issue 12: certificates from Rust without JSON text. A system built in
+//! Certificates from Rust without JSON text. A system built in
 //! code is written out as a spec (structure constants when the algebra is
 //! not a builtin one), certified, and re-checked like a file.
 

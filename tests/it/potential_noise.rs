@@ -1,4 +1,4 @@
-//! Fluid noise in the whole semidirect-product algebra (issue 13, part 1):
+//! Fluid noise in the whole semidirect-product algebra:
 //! a noise element `((eta(y), 0), r(y))` acts on the compressible
 //! equilibrium `(m, rho) = ((U, 0), 1)` by `-(0, U eta' + r')` (the paper's
 //! `ad*` with the term `rho grad r` of the density part; derivation in

@@ -1,4 +1,4 @@
-//! Issue 11: the Casimir choice is invariant to how the conserved
+//! The Casimir choice is invariant to how the conserved
 //! quantities are normalised and to the basis of the algebra, and a definite
 //! form found in floating point is never lost.
 //!

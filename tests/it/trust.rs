@@ -1,4 +1,4 @@
-//! Trust at the edges (issue 10): one regression test per family that an
+//! Trust at the edges: one regression test per family that an
 //! adversarial review found, named after what broke. Every constant asserted
 //! is derived in the comment beside it.
 

@@ -1,4 +1,4 @@
-//! A no-panic, bounded-cost and forgery fuzz run of the engine (issue 10).
+//! A no-panic, bounded-cost and forgery fuzz run of the engine.
 //!
 //! ```text
 //! cargo run --release -p verify --example fuzz_edges -- [--specs N] [--certs M] [--seed S]

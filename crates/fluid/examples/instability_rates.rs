@@ -8,7 +8,7 @@
 //! the phase speed, `e^{ik(x - c t)}`) and the one nearest an argument
 //! `re,im` if one is given; then the analysis's instability search (spec
 //! `ny` 512, one x-mode of wavenumber `k`, no noise) grid by grid.
-//! Measured with it, 2026-11-29: `analysis/instability.rs` docs.
+//! Measured with it: `analysis/instability.rs` docs.
 
 use fluid::grid::{Boundary, YGrid};
 use fluid::modes::Mode;

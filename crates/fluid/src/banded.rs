@@ -37,21 +37,20 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// Below that it is `fl(fl(x + units 2^-1074) (1 + 4u))`: `units 2^-1074`
 /// is exact, the sum is exact while it is subnormal (and then the product
 /// rounds back to it at worst), and otherwise each rounding loses at most
-/// a relative `u`, which `1 + 4u` more than restores. (Until review,
-/// 2026-11-28, this case was the plain sum, which for `x` above `2^-1021`
-/// can round back down to `x`; the callers' relative inflations covered
-/// that, as they did before this function.) Each subnormal result costs a
-/// microcode assist of about a hundred cycles: adding the underflow terms
-/// entry by entry was 64% of `Bounded::set_with_error`, about 5% of a
-/// walls check at ny = 1024 (`perf annotate`, 2026-11-28).
+/// a relative `u`, which `1 + 4u` more than restores. (The plain sum is not
+/// enough: for `x` above `2^-1021` it can round back down to `x`.) Each
+/// subnormal result costs a microcode assist of about a hundred cycles:
+/// adding the underflow terms entry by entry in subnormal arithmetic takes
+/// 64% of `Bounded::set_with_error`, about 5% of a walls check at
+/// ny = 1024 (`perf annotate`).
 ///
 /// The small case is a call the compiler cannot inline: as a plain `if`,
 /// LLVM computed both branches and selected one, so the subnormal product
 /// was formed every time.
 #[inline]
 pub fn plus_underflow(x: f64, units: f64) -> f64 {
-    // (a NaN `x` passes and propagates, as it did before this function:
-    // the callers' finiteness tests refuse it; never a panic)
+    // (a NaN `x` passes and propagates: the callers' finiteness tests
+    // refuse it; never a panic)
     debug_assert!((x.is_nan() || x >= 0.0) && (0.0..=pow2(100)).contains(&units));
     #[cold]
     #[inline(never)]
@@ -116,8 +115,8 @@ pub fn pow2(e: i32) -> f64 {
 /// `L |D| L^T`, the shifted Cholesky), megabytes each, and the ladder and
 /// the modes repeat them. glibc returns such blocks to the kernel when they
 /// are freed (`munmap`, or `madvise` in a worker thread's arena), so every
-/// new one page-faulted in again: measured 2026-11-27 (fifth session) at ny = 1024 (mode 1
-/// of `bench/cubic-walls.json`, `fluid_mode`), 29% of a banded check
+/// new one would page-fault in again: measured at ny = 1024 (mode 1 of
+/// `bench/cubic-walls.json`, `fluid_mode`), 29% of a banded check
 /// (11.2 ms, against 8.0 ms with glibc told to keep its memory through
 /// `MALLOC_MMAP_THRESHOLD_` and `MALLOC_TRIM_THRESHOLD_`). A few freed
 /// bands per thread are kept here instead; small ones are left to the
@@ -459,9 +458,9 @@ impl SymBanded {
     /// Entry `(i, j)` is `sum_k A[i][k] w[k] A[k][j]` over `k` within `b`
     /// of both: one forward inner product of row `i` of `A` times `w` with
     /// row `j` of `A`, both held by full rows ([`SymBanded::rows`]'s
-    /// layout). Until 2026-11-28 each term read `A` through
-    /// [`SymBanded::get`] with its branch, and the product took a fifth of a
-    /// periodic mode's Lanczos run at ny = 1024 (`perf`, docs/fluids.md §5).
+    /// layout). Reading each term through [`SymBanded::get`], with its
+    /// branch, would make the product a fifth of a periodic mode's Lanczos
+    /// run at ny = 1024 (`perf`, docs/fluids.md §5).
     ///
     /// ```
     /// use fluid::banded::SymBanded;
@@ -652,9 +651,9 @@ impl SymBanded {
     /// fails, the usual schedule runs after it. For `P = L |D| L^T` the
     /// caller knows `|R^T| |R|` in advance (it is `|L| |D| |L^T|`, whose row
     /// sums it has computed), which the first share from `|P|` misses where
-    /// `P`'s entries cancel: a second factorisation was then needed, a
+    /// `P`'s entries cancel: a second factorisation is then needed, a
     /// fifth of a check's time (periodic modes 3 to 8 of Kolmogorov flow at
-    /// ny = 1024, 2026-11-28).
+    /// ny = 1024).
     fn verified_positive_definite_above_from(&self, f: &[f64], first: Option<&[f64]>) -> bool {
         let (n, b) = (self.n, self.b);
         if !self.finite_with_row_bounds(f) {
@@ -756,9 +755,8 @@ impl SymBanded {
         // A quotient l_ij = fl(s / r_jj) that underflows is off by up to
         // 2^-1075, which the entry (i, j) of R^T R carries times r_jj: at
         // most (b + 1) 2^-1074 max r_jj in a row, counting the entries in
-        // both rows they touch (found in review, 2026-11-27: harmless,
-        // because row j's own shift covers it many times over, but not
-        // written down before).
+        // both rows they touch (row j's own shift covers it many times
+        // over, but the bound should not rely on that).
         let max_r = (0..n).fold(0.0f64, |m, k| m.max(c[k * b1]));
         // A multiplier flushed to zero by `eliminate` leaves at most
         // FLUSH (1 + gamma_b) r_kk in R^T R - A' at its entry (`eliminate`'s
@@ -857,9 +855,8 @@ impl SymBanded {
                 let ev = err.band[i * b1 + dd];
                 let mut e = if ev == 0.0 { 0.0 } else { plus_underflow(ev * f, 1.0) };
                 // and so may the scaled entry, to a subnormal number or to
-                // zero (found in review, 2026-11-28: an entry whose own
-                // bound is zero, such as a stored L_ab, underflowing to 0
-                // was no longer counted)
+                // zero (an entry whose own bound is zero, such as a stored
+                // L_ab, must still be counted when it underflows to 0)
                 if v.abs() < f64::MIN_POSITIVE && self.band[i * b1 + dd] != 0.0 {
                     e += f64::MIN_POSITIVE;
                 }
@@ -893,9 +890,9 @@ impl SymBanded {
     /// most `2 * 2^-1075 (b + 1 + sum_k |l_jk| + |d_j|)` per entry. So
     /// `||A + E - L D L^T||_2 <= eps`, `eps` the largest row sum of those
     /// bounds plus `radius`. The row sums of `|L| |D| |L^T|` cost `O(n b)`:
-    /// `sum_k |l_ik| |d_k| c_k`, `c_k` the column sums of `|L|`. (Until
-    /// 2026-11-27 the residual `A - L D L^T` was computed entry by entry,
-    /// one more `O(n b^2)` pass, and its bound carried `gamma_{2b+4}
+    /// `sum_k |l_ik| |d_k| c_k`, `c_k` the column sums of `|L|`. (Computing
+    /// the residual `A - L D L^T` entry by entry would be one more
+    /// `O(n b^2)` pass, and its bound would carry `gamma_{2b+4}
     /// (|A| + |L||D||L^T|)` for its own rounding besides: never tighter.)
     ///
     /// **The inertia.** With `G = L |D|^{1/2}` and `J = sign(D)`,
@@ -1025,9 +1022,9 @@ impl SymBanded {
     /// at a zero or non-finite pivot.
     ///
     /// Right-looking (`eliminate`, with `times = d_k`). The inner-product
-    /// form used until 2026-11-27 chained each entry's sum to the next and
-    /// took about twice as long (4.6 ms against 9.6 ms for the lifted
-    /// matrix of ny = 2048, two noise fields).
+    /// form chains each entry's sum to the next and takes about twice as
+    /// long (9.6 ms against this form's 4.6 ms for the lifted matrix of
+    /// ny = 2048, two noise fields).
     fn ldl(&self) -> Option<(pool::Buffer, Vec<f64>)> {
         let (n, b) = (self.n, self.b);
         let b1 = b + 1;
@@ -1137,7 +1134,7 @@ impl SymBanded {
     /// The banded Cholesky factor of `self - shift * other` into `c`.
     ///
     /// Right-looking (`eliminate` with `times = 1`), like [`SymBanded::ldl`]:
-    /// the inner-product form used until 2026-11-28 was an eighth of a
+    /// in the inner-product form this factorisation is an eighth of a
     /// periodic mode's Lanczos run at ny = 1024 (`perf`, docs/fluids.md §5).
     fn factor_into(&self, minus: Option<(f64, &SymBanded)>, c: &mut Vec<f64>) -> Result<(), BandedError> {
         let (n, b) = (self.n, self.b);
@@ -1216,8 +1213,8 @@ impl BandedRows {
 /// and the division is a multiplication by the stored reciprocal: the
 /// chain per row is one multiply-add and one product. The solves are not
 /// part of any verified claim (Lanczos, conjugate gradients, simulations).
-/// Measured 2026-11-27 (fifth session) at ny = 1024 (`fluid_mode`, mode 1 of
-/// `bench/cubic-walls.json`, best of 20): see docs/fluids.md §5.
+/// Measured at ny = 1024 (`fluid_mode`, mode 1 of `bench/cubic-walls.json`,
+/// best of 20): see docs/fluids.md §5.
 #[derive(Clone, Debug)]
 pub struct BandedCholesky {
     n: usize,
@@ -1353,7 +1350,7 @@ mod tests {
         // pivots while det A = d c - e^2 < 0 (exact in rationals below).
         // Each case is built so that only one flush term of the verified
         // bounds stands between these factors and a false answer; removing
-        // either term fails its case (checked 2026-11-28 by zeroing each).
+        // either term fails its case (checked by zeroing each).
         let q = |x: f64| exact::Rational::from_float(x).unwrap();
         let matrix = |d: f64, e: f64, c: f64| {
             assert!(q(d) * q(c) - q(e) * q(e) < exact::Rational::from(0), "A is indefinite");

@@ -47,7 +47,7 @@ pub const INSTABILITY_MAX_NY: f64 = 1024.0;
 /// last candidate above the floor (shift-invert on the banded pencil,
 /// `analysis::instability` docs): the weakly growing modes near a neutral
 /// wavenumber have critical layers of width about `Im c / |U'|`. Measured
-/// 2026-11-29 for the Bickley jet `sech^2 y` on `[-8, 8]`
+/// for the Bickley jet `sech^2 y` on `[-8, 8]`
 /// (`examples/instability_rates.rs`; shooting values in the regression
 /// test `the_bickley_jet_sinuous_mode_is_found`): the rates agree to
 /// `1e-3` between 2048 and 4096 at `k = 1.9` (`Im c = 0.0116`), 4096 and

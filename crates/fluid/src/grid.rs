@@ -20,9 +20,9 @@
 //!   stored in the *banded order* `0, ny - 1, 1, ny - 2, ...` ([`YGrid::banded_order`]),
 //!   in which the cyclic band of width `p` becomes an ordinary band of
 //!   width `2p`, so every banded solve and the verified banded check of
-//!   [`crate::walls_check`] serve both boundaries. Until 2026-11-28 (sixth
-//!   session) periodic grids used Fourier collocation (`K` a dense
-//!   circulant), whose verified check was dense, `O(ny^3)`.
+//!   [`crate::walls_check`] serve both boundaries. (Fourier collocation
+//!   would make `K` a dense circulant, whose verified check is dense,
+//!   `O(ny^3)`.)
 //!
 //! These two properties are what make the energy–Casimir–momentum form an
 //! exact invariant of the discrete linearised drift (module [`crate::modes`]):

@@ -20,13 +20,12 @@
 //!
 //! So this is the plain Lanczos process with full reorthogonalisation (at
 //! most a few hundred vectors for sizes of a few thousand, robust without
-//! restarts). Until 2026-11-28 the periodic modes formed `V` and `Q`
-//! densely (`modes.rs`), where a dense eigensolver would also have served;
-//! now both boundaries apply banded operators. The
-//! top Ritz pair of the small tridiagonal matrix comes from bisection and
-//! inverse iteration on the tridiagonal itself (`top_ritz`: nalgebra's
-//! symmetric eigensolver, used until 2026-11-28, first reduces a dense
-//! matrix to tridiagonal form, `O(steps^3)` at every look).
+//! restarts), applying banded operators on both boundaries (a dense
+//! eigensolver would need `V` and `Q` formed densely). The top Ritz pair of
+//! the small tridiagonal matrix comes from bisection and inverse iteration
+//! on the tridiagonal itself (`top_ritz`: nalgebra's symmetric eigensolver
+//! first reduces a dense matrix to tridiagonal form, `O(steps^3)` at every
+//! look).
 
 /// The converged top Ritz pair's value and its residual.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -179,10 +178,10 @@ pub fn largest_generalized_eigenvalue(
         // then V-orthogonalisation against the whole basis, which now removes
         // only what rounding left, and a second time only where the first
         // removed more than half of `p`'s squared V-norm (Daniel, Gragg,
-        // Kaufman and Stewart's test; "twice is enough", Parlett). Until
-        // 2026-11-28 both passes always ran: with hundreds of steps (the high
-        // x-modes of a fine grid) they were two thirds of the run, reading
-        // the whole basis twice a step.
+        // Kaufman and Stewart's test; "twice is enough", Parlett). Always
+        // running both passes would, with hundreds of steps (the high
+        // x-modes of a fine grid), be two thirds of the run, reading the
+        // whole basis twice a step.
         axpy(-a, &basis[j], &mut p);
         if j > 0 {
             axpy(-beta[j - 1], &basis[j - 1], &mut p);
@@ -245,12 +244,11 @@ pub fn largest_generalized_eigenvalue(
 /// Whether to look at the Ritz values after `steps` steps: every step from
 /// the fourth to the 31st, then every eighth, and at the last. Each look is
 /// the top eigenpair of the tridiagonal `T` ([`top_ritz`]: bisection and
-/// inverse iteration, `O(steps)` per Sturm count; until 2026-11-28 a dense
-/// eigenproblem, `O(steps^3)`), cheap beside a step, and the walls' modes
-/// converge within 7 to 20 steps, so looking only every eighth step ran up
-/// to seven steps too many.
-/// Measured 2026-11-27 (fifth session) at ny = 1024 (`fluid_mode`, mode 1 of
-/// `bench/cubic-walls.json`): 9 steps instead of 16 (docs/fluids.md §5).
+/// inverse iteration, `O(steps)` per Sturm count), cheap beside a step,
+/// and the walls' modes converge within 7 to 20 steps, so looking only
+/// every eighth step would run up to seven steps too many.
+/// Measured at ny = 1024 (`fluid_mode`, mode 1 of `bench/cubic-walls.json`):
+/// 9 steps instead of 16 (docs/fluids.md §5).
 fn check_now(steps: usize, m_max: usize) -> bool {
     steps == m_max || (steps >= 4 && (steps < 32 || steps % 8 == 0))
 }
@@ -279,11 +277,11 @@ pub fn conjugate_gradients(
     let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
     // The residual is tested before the preconditioner is applied to it:
     // the V-solves take few iterations (their preconditioner is V's inverse
-    // up to rounding; counted 2026-11-28 at tol = 1e-15: 2 on the walls
-    // modes of `bench/cubic-walls.json` and `channel-sin-walls` at ny = 1024
-    // and 4096, 1 or 0 on periodic ones), and a preconditioned residual
-    // computed after the last step is never used (until 2026-11-28 it was,
-    // at a third of the preconditioner's work; the iterate is the same).
+    // up to rounding; counted at tol = 1e-15: 2 on the walls modes of
+    // `bench/cubic-walls.json` and `channel-sin-walls` at ny = 1024 and
+    // 4096, 1 or 0 on periodic ones), and no preconditioned residual is
+    // computed after the last step, where it would go unused (a third of
+    // the preconditioner's work; the iterate is the same).
     if norm(&r) <= tol * bnorm {
         return Some(0);
     }
@@ -324,12 +322,12 @@ pub fn conjugate_gradients(
 /// takes a dense matrix, reduces it to tridiagonal form by Householder
 /// reflections (`O(steps^3)`, though this one is tridiagonal already) and
 /// returns every eigenpair. The high x-modes of a fine grid take hundreds
-/// of Lanczos steps, and there this was a third of the run (`perf`, mode
-/// 2048 of the Kolmogorov spec at ny = 4096, 2026-11-28). Here the two
+/// of Lanczos steps, and there it would be a third of the run (`perf`,
+/// mode 2048 of the Kolmogorov spec at ny = 4096). Here the two
 /// extreme eigenvalues come from bisection on the Sturm count
 /// ([`sturm_below`], to a few ulps of the spectrum's scale) and the top
 /// eigenvector from inverse iteration with a pivoted tridiagonal solve
-/// ([`solve_shifted`]): `O(steps)` each. Like the eigensolver before, it
+/// ([`solve_shifted`]): `O(steps)` each. Like any eigensolver here, it
 /// only steers the iteration: the reported value is the Rayleigh quotient
 /// of the Ritz vector, and every bound is proved by the verified checks.
 fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
@@ -341,13 +339,13 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
     if steps == 1 {
         // T = [alpha_0]: its eigenvector is e_1 (and T = 0, the pencil of
         // a noise-free or constant-noise mode, must give 0, not a solve
-        // with a zero pivot; found in review, 2026-11-28)
+        // with a zero pivot)
         return (vec![1.0], alpha[0], b.abs(), alpha[0].abs());
     }
     // Scaled by a power of two to entries of order one (exact, and the
     // results scale back exactly): the Sturm count squares the
-    // off-diagonal, which underflows for a spectrum near 1e-160 (found in
-    // review, 2026-11-28). The eigenvector does not change.
+    // off-diagonal, which underflows for a spectrum near 1e-160. The
+    // eigenvector does not change.
     let top = alpha.iter().chain(beta).fold(0.0f64, |m, x| m.max(x.abs()));
     if top > 0.0 && !(2f64.powi(-200)..=2f64.powi(200)).contains(&top) {
         let e = top.log2().round() as i32;
@@ -372,7 +370,7 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
     // Bisection stops at a few ulps of the spectrum's scale (Gershgorin's
     // bound on it), not of the interval's ends: near a zero eigenvalue the
     // latter would take up to about a thousand more Sturm sweeps for an
-    // accuracy the Ritz value does not need (found in review, 2026-11-28)
+    // accuracy the Ritz value does not need
     let width = 2.0 * f64::EPSILON * lo.abs().max(hi.abs());
     let bisect = |top: bool| -> f64 {
         // top: the largest x with fewer than `steps` eigenvalues below it;
@@ -525,9 +523,9 @@ mod tests {
     fn top_ritz_agrees_with_nalgebra_on_random_tridiagonal_matrices() {
         // The extreme eigenvalues and the top eigenvector's last component
         // (the residual's factor) against nalgebra's dense symmetric
-        // eigensolver, which `top_ritz` used until 2026-11-28: sizes 1 to
-        // 300, entries of mixed signs and scales, and a case with a nearly
-        // double top eigenvalue (two copies of one block joined weakly).
+        // eigensolver: sizes 1 to 300, entries of mixed signs and scales,
+        // and a case with a nearly double top eigenvalue (two copies of one
+        // block joined weakly).
         use rand::{Rng, SeedableRng};
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         for case in 0..60 {

@@ -44,11 +44,11 @@ pub const DENSE_FALLBACK_UNKNOWNS: usize = 1023;
 /// Where the dense fallback is allowed, the dense check is run alone when
 /// the banded check's work `rows (bandwidth + 1)^2`
 /// ([`crate::walls_check::lifted_size`]) exceeds this multiple of `n^3`
-/// and [`DENSE_PREFERRED_FLOOR`]. Measured 2026-11-28 at `n = 1023`
-/// (`fluid_mode`, the cubic profile with `J` fields `0.1 sin(j y + j/7)`,
-/// mode 1, a CI run beside it): the banded bound took 99 ms at `J = 12`
-/// (work `0.21 n^3`) and 412 ms at `J = 16` (`0.45 n^3`), the dense check
-/// 250 to 440 ms whatever `J`.
+/// and [`DENSE_PREFERRED_FLOOR`]. Measured at `n = 1023` (`fluid_mode`,
+/// the cubic profile with `J` fields `0.1 sin(j y + j/7)`, mode 1, a CI run
+/// beside it): the banded bound takes 99 ms at `J = 12` (work `0.21 n^3`)
+/// and 412 ms at `J = 16` (`0.45 n^3`), the dense check 250 to 440 ms
+/// whatever `J`.
 pub const DENSE_PREFERRED_RATIO: f64 = 0.3;
 
 /// The banded work below which the banded check is kept however the dense
@@ -268,9 +268,8 @@ impl<'g> Mode<'g> {
     /// check [`Mode::verify_dense`]. Not on periodic grids: their stiffness
     /// has the constants in its kernel, so `L = S + k^2 M` is nearly
     /// singular for small `k L` and the computed `K` the dense check trusts
-    /// can be wrong by far more than its margin (found in review
-    /// 2026-11-28: ny = 16, `k = 7e-7`, a bound 0.12% below the stored
-    /// pencil's eigenvalue proved; test
+    /// can be wrong by far more than its margin (at ny = 16, `k = 7e-7` it
+    /// proves a bound 0.12% below the stored pencil's eigenvalue; test
     /// `walls_check::tests::no_dense_fallback_on_periodic_grids`).
     ///
     /// Where [`Mode::prefers_dense`] says so, the dense check runs alone

@@ -44,13 +44,13 @@
 //! roundings of both factors, twice those of `D_a` (a quotient), two of its
 //! own, and one more where it is subtracted from `L`'s diagonal. `D_a` must
 //! be a normal number (its sign is then exact), and so must the quotient;
-//! otherwise nothing is proved. Until 2026-11-27 (fifth session) `omega_a` was an unknown of
-//! `B` itself (last within its node, bandwidth `(J + 3)(p + 1) - 1`): the
+//! otherwise nothing is proved. Against keeping `omega_a` as an unknown of
+//! `B` (last within its node, bandwidth `(J + 3)(p + 1) - 1`), the
 //! factorisation's flops fall by `(4/5)(35/44)^2 = 0.51` for `J = 2`,
-//! `p = 8`. Measured (`fluid_mode` with one banded check at `3e-7`, best of 20,
-//! mode 1 of `bench/cubic-walls.json`): the check took 7.8 ms before and
-//! 5.3 ms after at ny = 1024, 17 and 11 ms at ny = 2048. The margins proved
-//! (`walls_margins`, 32 modes, ny = 1024 and 2048): the same for most
+//! `p = 8`. Measured (`fluid_mode` with one banded check at `3e-7`, best of
+//! 20, mode 1 of `bench/cubic-walls.json`): the check takes 5.3 ms instead
+//! of 7.8 ms at ny = 1024, 11 instead of 17 ms at ny = 2048. The margins
+//! proved (`walls_margins`, 32 modes, ny = 1024 and 2048): the same for most
 //! modes; for `U = y^3 + y/2` (`s = +1`) six modes prove a narrower rung and
 //! none a wider one; for `channel-sin-walls` (`s = -1`) seven modes prove a
 //! narrower rung and six a wider one (mode 7 at ny = 1024: `9e-6` instead
@@ -59,12 +59,12 @@
 //! **Why this lifting.** `J + 2` Grams are the fewest for this form: in the
 //! basis `(1, E_1, .., E_J, S2)` its coefficient matrix has the block
 //! `[[rho, 1/2], [1/2, 0]]` on `(1, S2)` and `-1` on each `E_j`, rank
-//! `J + 2`. Until 2026-11-27 `rho K` had a Gram of its own (`(s rho, M)`,
-//! and the squares `M (S2 +- t)`): one more unknown per node. Dropping it
-//! made the checks about 1.5 times faster (1.1 to 2.1 over the modes at
-//! ny = 1024 to 4096, `J = 2`, both versions timed in turn on the same
-//! modes with another job running; the flops fall by `(5/6)^3`) and proved the same
-//! margins or tighter ones, never looser (`walls_margins` on
+//! `J + 2`. A Gram of its own for `rho K` (`(s rho, M)`, and the squares
+//! `M (S2 +- t)`) would add one unknown per node; without it the checks are
+//! about 1.5 times faster (1.1 to 2.1 over the modes at ny = 1024 to 4096,
+//! `J = 2`, both versions timed in turn on the same modes with another job
+//! running; the flops fall by `(5/6)^3`) and prove the same margins or
+//! tighter ones, never looser (`walls_margins` on
 //! `bench/cubic-walls.json` and `channel-sin-walls` at ny = 1024, 2048 and
 //! 4096; e.g. mode 1 of the cubic profile at ny = 1024: `3e-7` instead of
 //! `9e-6`). Two other liftings were tried and measured against the
@@ -176,9 +176,9 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
 /// exactly first as in [`below_bar`]. Its block `D = s M diag(w)` is
 /// diagonal, so by Haynsworth the inertia is `D`'s plus that of the Schur
 /// complement `-s L - M D^-1 M`, of `L`'s bandwidth `p` on the `n` nodes.
-/// Until 2026-11-28 the whole `2n x 2n` matrix (bandwidth `2p + 1`) was
-/// factored: about eight times the flops, the same pivots in exact
-/// arithmetic (its `L D L^T` took the `omega` pivots first, node by node).
+/// Factoring the whole `2n x 2n` matrix (bandwidth `2p + 1`) would take
+/// about eight times the flops for the same pivots in exact arithmetic (its
+/// `L D L^T` takes the `omega` pivots first, node by node).
 /// Each diagonal entry `(m_a / D_a) m_a` is formed with its rounding
 /// bounded as in [`below_bar`]: `D_a` a product of three doubles (two
 /// roundings, counted twice in a quotient), the quotient's and the
@@ -305,9 +305,9 @@ fn below_bar(
         if u_vals.iter().any(|(v, sc, _)| (*v != 0.0 && v.abs() < f64::MIN_POSITIVE) || !sc.is_finite()) {
             return false;
         }
-        // nor one that underflowed to 0 from nonzero terms (found in review,
-        // 2026-11-27: its absolute error, up to 2^-1075, is divided by D_a
-        // below, which the counted roundings do not cover)
+        // nor one that underflowed to 0 from nonzero terms (its absolute
+        // error, up to 2^-1075, is divided by D_a below, which the counted
+        // roundings do not cover)
         let underflowed_to_zero = if nj > 0 {
             u_vals[0].0 == 0.0
                 || (u_vals[1].0 == 0.0 && (s2[a] - t) + rho != 0.0)
@@ -567,13 +567,13 @@ mod tests {
 
     #[test]
     fn a_quotient_that_underflows_to_zero_proves_nothing() {
-        // Found in review (2026-11-27, fifth session): noise near 1e-302 and
-        // a bound near 1e30 (rho = bar / k^2 huge) made U_c / D_a underflow
-        // to exactly 0 while U_c was not, and the entry's bound then missed
-        // the true (U_c / D_a) U_e. The field alternates in sign from node
-        // to node, so its centred values stay near its size and every
-        // U_c = eta m is a normal number. Such a check now proves nothing;
-        // with the noise at ordinary size the same bound is proved.
+        // Noise near 1e-302 and a bound near 1e30 (rho = bar / k^2 huge)
+        // make U_c / D_a underflow to exactly 0 while U_c is not, and the
+        // entry's bound would then miss the true (U_c / D_a) U_e. The field
+        // alternates in sign from node to node, so its centred values stay
+        // near its size and every U_c = eta m is a normal number. Such a
+        // check proves nothing; with the noise at ordinary size the same
+        // bound is proved.
         let (g, coef, form) = channel(16, 2.0, Sign::Positive);
         let field = |f: f64| -> Coefficients {
             let eta = vec![(0..g.n()).map(|a| if a % 2 == 0 { f } else { -f }).collect()];
@@ -651,11 +651,11 @@ mod tests {
 
     #[test]
     fn an_entry_whose_product_underflows_midway_proves_nothing_false() {
-        // Found in review (2026-11-27): on an interval of length 1e-14
-        // (weights m near 1e-15) with w near 1e277 and Sigma^2 near 3e-307,
-        // rho m fell below the normal range and rounded by up to 4.6%, which
-        // the factor w carried into the entry `s rho m w`; bounds 0.3% below
-        // the eigenvalue were proved. The truth is decided here in exact
+        // On an interval of length 1e-14 (weights m near 1e-15) with w near
+        // 1e277 and Sigma^2 near 3e-307, rho m falls below the normal range
+        // and rounds by up to 4.6%, which the factor w carries into the
+        // entry `s rho m w`; unguarded, that proves bounds 0.3% below the
+        // eigenvalue. The truth is decided here in exact
         // rationals on the stored L, m, w and eta (k = 1, energy 1, s = +1).
         let lg = 1e-14;
         let g = YGrid::new(Boundary::Walls, 0.0, lg, 16);
@@ -727,12 +727,12 @@ mod tests {
 
     #[test]
     fn no_dense_fallback_on_periodic_grids() {
-        // Found in review (2026-11-28): on a periodic grid the stiffness has
-        // the constants in its kernel, so at small k L the computed K is far
-        // from M L^-1 M of the stored L, and the dense check (a claim about
-        // the computed matrices) proved bounds below the stored pencil's
-        // eigenvalue (the reviewer's case: ny = 16, k L = 3.7e-6, a bound
-        // 0.12% below the eigenvalue that mpmath computed to 60 digits).
+        // On a periodic grid the stiffness has the constants in its
+        // kernel, so at small k L the computed K is far from M L^-1 M of
+        // the stored L, and the dense check (a claim about the computed
+        // matrices) proves bounds below the stored pencil's eigenvalue
+        // (ny = 16, k L = 3.7e-6: a bound 0.12% below the eigenvalue that
+        // mpmath computes to 60 digits).
         // Mode::verify therefore answers with the banded check alone on
         // periodic grids: here, where the dense check proves bounds the
         // banded one does not, the two answers must still be the banded ones.

@@ -333,8 +333,7 @@ impl VerifiedPencil {
             // Plus, per entry, 2r + 4 operations' worth of underflow, the
             // inner product's carried through the outer one: an underflowed
             // (K' G^T)_aj is multiplied by g_ia, and sum_a |g_ia| <= sum_j
-            // d_j (found in review, 2026-11-27: the underflow was charged
-            // unamplified).
+            // d_j, so the underflow is charged times 1 + sum_j d_j.
             let amplify = (1.0 + d.iter().sum::<f64>()) * (1.0 + 4.0 * (r as f64 + 1.0) * U);
             let t_error = k_hat * (2.0 * g_hat * e_hat + e_hat * e_hat + gamma(2 * r + 2) * g_hat * g_hat)
                 + ((2 * r + 4) * n) as f64 * f64::MIN_POSITIVE * amplify;

@@ -323,10 +323,10 @@ impl Block {
     /// Haynsworth `s P - Q ≻ 0` iff `B` has `n + n #{g < 0}` positive and
     /// `n #{g > 0}` negative eigenvalues (`-L/g` has the sign of `-g`). The
     /// unknowns are interleaved per entry (the lifted ones first), so `B` is
-    /// banded. This is the lifting `fluid::walls_check` used until
-    /// 2026-11-27 (it now folds the `eps` Gram into the two squares, one
-    /// unknown per entry fewer), chosen there over the congruence by `Delta`
-    /// (which squares `L`'s condition) after measurement. The claim is about
+    /// banded. The lifting is chosen over the congruence by `Delta` (which
+    /// squares `L`'s condition) after measurement; `fluid::walls_check`
+    /// folds the `eps` Gram into the two squares instead, one unknown per
+    /// entry fewer. The claim is about
     /// the exact `B` built from the stored `c`, `Delta` and noise values:
     /// each entry's rounding is bounded.
     fn lifted(&self, c: &[f64], eps: f64, s: f64, tracked: bool) -> Option<(Bounded, (usize, usize))> {
@@ -1023,10 +1023,9 @@ fn minus_laplacian_is_definite(t: &Tridiagonal) -> bool {
 /// factors and a sum of four terms: `gamma_5` of the terms' magnitudes; a
 /// product whose partial product underflows before its last factor proves
 /// nothing), and the verified inertia test of `fluid::banded::Bounded`
-/// decides. False when unsure. Until 2026-11-27 the test was run on the
-/// matrix as computed, with no radius, which is not the stated claim:
-/// review found a 2 x 2 case that it proved and exact arithmetic refutes
-/// (the test below).
+/// decides. False when unsure. A test of the matrix as computed, with no
+/// radius, would not prove the stated claim: it passes a 2 x 2 case that
+/// exact arithmetic refutes (the test below).
 fn congruent_form_is_definite(t: &Tridiagonal, c: &[f64], eps: f64) -> bool {
     let n = t.len();
     if n == 0 || c.len() != n || !(eps == 0.0 || eps.abs() == 1.0) {
@@ -1057,8 +1056,8 @@ fn congruent_form_is_definite(t: &Tridiagonal, c: &[f64], eps: f64) -> bool {
 mod tests {
     #[test]
     fn the_definiteness_of_p_is_proved_for_the_exact_congruent_matrix() {
-        // Found in review (2026-11-27): the float test of the computed
-        // Delta P Delta said definite; exact arithmetic says indefinite.
+        // The float test of the computed Delta P Delta says definite;
+        // exact arithmetic says indefinite.
         let t = Tridiagonal { diag: vec![-34.106100004537396, -2.1503007814110386], off: vec![0.5492700821132699] };
         let c = [-0.029321712938786146, 0.005637516160197854];
         let q = |x: f64| exact::Rational::from_float(x).unwrap();

@@ -63,8 +63,8 @@ pub(super) fn analyse_normalised(
     // When the forced shift is 0 the paper's functional is the chosen one,
     // built by the same call: its Sigma^2 is the chosen form's, at every
     // resolution, and is taken from that run instead of a second Lanczos
-    // pass over every mode (until 2026-11-28 it was computed twice, at the
-    // finest grid and in each row of the convergence table).
+    // pass over every mode (at the finest grid and in each row of the
+    // convergence table).
     let paper_is_chosen = matches!(&choice, Choice::Forced { shift, .. } if shift.abs() == 0.0);
     let paper_form_at = |grid: &YGrid, coef: &Coefficients| -> Option<Form> {
         match &choice {

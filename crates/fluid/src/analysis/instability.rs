@@ -19,7 +19,7 @@
 //!
 //! Why tracking: the weakly growing modes near a neutral wavenumber need
 //! fine grids. The Bickley jet `sech^2 y` on `[-8, 8]` at `k = 1.9`
-//! (measured 2026-11-29, `examples/instability_rates.rs`): the largest
+//! (measured with `examples/instability_rates.rs`): the largest
 //! `k Im c` is 0.0351 at ny = 128, 0 at 256 (the mode is not resolved; no
 //! other eigenvalue is complex), 0.0175 at 512, 0.02267 at 1024,
 //! 0.0220931 at 2048 and 0.0220919 at 4096 (shooting: 0.02209194), with
@@ -214,8 +214,7 @@ mod tests {
     use crate::grid::Boundary;
 
     /// The Bickley jet `U = sech^2 y = 4/(e^y + e^-y)^2` between walls at
-    /// `y = -8, 8`, one x-mode of wavenumber `k`, no noise, ny = 512 (the
-    /// spec of the report, 2026-11-29).
+    /// `y = -8, 8`, one x-mode of wavenumber `k`, no noise, ny = 512.
     fn bickley(k: f64) -> FluidProblem {
         let u = crate::expr::parse("4/(exp(y) + exp(-y))^2", &Default::default()).unwrap();
         FluidProblem {
@@ -227,11 +226,11 @@ mod tests {
         }
     }
 
-    /// Until 2026-11-29 the search stopped at ny = 1024 and the jet was
+    /// A search that stopped at ny = 1024 would find the jet
     /// `inconclusive`: the sinuous mode's largest `k Im c` is 0.0351,
     /// 0 (unresolved), 0.0175, 0.02267 at ny = 128 to 1024, and agrees to
     /// `1e-3` only from 2048 (0.0220931) to 4096 (0.0220919), which the
-    /// banded shift-invert now reaches (module docs).
+    /// banded shift-invert reaches (module docs).
     ///
     /// The independent value: shooting on Rayleigh's equation
     /// `(U - c)(phi'' - k^2 phi) - U'' phi = 0`, `phi(-8) = 0`, `phi'(0) = 0`,

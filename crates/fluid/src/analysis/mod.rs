@@ -395,9 +395,9 @@ fn held_rung(r: &ModeResult, ritz: &crate::lanczos::Ritz) -> Option<usize> {
 /// of the ladder). `ritz[i]` is mode `i`'s Ritz data.
 ///
 /// Why. Each mode first proves the widest rung
-/// ([`verified_mode_bound`]), one check, where the ladder from the
-/// narrowest rung took one check per failed rung: at ny = 1024 most modes
-/// need two or three (measured 2026-11-28 with `walls_margins`: of 32 modes,
+/// ([`verified_mode_bound`]), one check, where a ladder from the
+/// narrowest rung takes one check per failed rung: at ny = 1024 most modes
+/// need two or three (measured with `walls_margins`: of 32 modes,
 /// 19 of `U = y^3 + y/2`, 26 of `channel-sin-walls`, 27 of
 /// `kolmogorov-4096`; at 4096 nearly all fail one or two). The
 /// certificate's claim is about `Sigma^2 = max_k Sigma^2_k`, so only the
@@ -533,33 +533,29 @@ pub(super) fn prove_remaining_modes(
 
 /// Up to this many unknowns (ny = 512: 511 unknowns on walls, 512 on a
 /// periodic grid) the banded check proves the narrowest rung, `1e-8`:
-/// measured 2026-11-27 (fifth session) with `walls_margins` for
-/// `U = y^3 + y/2` (`s = +1`) and `channel-sin-walls` (`s = -1`), the low
-/// modes at ny = 128, 256 and 512 prove every rung; at ny = 1024 none of
-/// the 32 modes of either proves `1e-8`. For `kolmogorov-periodic`
-/// (`s = -1`, 2026-11-28) mode 1 proves `1e-8` at ny = 512 and none does at
-/// 1024.
+/// measured with `walls_margins` for `U = y^3 + y/2` (`s = +1`) and
+/// `channel-sin-walls` (`s = -1`), the low modes at ny = 128, 256 and 512
+/// prove every rung; at ny = 1024 none of the 32 modes of either proves
+/// `1e-8`. For `kolmogorov-periodic` (`s = -1`) mode 1 proves `1e-8` at
+/// ny = 512 and none does at 1024.
 pub const BANDED_NARROWEST_UNKNOWNS: usize = 512;
 
 /// The first rung of the margin ladder that [`tighten_overall_bound`]
 /// climbs with the banded check, on a grid with `unknowns` unknowns, for
-/// the modes that set the overall bound (every mode climbed it from here
-/// until 2026-11-28; now each first proves the widest rung): the margin it
-/// can prove grows like `h^-2` (`walls_check` docs), so rungs that cannot
-/// succeed are skipped. The bottom up to [`BANDED_NARROWEST_UNKNOWNS`],
-/// `3e-7` up to 2048 unknowns, then one rung higher per doubling (the
-/// thresholds are those of ny, so that walls, `ny - 1` unknowns, and
-/// periodic grids, `ny`, start alike). Measured
-/// for `U = y^3 + y/2` (`s = +1`) and the `channel-sin-walls` fixture
-/// (`s = -1`), 32 modes each, with `walls_margins` (2026-11-27, fifth session; the
-/// elimination of `omega` of `walls_check`): at ny = 1024, 13 and 6 of the
-/// 32 modes prove `3e-7` and none `1e-8`; at ny = 2048, 10 and 5 prove
-/// `3e-7`; at ny = 4096, 0 and 1 (the ladder starts at `9e-6` there). For
-/// `kolmogorov-periodic` (`s = -1`, 2026-11-28) modes 1 to 3 of 16 prove
-/// `3e-7` at ny = 1024, 2048 and 4096. The
-/// claim is the same kind
-/// either way (a verified bound, or none); only its width can differ, and
-/// the widest rung tried does not change.
+/// the modes that set the overall bound (every mode first proves the
+/// widest rung): the margin it can prove grows like `h^-2` (`walls_check`
+/// docs), so rungs that cannot succeed are skipped. The bottom up to
+/// [`BANDED_NARROWEST_UNKNOWNS`], `3e-7` up to 2048 unknowns, then one rung
+/// higher per doubling (the thresholds are those of ny, so that walls,
+/// `ny - 1` unknowns, and periodic grids, `ny`, start alike). Measured for `U = y^3 + y/2`
+/// (`s = +1`) and the `channel-sin-walls` fixture (`s = -1`), 32 modes
+/// each, with `walls_margins`: at ny = 1024, 13 and 6 of the 32 modes prove
+/// `3e-7` and none `1e-8`; at ny = 2048, 10 and 5 prove `3e-7`; at
+/// ny = 4096, 0 and 1 (the ladder starts at `9e-6` there). For
+/// `kolmogorov-periodic` (`s = -1`) modes 1 to 3 of 16 prove `3e-7` at
+/// ny = 1024, 2048 and 4096. The claim is the same kind either way (a
+/// verified bound, or none); only its width can differ, and the widest rung
+/// tried does not change.
 pub fn first_rung(unknowns: usize) -> usize {
     if unknowns <= BANDED_NARROWEST_UNKNOWNS {
         return 0;
@@ -576,22 +572,20 @@ pub fn first_rung(unknowns: usize) -> usize {
 /// The verified bound of one mode as the analysis first finds it:
 /// `verified_upper` with the check for its grid. The banded check
 /// ([`crate::walls_check`], `O(ny)`, about the exact pencil of the stored
-/// operators) tries the widest rung of the ladder, one check (since
-/// 2026-11-28: the modes that set the overall bound are narrowed afterwards
-/// by [`tighten_overall_bound`], from [`first_rung`]); only a mode it does
+/// operators) tries the widest rung of the ladder, one check (the modes
+/// that set the overall bound are narrowed afterwards by
+/// [`tighten_overall_bound`], from [`first_rung`]); only a mode it does
 /// not prove, on a walls grid of at most [`crate::modes::DENSE_FALLBACK_UNKNOWNS`]
 /// unknowns ([`Mode::dense_fallback`]), climbs the ladder with the dense
-/// check from the bottom. Periodic grids take the banded path since
-/// 2026-11-28 (sixth session), without the fallback; they used the dense
-/// check alone before.
+/// check from the bottom. Periodic grids take the banded path without the
+/// fallback ([`Mode::verify`]).
 /// Returns `(sigma2_upper, form_verified)`.
 ///
-/// Until 2026-11-27 (fifth session) every rung on a grid of up to 1023 unknowns that the
-/// banded check did not prove went to the dense check, which proves `1e-8`
-/// there: a narrower bound, at about 150 ms a mode at ny = 1024 against
-/// 5 ms for a banded rung, and a weaker claim (about `K` as computed,
-/// docs/fluids.md §5b). Now most modes at ny = 1024 prove `3e-7` or `9e-6`
-/// with the banded check alone.
+/// The dense check is not tried for each rung the banded check fails: it
+/// would prove `1e-8` there, a narrower bound, but at about 150 ms a mode
+/// at ny = 1024 against 5 ms for a banded rung, and with a weaker claim
+/// (about `K` as computed, docs/fluids.md §5b). Most modes at ny = 1024
+/// prove `3e-7` or `9e-6` with the banded check alone.
 pub fn verified_mode_bound(
     mode: &Mode,
     form: &Form,
@@ -916,11 +910,11 @@ mod tests {
     }
 
     /// The pipeline's overall bound against the one the ladder from
-    /// `first_rung` gives every mode with the banded check (the rule until
-    /// 2026-11-28, computed here mode by mode, independently of
-    /// `tighten_overall_bound`): equal, on walls (`s = -1`, where modes
-    /// prove rungs from `3e-7` to `2.7e-4` at ny = 1024) and periodic
-    /// grids, while most modes' own bounds are wider.
+    /// `first_rung` gives every mode with the banded check (computed here
+    /// mode by mode, independently of `tighten_overall_bound`): equal, on
+    /// walls (`s = -1`, where modes prove rungs from `3e-7` to `2.7e-4` at
+    /// ny = 1024) and periodic grids, while most modes' own bounds are
+    /// wider.
     #[test]
     fn the_narrowed_overall_bound_is_the_one_the_full_ladder_gives() {
         use crate::grid::Boundary;

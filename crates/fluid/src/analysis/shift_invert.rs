@@ -12,7 +12,7 @@
 //! `sigma` (ratio `|c_1 - sigma| / |c_2 - sigma|` a step), each step a
 //! banded solve: `O(n b^2)` to factor once and `O(n b)` a step, where the
 //! dense eigenvalues cost `O(n^3)` (ny = 2048: 4 s, 4096: 33 s; measured
-//! 2026-11-29 with `examples/instability_rates.rs`).
+//! with `examples/instability_rates.rs`).
 //!
 //! Written here rather than taken from a crate for the reason of
 //! [`crate::banded`]: a complex banded LU with partial pivoting is forty

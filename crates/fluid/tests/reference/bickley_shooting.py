@@ -11,7 +11,7 @@ to every printed digit, and rtol 1e-10, 1e-12, 1e-13 agree to 1e-12.
 A second-order finite-difference generalised eigenproblem on 1024, 2048,
 4096 intervals gives k Im c = 0.0220997, 0.02209219, 0.02209203 at k = 1.9.
 
-Output (2026-11-29, numpy 2.4.6, scipy 1.17.1):
+Output (numpy 2.4.6, scipy 1.17.1):
 k 1.9   c = 0.6496547050780082+0.011627338319323938j  k Im c = 2.2091942807e-02
 k 1.95  c = 0.6581965386199845+0.00567832877183954j   k Im c = 1.1072741105e-02
 k 1.99  c = 0.664978389930108+0.0011138705081814519j  k Im c = 2.2166023113e-03

@@ -356,7 +356,7 @@ fn the_nonlinear_scheme_grows_at_the_certified_rate() {
     assert!((ratio - 4.0).abs() <= 0.5, "error ratio {ratio}");
     let tolerance = 1e-4 * certified;
     assert!((extrapolated - certified).abs() <= tolerance);
-    let at_128 = 0.141_215_173_850_768; // analyse at N = 128 (docs/zeitlin.md's survey: 0.14122)
+    let at_128 = 0.141_215_173_850_768; // analyse at N = 128 (docs/zeitlin.md, "Convergence in N": 0.141215)
     assert!((extrapolated - at_128).abs() > tolerance);
 
     // With zonal noise: reported, not asserted beyond conservation.
@@ -397,9 +397,9 @@ fn the_nonlinear_scheme_grows_at_the_certified_rate() {
 /// second variation itself is constant along the path, to the cubic
 /// remainder, at most of order `max |w_jk| / min |d omega|`, about `1e-4`
 /// here (a crude bound: `8.2e-10` is measured), while `|w|` moves by 5%.
-/// (N = 48, not 64 as until 2026-11-27: the same claims hold, `kappa`
-/// 1.829, and the test takes 14 s instead of 70 s in the debug build; the
-/// fixed-point solve's complex products dominate.)
+/// (N = 48 rather than 64: the same claims hold, `kappa` 1.829, and the
+/// test takes 14 s instead of 70 s in the debug build; the fixed-point
+/// solve's complex products dominate.)
 ///
 /// Also along the path: `tr H^2`, `tr H^3` and `J` are constant to 1e-12
 /// relative (as in test 3), and the perturbation does move (its norm varies
