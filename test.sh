@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's test command: the Rust test suite, then the Python package's.
 #
-# The Python part builds the extension (python/, PyO3 + maturin, abi3) into a
+# The Python part builds the extension (python/, PyO3 + maturin, abi3; the
+# dev profile, on the crates the Rust tests built) into a
 # private virtual environment under target/python-venv, installing maturin,
 # pytest, numpy and matplotlib (for examples/rigid_body.py) there from PyPI
 # when they are missing, and runs the pytest suite (python/tests) and the
@@ -34,11 +35,12 @@ fi
 if ! "$venv/bin/python" -c 'import maturin, pytest, numpy, matplotlib' 2>/dev/null; then
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "maturin>=1.9,<2" "pytest>=7" numpy matplotlib
 fi
-# One target folder for both workspaces: the engine's crates built in
-# release for `verify` are reused by the extension.
+# One target folder for both workspaces, and the extension built in the dev
+# profile (python/Cargo.toml repeats the root's): the engine's crates that
+# `cargo test` built are reused, so no release build is needed here.
 export CARGO_TARGET_DIR="$PWD/target"
 part "Python environment ready"
-VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --release --quiet -m python/Cargo.toml
-part "extension built (maturin, release)"
+VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --quiet -m python/Cargo.toml
+part "extension built (maturin, dev profile)"
 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests --doctest-modules --pyargs energy_casimir
 part "pytest done"

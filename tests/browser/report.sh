@@ -27,9 +27,9 @@ if [ -z "$browser" ]; then
     exit 0
   fi
 fi
-cargo build --quiet --release -p verify
+cargo build --quiet -p verify
 mapfile -t certs < <(find fixtures -name '*.cert.json' | sort)
-./target/release/verify report "${certs[@]}" -o "$out/report.html"
+./target/debug/verify report "${certs[@]}" -o "$out/report.html"
 page="file://$PWD/$out/report.html"
 # Chromium's own background traffic (updates, sync, accounts) is switched
 # off where flags allow; what remains goes nowhere, through the dead proxy.
