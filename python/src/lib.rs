@@ -49,12 +49,37 @@ fn error_with<E: pyo3::PyTypeInfo>(py: Python<'_>, text: String, attributes: &[(
     err
 }
 
-fn spec_error(py: Python<'_>, e: &spec::SpecError) -> PyErr {
-    error_with::<SpecError>(py, e.to_string(), &[("path", &e.path), ("message", &e.message)])
+/// A `SpecError`; `has_base` says whether the caller gave a folder. A spec
+/// given as a dict or JSON text has none, so a file it names (a Zeitlin
+/// field's `.npy`) is read from the current folder; the message then says
+/// how to name the folder from Python.
+fn spec_error(py: Python<'_>, e: &spec::SpecError, has_base: bool) -> PyErr {
+    let mut message = e.message.clone();
+    if !has_base && names_a_file(&e.path) {
+        message.push_str(BASE_DIR_HINT);
+    }
+    let text = format!("{}: {message}", e.path);
+    error_with::<SpecError>(py, text, &[("path", &e.path), ("message", &message)])
 }
 
-fn check_error(py: Python<'_>, e: &spec::CheckError) -> PyErr {
+/// What a file-reading error says when the spec came without a folder.
+const BASE_DIR_HINT: &str = "; a spec given as a dict or JSON text has no folder of its own, so its files are read from the current folder: pass base_dir= the folder that holds them (e.g. certify(spec, base_dir=\"specs/\"); every function that takes a spec accepts base_dir=), or give the spec file's path";
+
+/// Whether a JSON path is that of a field naming a file (a `.npy`).
+fn names_a_file(path: &str) -> bool {
+    path.ends_with(".npy")
+}
+
+fn check_error(py: Python<'_>, e: &spec::CheckError, has_base: bool) -> PyErr {
     match e {
+        spec::CheckError::BadInput(s) if !has_base && names_a_file(&s.path) => {
+            let message = format!("{}{BASE_DIR_HINT}", s.message);
+            error_with::<CheckError>(
+                py,
+                format!("{}: {message}", s.path),
+                &[("path", &s.path), ("message", &message), ("kind", "bad_input")],
+            )
+        }
         spec::CheckError::BadInput(s) => error_with::<CheckError>(
             py,
             e.to_string(),
@@ -89,7 +114,9 @@ fn certify_text(
     base: Option<PathBuf>,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<String> {
-    let spec = py.detach(move || spec::parse_any_spec_in(&text, base.as_deref())).map_err(|e| spec_error(py, &e))?;
+    let has_base = base.is_some();
+    let spec =
+        py.detach(move || spec::parse_any_spec_in(&text, base.as_deref())).map_err(|e| spec_error(py, &e, has_base))?;
     let state = Progress::new();
     if matches!(spec, spec::AnySpec::Lie(_)) && progress.is_none() {
         // Finite-dimensional systems certify in micro- to milliseconds:
@@ -120,7 +147,7 @@ fn check_text(
         interruptible(py, progress.as_ref(), &state, || spec::check_certificate_with(&text, base.as_deref(), &state))?;
     match out {
         Ok(r) => Ok((r.name, r.verdict.as_str().to_string(), r.level.map(|l| l.as_str().to_string()), r.sigma2)),
-        Err(e) => Err(check_error(py, &e)),
+        Err(e) => Err(check_error(py, &e, base.is_some())),
     }
 }
 
@@ -129,8 +156,9 @@ fn check_text(
 #[pyfunction]
 #[pyo3(signature = (text, base=None))]
 fn validate_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<()> {
+    let has_base = base.is_some();
     let out = py.detach(move || spec::parse_any_spec_in(&text, base.as_deref()).map(|_| ()));
-    out.map_err(|e| spec_error(py, &e))
+    out.map_err(|e| spec_error(py, &e, has_base))
 }
 
 /// `T(eps, delta) = ln(eps/delta) / Sigma^2`, rounded down (a guarantee), or
@@ -171,7 +199,7 @@ fn simulate_text(
     let scheme = simulate::Scheme::from_name(scheme)
         .ok_or_else(|| PyValueError::new_err(format!("scheme: {scheme:?} is not 'lie' or 'heun'")))?;
     let spec =
-        match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))? {
+        match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
             spec::AnySpec::Lie(s) => s,
             spec::AnySpec::Fluid(_) => {
                 return Err(PyValueError::new_err(
@@ -254,7 +282,7 @@ fn simulate_fluid_text(
     force: bool,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<String> {
-    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))? {
+    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
         spec::AnySpec::Fluid(s) => s,
         _ => return Err(PyValueError::new_err("simulate_fluid runs fluid specs; use simulate for the others")),
     };
@@ -477,7 +505,7 @@ fn sweep_text(
     shard: Option<String>,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<(Vec<String>, SweepColumns)> {
-    let spec = spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e))?;
+    let spec = spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))?;
     let ranges: Vec<spec::ParamRange> = if params.is_empty() {
         spec.sweep().ranges.clone()
     } else {

@@ -23,6 +23,7 @@ mod fluid_scale;
 mod large;
 mod library;
 mod moments;
+mod newcomer;
 mod no_panic;
 mod numeric_level;
 mod output_paths;

@@ -86,6 +86,7 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
             n.replace("forcing runs it", "--force runs it")
                 .replace("smaller ny", "smaller --ny")
                 .replace("shorter t_end", "shorter --t-end")
+                .replace("ask for t_end ", "pass --t-end ")
         );
         match &bar {
             Some(bar) => bar.suspend(|| eprintln!("{line}")),
@@ -128,6 +129,8 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         exact_over_bound,
         agreeing,
         paper_exceeded_at,
+        estimated_seconds,
+        run_seconds,
     } = run;
     let records = times.len();
     let report = &report;
@@ -196,10 +199,12 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
 
     // Summary.
     eprintln!(
-        "{name}: x-mode {m} (k = {}) at ny = {ny} ({} unknowns): {paths} paths x {steps} steps of {}; outputs in {}",
+        "{name}: x-mode {m} (k = {}) at ny = {ny} ({} unknowns): {paths} paths x {steps} steps of {} in {:.1} s (estimated {:.1} s); outputs in {}",
         num(k),
         unknowns,
         num(dt),
+        run_seconds,
+        estimated_seconds,
         dir.display()
     );
     eprintln!(

@@ -71,7 +71,7 @@ enum Command {
     Certify {
         /// The spec (JSON).
         spec: PathBuf,
-        /// Write the certificate here instead of stdout.
+        /// Write the certificate to this file instead of stdout (`-o -` is stdout).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
@@ -88,7 +88,7 @@ enum Command {
         /// Largest number of sub-boxes analysed (default 4096).
         #[arg(long)]
         max_boxes: Option<u64>,
-        /// Write the certificate here instead of stdout.
+        /// Write the certificate to this file instead of stdout (`-o -` is stdout).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
@@ -213,7 +213,7 @@ fn emit(cert: &Value, output: Option<&Path>) -> Result<(), Failure> {
     match output {
         // Atomic: a failed write (a full disk) leaves no partial certificate
         // and keeps an existing one.
-        Some(path) => paths::write_atomic(path, pretty.as_bytes()).map_err(|e| paths::write_failure(path, &e))?,
+        Some(path) => paths::write_output(path, pretty.as_bytes()).map_err(|e| paths::write_failure(path, &e))?,
         None => print!("{pretty}"),
     }
     eprintln!("{}", summary(cert));
@@ -332,6 +332,9 @@ fn summary(cert: &Value) -> String {
     if let Some(t) = cert.pointer("/theorem/not_checked").and_then(Value::as_str) {
         s.push_str(&format!("\n  not checked: {t}"));
     }
+    if let Some(line) = compatible_noise_line(cert) {
+        s.push_str(&line);
+    }
     if let Some(list) = cert.pointer("/compressible/compatible_completion") {
         s.push_str(&format!("\n  compatible noise (paste as fluid.noise): {list}"));
     }
@@ -342,6 +345,47 @@ fn summary(cert: &Value) -> String {
         }
     }
     s
+}
+
+/// For incompatible noise in a finite-dimensional certificate, the noise
+/// that would be compatible: a basis of the isotropy algebra of `mu_e`
+/// (`noise.isotropy_basis`; every `sigma` with `ad*_sigma mu_e = 0` is a
+/// combination of these), as rows of components on `e_a` that paste into
+/// the spec's `noise`. Integers are written as numbers, other rationals as
+/// strings (`"3/10"`), as a spec writes them.
+fn compatible_noise_line(cert: &Value) -> Option<String> {
+    if cert.get("verdict").and_then(Value::as_str) != Some("noise_incompatible") {
+        return None;
+    }
+    let basis = cert.pointer("/noise/isotropy_basis")?.as_array()?;
+    if basis.is_empty() {
+        return Some(
+            "\n  compatible noise: none (the isotropy algebra of mu_e is {0}: only sigma = 0 keeps mu_e)".into(),
+        );
+    }
+    let entry = |x: &Value| match x.as_str() {
+        Some(t) if t.parse::<i64>().is_ok() => t.to_string(),
+        Some(t) => format!("\"{t}\""),
+        None => x.to_string(),
+    };
+    let rows: Vec<String> = basis
+        .iter()
+        .map(|row| format!("[{}]", row.as_array().map_or(vec![], |r| r.iter().map(entry).collect()).join(", ")))
+        .collect();
+    let coordinates: Vec<&str> = cert
+        .get("coordinates")
+        .and_then(Value::as_array)
+        .map_or(vec![], |c| c.iter().filter_map(Value::as_str).collect());
+    let on = if coordinates.is_empty() {
+        "components on the basis e_a".to_string()
+    } else {
+        format!("components on e_a, a = {}", coordinates.join(", "))
+    };
+    Some(messages::cut_message(&format!(
+        "\n  compatible noise (ad*_sigma mu_e = 0): the combinations of these {} element(s), a basis of the isotropy algebra of mu_e ({on}; paste rows as noise): [{}]",
+        rows.len(),
+        rows.join(", ")
+    )))
 }
 
 /// Whether `text` is a spec rather than a certificate: a JSON object with

@@ -26,7 +26,7 @@
 //! The output has the lines in index order, written atomically.
 
 use crate::messages::excerpt;
-use crate::paths::{check_output_file, ensure_output_dir, write_atomic};
+use crate::paths::{check_one_stdout, check_output_file, ensure_output_dir, is_stdout, shown, write_output};
 use crate::sweep_cmd::{planned, PlanArgs, PlannedSweep};
 use crate::Failure;
 use clap::Args;
@@ -44,17 +44,18 @@ pub struct MergeArgs {
     /// the next option, so give SPEC before `--lines`.
     #[arg(long = "lines", value_name = "FILE", required = true, num_args = 1..)]
     pub lines: Vec<PathBuf>,
-    /// The merged file.
+    /// The merged file (`-o -`: stdout).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Also draw the charts of the merged sweep into this directory.
+    /// Also draw the charts of the merged sweep into this directory (needs
+    /// -o FILE: the charts are drawn from it).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Also write the merged sweep as numpy arrays (`numpy.load`): `index`,
     /// one array per parameter, `sigma2` and `T` (NaN where absent, inf for
     /// an infinite T), and `verdict_code` (0 stable, 1 linearly_unstable,
     /// 2 inconclusive, 3 not_an_equilibrium, 4 noise_incompatible, -1 an
-    /// invalid point).
+    /// invalid point). `--npz -` writes the archive to stdout.
     #[arg(long, value_name = "FILE")]
     pub npz: Option<PathBuf>,
     /// Certify every point again and refuse a line whose results (verdict,
@@ -72,10 +73,16 @@ fn bad(m: impl Into<String>) -> Failure {
 pub fn run(args: &MergeArgs) -> Result<(), Failure> {
     check_output_file(&args.output, "-o")?;
     if let Some(dir) = &args.plot {
+        if is_stdout(&args.output) {
+            return Err(bad(
+                "--plot draws the charts from -o FILE: with -o - the merged lines go to standard output; name a file",
+            ));
+        }
         ensure_output_dir(dir, "--plot")?;
     }
     if let Some(npz) = &args.npz {
         check_output_file(npz, "--npz")?;
+        check_one_stdout(npz, "--npz", &args.output, "-o")?;
         crate::paths::check_distinct(npz, "--npz", &args.output, "-o")?;
         for input in &args.lines {
             crate::paths::check_distinct(npz, "--npz", input, "--lines")?;
@@ -230,15 +237,15 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
         let verdict = v.get("verdict").and_then(Value::as_str).unwrap_or("error");
         *verdicts.entry(verdict.to_string()).or_default() += 1;
     }
-    write_atomic(&args.output, text.as_bytes())
-        .map_err(|e| Failure::Failed(format!("-o {}: cannot write: {e}", args.output.display())))?;
+    write_output(&args.output, text.as_bytes())
+        .map_err(|e| Failure::Failed(format!("-o {}: cannot write: {e}", shown(&args.output))))?;
     let counts: Vec<String> = verdicts.iter().map(|(v, c)| format!("{v} {c}")).collect();
     eprintln!(
         "merged sweep {id}: {} files, {} points ({}) into {}{}",
         args.lines.len(),
         points.len(),
         counts.join(", "),
-        args.output.display(),
+        shown(&args.output),
         if dropped > 0 { format!("; {dropped} repeated lines dropped") } else { String::new() }
     );
     eprintln!(
@@ -251,7 +258,7 @@ pub fn run(args: &MergeArgs) -> Result<(), Failure> {
     );
     if let Some(path) = &args.npz {
         crate::npz_out::write_sweep_columns(path, evaluator.names(), points.values().map(|(line, _)| line.as_str()))
-            .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", path.display())))?;
+            .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", shown(path))))?;
     }
     if let Some(dir) = &args.plot {
         crate::sweep_plots::plot_files(std::slice::from_ref(&args.output), &args.plan.spec, dir, None, None)?;

@@ -53,11 +53,26 @@ pub fn write_json_arrays(path: &Path, report: &Value) -> std::io::Result<()> {
 /// `index`, one array per parameter, `sigma2`, `T` (NaN where absent, inf
 /// for an infinite `T`) and `verdict_code` (0 stable, 1 linearly_unstable,
 /// 2 inconclusive, 3 not_an_equilibrium, 4 noise_incompatible, -1 invalid).
+/// `path` `-` is standard output (the archive is built in memory first: a
+/// ZIP file is written with seeks).
 pub fn write_sweep_columns<'a>(
     path: &std::path::Path,
     names: &[String],
     lines: impl Iterator<Item = &'a str>,
 ) -> std::io::Result<()> {
+    if crate::paths::is_stdout(path) {
+        let archive = npz::NpzWriter::new(std::io::Cursor::new(Vec::new()));
+        let bytes = sweep_columns(archive, names, lines)?.into_inner();
+        return crate::paths::write_output(path, &bytes);
+    }
+    sweep_columns(npz::NpzWriter::create(path)?, names, lines).map(|_| ())
+}
+
+fn sweep_columns<'a, W: std::io::Write + std::io::Seek>(
+    mut out: npz::NpzWriter<W>,
+    names: &[String],
+    lines: impl Iterator<Item = &'a str>,
+) -> std::io::Result<W> {
     const VERDICTS: [&str; 5] =
         ["stable", "linearly_unstable", "inconclusive", "not_an_equilibrium", "noise_incompatible"];
     let number = |v: Option<&Value>| match v {
@@ -79,7 +94,6 @@ pub fn write_sweep_columns<'a>(
         code.push(VERDICTS.iter().position(|v| *v == verdict).map_or(-1, |k| k as i64));
     }
     let n = [index.len() as u64];
-    let mut out = npz::NpzWriter::create(path)?;
     out.add_i64("index", &n, &index)?;
     for (column, name) in params.iter().zip(names) {
         out.add_f64(name, &n, column)?;
@@ -87,5 +101,5 @@ pub fn write_sweep_columns<'a>(
     out.add_f64("sigma2", &n, &sigma2)?;
     out.add_f64("T", &n, &t)?;
     out.add_i64("verdict_code", &n, &code)?;
-    out.finish().map(|_| ())
+    out.finish()
 }

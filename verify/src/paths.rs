@@ -2,6 +2,11 @@
 //! `name`), the checks on output files and directories named on the command
 //! line, and atomic whole-file writes.
 //!
+//! An output *file* named `-` ([`STDOUT`]: `-o -`, `--npz -`) is standard
+//! output, as in most Unix tools; an output *directory* named `-` (`--out`,
+//! `--plot`) is refused ([`ensure_output_dir`]): several files cannot go to
+//! one stream, and a directory literally named `-` is never what was meant.
+//!
 //! A name is data, never a path: [`file_stem`] maps any string to a stem that
 //! cannot leave the output directory, whatever it holds (`../x`, `/abs/x`,
 //! NUL, a 50 MB string).
@@ -63,10 +68,53 @@ pub fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
+/// The name of standard output where the command line names an output file.
+pub const STDOUT: &str = "-";
+
+/// Whether an output file named on the command line is [`STDOUT`].
+pub fn is_stdout(path: &Path) -> bool {
+    path.as_os_str() == STDOUT
+}
+
+/// Write a whole output named on the command line: to standard output for
+/// [`STDOUT`], else atomically to the file ([`write_atomic`]).
+pub fn write_output(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    if is_stdout(path) {
+        let mut out = io::stdout().lock();
+        out.write_all(bytes)?;
+        out.flush()
+    } else {
+        write_atomic(path, bytes)
+    }
+}
+
+/// How an output file named on the command line is shown in messages.
+pub fn shown(path: &Path) -> String {
+    if is_stdout(path) {
+        "standard output".to_string()
+    } else {
+        path.display().to_string()
+    }
+}
+
+/// Refuse [`STDOUT`] for a second output (`flag`) when `other` (shown as
+/// `other_flag`) goes there too: two files cannot share one stream.
+pub fn check_one_stdout(path: &Path, flag: &str, other: &Path, other_flag: &str) -> Result<(), Failure> {
+    if is_stdout(path) && is_stdout(other) {
+        return Err(Failure::BadInput(format!(
+            "{flag} - and {other_flag} -: only one output can go to standard output; name a file for the other"
+        )));
+    }
+    Ok(())
+}
+
 /// Check an output file named on the command line (`flag FILE`) before any
 /// work: its directory must exist (it is not created), and it must not be a
-/// directory. Both are bad input (exit status 2).
+/// directory. Both are bad input (exit status 2). [`STDOUT`] passes.
 pub fn check_output_file(path: &Path, flag: &str) -> Result<(), Failure> {
+    if is_stdout(path) {
+        return Ok(());
+    }
     if path.is_dir() {
         return Err(Failure::BadInput(format!("{flag} {}: is a directory, not a file", path.display())));
     }
@@ -105,6 +153,11 @@ pub fn check_distinct(path: &Path, flag: &str, other: &Path, other_flag: &str) -
 /// It must also be writable, checked with a probe file, so that a long
 /// computation does not end in a failed write.
 pub fn ensure_output_dir(path: &Path, flag: &str) -> Result<(), Failure> {
+    if is_stdout(path) {
+        return Err(Failure::BadInput(format!(
+            "{flag} -: {flag} names a directory for several files, which cannot go to standard output; name a directory (`{flag} ./-` if you really mean one called '-')"
+        )));
+    }
     std::fs::create_dir_all(path).map_err(|e| {
         Failure::BadInput(format!("{flag} {}: cannot create the output directory: {e}", path.display()))
     })?;
@@ -125,6 +178,9 @@ pub fn ensure_output_dir(path: &Path, flag: &str) -> Result<(), Failure> {
 /// I/O error) is a failure (exit status 1).
 pub fn write_failure(path: &Path, e: &io::Error) -> Failure {
     use io::ErrorKind::*;
+    if is_stdout(path) {
+        return Failure::Failed(format!("standard output: cannot write: {e}"));
+    }
     let message = format!("{}: cannot write: {e} (nothing was written; an existing file is unchanged)", path.display());
     match e.kind() {
         PermissionDenied | NotFound | IsADirectory | NotADirectory | ReadOnlyFilesystem | InvalidInput => {

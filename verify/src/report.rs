@@ -13,7 +13,7 @@
 //! is escaped (names are data).
 
 use crate::messages::cut_message;
-use crate::paths::write_atomic;
+use crate::paths::write_output;
 use crate::plots::{xy_svg, XyChart};
 use crate::table::format_number;
 use crate::Failure;
@@ -27,7 +27,7 @@ pub struct ReportArgs {
     /// Certificates (JSON).
     #[arg(required = true)]
     pub certificates: Vec<PathBuf>,
-    /// The HTML file to write.
+    /// The HTML file to write (`-o -`: stdout).
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -333,8 +333,8 @@ pub fn run(args: &ReportArgs) -> Result<(), Failure> {
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src 'unsafe-inline'\"><title>Stability certificates</title><style>{STYLE}</style></head><body><h1>Stochastic energy–Casimir stability certificates</h1><p>Engine {}. Each certificate below was re-checked when this page was written.</p>{summary}{body}</body></html>\n",
         escape(spec::ENGINE_VERSION)
     );
-    write_atomic(&args.output, html.as_bytes()).map_err(|e| crate::paths::write_failure(&args.output, &e))?;
-    eprintln!("wrote {} ({} certificate(s))", args.output.display(), args.certificates.len());
+    write_output(&args.output, html.as_bytes()).map_err(|e| crate::paths::write_failure(&args.output, &e))?;
+    eprintln!("wrote {} ({} certificate(s))", crate::paths::shown(&args.output), args.certificates.len());
     if failed > 0 {
         return Err(Failure::Failed(format!(
             "{failed} certificate(s) failed their re-check (marked FAILED in the report)"

@@ -22,7 +22,10 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
     pub dt: f64,
     /// Final time (default: 8 T(eps, delta) for a stable spec, within [1, 200],
-    /// long enough to see the passage to the ergodic regime; else 20).
+    /// long enough to see the passage to the ergodic regime; else 20. For a
+    /// fluid spec: one growth time 1/Sigma_k^2, where the certified bound
+    /// has grown by e, at least 1, shortened with a note to what about 2
+    /// minutes of computation reach; 10 when Sigma_k^2 = 0).
     #[arg(long, allow_negative_numbers = true)]
     pub t_end: Option<f64>,
     /// Coordinate whose distribution is plotted (default: the first coordinate

@@ -2,7 +2,7 @@
 //! parameters, one JSON line per point, resumable and shardable.
 
 use crate::messages::{excerpt, quoting};
-use crate::paths::{check_output_file, ensure_output_dir};
+use crate::paths::{check_output_file, ensure_output_dir, is_stdout, shown};
 use crate::{read, Failure};
 use clap::Args;
 use spec::{parse_any_spec_in, ParamRange};
@@ -48,20 +48,22 @@ pub struct SweepArgs {
     /// machines or Slurm array tasks; `verify merge` joins the outputs).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
-    /// Write the lines here (default: stdout).
+    /// Write the lines to this file (default, and with `-o -`: stdout).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Keep the complete lines already in --output and compute only the
-    /// missing points.
+    /// missing points (needs -o FILE).
     #[arg(long, requires = "output")]
     pub resume: bool,
-    /// After the sweep, draw the charts into this directory (needs --output).
+    /// After the sweep, draw the charts into this directory (needs -o FILE:
+    /// the charts are drawn from it).
     #[arg(long, requires = "output")]
     pub plot: Option<PathBuf>,
     /// After the sweep, also write its lines (all of --output, in index
     /// order) as numpy arrays: `index`, one per parameter, `sigma2`, `T`,
     /// `verdict_code` (0 stable, 1 linearly_unstable, 2 inconclusive,
-    /// 3 not_an_equilibrium, 4 noise_incompatible, -1 invalid).
+    /// 3 not_an_equilibrium, 4 noise_incompatible, -1 invalid). Needs
+    /// -o FILE (read back); `--npz -` writes the archive to stdout.
     #[arg(long, value_name = "FILE", requires = "output")]
     pub npz: Option<PathBuf>,
 }
@@ -161,10 +163,20 @@ fn open_locked(path: &Path, resume: bool, id: &str, len: u64) -> Result<(File, D
 
 /// Run `verify sweep`.
 pub fn run(args: &SweepArgs) -> Result<(), Failure> {
+    // `-o -` is stdout; what reads the output back needs a file.
+    let output = args.output.as_deref().filter(|p| !is_stdout(p));
+    if args.output.is_some() && output.is_none() {
+        let needs = [(args.resume, "--resume"), (args.plot.is_some(), "--plot"), (args.npz.is_some(), "--npz")];
+        if let Some((_, flag)) = needs.iter().find(|(given, _)| *given) {
+            return Err(bad(format!(
+                "{flag} reads the sweep's lines back from -o FILE: with -o - they go to standard output; name a file"
+            )));
+        }
+    }
     if let Some(dir) = &args.plot {
         ensure_output_dir(dir, "--plot")?;
     }
-    if let (Some(npz), Some(out)) = (&args.npz, &args.output) {
+    if let (Some(npz), Some(out)) = (&args.npz, output) {
         // Checked before the sweep runs: a bad name must not cost the sweep.
         check_output_file(npz, "--npz")?;
         crate::paths::check_distinct(npz, "--npz", out, "-o")?;
@@ -175,7 +187,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         None => Shard::ALL,
     };
 
-    let (mut sink, done): (Box<dyn Write + Send>, Done) = match &args.output {
+    let (mut sink, done): (Box<dyn Write + Send>, Done) = match output {
         None => (Box::new(std::io::stdout()), Done::none()),
         Some(path) => {
             let (file, done) = open_locked(path, args.resume, &id, plan.len())?;
@@ -209,7 +221,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     if summary.outside_domain > 0 {
         eprintln!("  {} points lie outside the spec's sweep domain (no line)", summary.outside_domain);
     }
-    if let (Some(npz), Some(out)) = (&args.npz, &args.output) {
+    if let (Some(npz), Some(out)) = (&args.npz, output) {
         let text = read(out)?;
         let mut lines: Vec<(u64, &str)> = text
             .lines()
@@ -217,10 +229,10 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             .collect();
         lines.sort_by_key(|(i, _)| *i);
         crate::npz_out::write_sweep_columns(npz, evaluator.names(), lines.into_iter().map(|(_, l)| l))
-            .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", npz.display())))?;
+            .map_err(|e| Failure::Failed(format!("--npz {}: cannot write: {e}", shown(npz))))?;
     }
-    if let (Some(dir), Some(out)) = (&args.plot, &args.output) {
-        crate::sweep_plots::plot_files(std::slice::from_ref(out), &args.plan.spec, dir, None, None)?;
+    if let (Some(dir), Some(out)) = (&args.plot, output) {
+        crate::sweep_plots::plot_files(&[out.to_path_buf()], &args.plan.spec, dir, None, None)?;
     }
     if summary.invalid > 0 {
         return Err(bad(format!(

@@ -292,8 +292,47 @@ impl BarotropicSde {
         run: &StrangRun,
         ticks: Ticks<'_>,
     ) -> Result<Vec<EnsembleRow>, Cancelled> {
-        let n = self.n();
+        self.ensemble_from(&self.drift_propagator(run.dt / 2.0), x0, run, ticks)
+    }
+
+    /// Wall-clock seconds of a run of [`Self::ensemble`] of these sizes:
+    /// `(setup, stepping)`, the drift propagator's once per run and the
+    /// paths' steps (on the thread pool, as a run takes them).
+    pub(crate) fn time_ensemble(&self, x0: &DVector<C>, run: &StrangRun) -> (f64, f64) {
+        let started = std::time::Instant::now();
         let half = self.drift_propagator(run.dt / 2.0);
+        let setup = started.elapsed().as_secs_f64();
+        let stepping = std::time::Instant::now();
+        // (a fresh `Progress` is never cancelled)
+        let _ = self.ensemble_from(&half, x0, run, Ticks { progress: &Progress::new(), weight: 1 });
+        (setup, stepping.elapsed().as_secs_f64())
+    }
+
+    /// Wall-clock seconds of the first Taylor step of
+    /// [`Self::exact_moments`] for `(t_end, samples)`. `None` when the run
+    /// has no step or too many.
+    pub(crate) fn time_taylor_step(&self, t_end: f64, samples: usize) -> Option<f64> {
+        if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
+            return None;
+        }
+        let dt = t_end / samples as f64;
+        let h = dt / self.taylor_steps(dt)? as f64;
+        let g = DMatrix::<C>::identity(self.n(), self.n());
+        // (the step count's singular values, once per run, are not timed)
+        let started = std::time::Instant::now();
+        self.taylor_step(&g, h, &Progress::new()).ok()?;
+        Some(started.elapsed().as_secs_f64())
+    }
+
+    /// The ensemble with the half-step drift propagator `half`.
+    fn ensemble_from(
+        &self,
+        half: &DMatrix<C>,
+        x0: &DVector<C>,
+        run: &StrangRun,
+        ticks: Ticks<'_>,
+    ) -> Result<Vec<EnsembleRow>, Cancelled> {
+        let n = self.n();
         let diag: Vec<Vec<C>> = self.b.iter().map(|b| (0..n).map(|i| b[(i, i)]).collect()).collect();
         let off: Vec<DMatrix<C>> = self
             .b
@@ -315,6 +354,6 @@ impl BarotropicSde {
                 z[i] *= e.exp();
             }
         };
-        strang_ensemble(x0, &half, self.b.len(), run, ticks, noise, |x| self.energy(x))
+        strang_ensemble(x0, half, self.b.len(), run, ticks, noise, |x| self.energy(x))
     }
 }

@@ -1,5 +1,5 @@
-//! Expressions in one variable `y` with `sin cos exp sqrt` and the constant
-//! `pi`, compiled to a tape (a straight-line program in which every
+//! Expressions in one variable `y` with `sin cos exp sqrt`, the hyperbolic
+//! `sinh cosh tanh sech` and the constant `pi`, compiled to a tape (a straight-line program in which every
 //! operation refers to earlier slots) and evaluated in three arithmetics:
 //!
 //! * `f64`, for values;
@@ -14,7 +14,11 @@
 //!
 //! Jet recurrences (coefficients `t_k` of `f(y + h) = sum_k t_k h^k`, so the
 //! k-th derivative is `k! t_k`), for `c = a b`, `a / b`, `exp a`, `sin a`,
-//! `cos a`, `sqrt a` (Griewank & Walther, *Evaluating Derivatives*, §13.2):
+//! `cos a`, `sqrt a` (Griewank & Walther, *Evaluating Derivatives*, §13.2),
+//! and the hyperbolic functions by the same method (each is the solution
+//! of a first-order ODE in `a`: `sinh' = cosh a'`, `cosh' = sinh a'`,
+//! `tanh' = sech^2 a'`, `sech' = -sech tanh a'`; matching the coefficients
+//! of `h^(k-1)` gives the `k`-th):
 //!
 //! ```text
 //! (ab)_k  = sum_{j<=k} a_j b_{k-j}
@@ -22,7 +26,17 @@
 //! e_k     = (1/k) sum_{1<=j<=k} j a_j e_{k-j}                     e = exp a
 //! s_k     = (1/k) sum j a_j c_{k-j},  c_k = -(1/k) sum j a_j s_{k-j}   s, c = sin a, cos a
 //! r_k     = (a_k - sum_{1<=j<k} r_j r_{k-j}) / (2 r_0)             r = sqrt a
+//! S_k     = (1/k) sum j a_j C_{k-j},  C_k = (1/k) sum j a_j S_{k-j}    S, C = sinh a, cosh a
+//! T_k     = (1/k) sum j a_j W_{k-j},  W = sech^2 a = 1 - T^2:
+//!           W_0 = sech(a_0)^2, W_k = -sum_{i<=k} T_i T_{k-i}           T = tanh a
+//! H_k     = -(1/k) sum j a_j (HT)_{k-j}                           H = sech a
 //! ```
+//!
+//! `W_0` is `sech(a_0)^2`, not `1 - tanh(a_0)^2`: at `a_0 = 20` the latter
+//! cancels to 0 in doubles while the former is `1.7e-17`. The hyperbolic
+//! functions of large arguments overflow (`cosh 711 = inf`): their jets
+//! are then infinite or NaN in `f64` (a value, not a proof), and in
+//! interval arithmetic infinite bounds, which prove nothing.
 //!
 //! Parameters are substituted by value and sub-expressions that do not
 //! depend on `y` are folded to numbers when parsed, so [`Expr::constant`] is
@@ -39,6 +53,9 @@ pub const MAX_LENGTH: usize = 10_000;
 /// Deepest nesting of parentheses, calls, unary signs and powers.
 pub const MAX_DEPTH: usize = 200;
 
+/// The names of the functions allowed, as a spec writes them.
+pub const FUNCTIONS: [&str; 8] = ["sin", "cos", "exp", "sqrt", "sinh", "cosh", "tanh", "sech"];
+
 /// The functions allowed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Func {
@@ -50,6 +67,14 @@ pub enum Func {
     Exp,
     /// `sqrt`.
     Sqrt,
+    /// `sinh`.
+    Sinh,
+    /// `cosh`.
+    Cosh,
+    /// `tanh`.
+    Tanh,
+    /// `sech = 1 / cosh`.
+    Sech,
 }
 
 /// One slot of the tape; operands are indices of earlier slots.
@@ -104,6 +129,10 @@ pub trait Scalar:
     fn exp(self) -> Self;
     /// `sqrt a`.
     fn sqrt(self) -> Self;
+    /// `(sinh a, cosh a)`.
+    fn sinh_cosh(self) -> (Self, Self);
+    /// `(tanh a, sech a)`.
+    fn tanh_sech(self) -> (Self, Self);
     /// `a^n`, `|n| <= 64`.
     fn powi(self, n: i32) -> Self;
 }
@@ -121,8 +150,27 @@ impl Scalar for f64 {
     fn sqrt(self) -> Self {
         f64::sqrt(self)
     }
+    fn sinh_cosh(self) -> (Self, Self) {
+        (self.sinh(), self.cosh())
+    }
+    fn tanh_sech(self) -> (Self, Self) {
+        (self.tanh(), sech(self))
+    }
     fn powi(self, n: i32) -> Self {
         f64::powi(self, n)
+    }
+}
+
+/// `sech x` in doubles: `1 / cosh x`, and `2 e^-|x|` past `|x| = 20`
+/// (where `sech x = 2 e^-|x| / (1 + e^-2|x|)` differs from it by a
+/// factor `1 - 4e-18`, below half an ulp), so that it does not drop to 0
+/// where `cosh` overflows (`sech 720 = 4.1e-313`, a subnormal).
+fn sech(x: f64) -> f64 {
+    let a = x.abs();
+    if a > 20.0 {
+        2.0 * (-a).exp()
+    } else {
+        1.0 / a.cosh()
     }
 }
 
@@ -138,6 +186,12 @@ impl Scalar for Interval {
     }
     fn sqrt(self) -> Self {
         Interval::sqrt(self)
+    }
+    fn sinh_cosh(self) -> (Self, Self) {
+        (Interval::sinh(self), Interval::cosh(self))
+    }
+    fn tanh_sech(self) -> (Self, Self) {
+        (Interval::tanh(self), Interval::sech(self))
     }
     fn powi(self, n: i32) -> Self {
         Interval::powi(self, n)
@@ -262,6 +316,51 @@ impl<T: Scalar> Scalar for Jet<T> {
         }
         Jet(r)
     }
+    fn sinh_cosh(self) -> (Self, Self) {
+        let a = self.0;
+        let (s0, c0) = a[0].sinh_cosh();
+        let mut s = [s0; 4];
+        let mut c = [c0; 4];
+        for k in 1..4 {
+            let (mut ss, mut cc) = (T::constant(0.0), T::constant(0.0));
+            for j in 1..=k {
+                let ja = a[j] * Self::c(j as f64);
+                ss = ss + ja * c[k - j];
+                cc = cc + ja * s[k - j];
+            }
+            s[k] = ss / Self::c(k as f64);
+            c[k] = cc / Self::c(k as f64);
+        }
+        (Jet(s), Jet(c))
+    }
+    fn tanh_sech(self) -> (Self, Self) {
+        let a = self.0;
+        let (t0, h0) = a[0].tanh_sech();
+        // t = tanh a, w = 1 - t^2 = sech^2 a, h = sech a, u = h t
+        let mut t = [t0; 4];
+        let mut w = [h0.powi(2); 4];
+        let mut h = [h0; 4];
+        let mut u = [h0 * t0; 4];
+        for k in 1..4 {
+            let (mut tt, mut hh) = (T::constant(0.0), T::constant(0.0));
+            for j in 1..=k {
+                let ja = a[j] * Self::c(j as f64);
+                tt = tt + ja * w[k - j];
+                hh = hh + ja * u[k - j];
+            }
+            t[k] = tt / Self::c(k as f64);
+            h[k] = -(hh / Self::c(k as f64));
+            // w_k = -(t t)_k and u_k = (h t)_k, now that t_k and h_k are known
+            let (mut tt2, mut ht) = (t[0] * t[k], h[0] * t[k]);
+            for i in 1..=k {
+                tt2 = tt2 + t[i] * t[k - i];
+                ht = ht + h[i] * t[k - i];
+            }
+            w[k] = -tt2;
+            u[k] = ht;
+        }
+        (Jet(t), Jet(h))
+    }
     fn powi(self, n: i32) -> Self {
         // Repeated squaring (at most 12 products for |n| <= 64): exact zeros
         // stay zeros, so y^2 has third derivative 0, not 0 * y^-1.
@@ -285,7 +384,8 @@ impl<T: Scalar> Scalar for Jet<T> {
 }
 
 /// The language of functions of `y`: numbers and parameters are doubles,
-/// `y` and `pi` are known, `sin cos exp sqrt` may be called, exponents are
+/// `y` and `pi` are known, `sin cos exp sqrt sinh cosh tanh sech` may be
+/// called, exponents are
 /// constant integers in `[-64, 64]`. Each construct becomes a slot of the
 /// tape, folded to a number when its operands are numbers.
 struct Tape<'a> {
@@ -307,6 +407,11 @@ struct Tape<'a> {
 /// let d = e.derivatives(y)[1];
 /// assert!((d - (4.0 * (2.0 * y).cos() * (2.0 * y).sin() - (-y).exp() / 2.0)).abs() < 1e-14);
 /// assert!(parse("log(y)", &Default::default()).unwrap_err().message.contains("unknown function 'log'"));
+/// // the hyperbolic functions: the Bickley jet sech(y)^2 is d/dy tanh(y)
+/// let bickley = parse("sech(y)^2", &Default::default()).unwrap();
+/// let tanh = parse("tanh(y)", &Default::default()).unwrap();
+/// assert!((bickley.eval(y) - tanh.derivatives(y)[1]).abs() < 1e-15);
+/// assert!((bickley.eval(y) - 4.0 / (y.exp() + (-y).exp()).powi(2)).abs() < 1e-15);
 /// ```
 pub fn parse(text: &str, params: &BTreeMap<String, f64>) -> Result<Expr, ExprError> {
     parse_in(text, "y", params)
@@ -373,6 +478,10 @@ fn apply(f: Func, x: f64) -> f64 {
         Func::Cos => x.cos(),
         Func::Exp => x.exp(),
         Func::Sqrt => x.sqrt(),
+        Func::Sinh => x.sinh(),
+        Func::Cosh => x.cosh(),
+        Func::Tanh => x.tanh(),
+        Func::Sech => sech(x),
     }
 }
 
@@ -449,7 +558,11 @@ impl Semantics for Tape<'_> {
             "cos" => Ok(Func::Cos),
             "exp" => Ok(Func::Exp),
             "sqrt" => Ok(Func::Sqrt),
-            _ => err(format!("unknown function '{}' (allowed: sin, cos, exp, sqrt)", exact::quote(name, 40)), at),
+            "sinh" => Ok(Func::Sinh),
+            "cosh" => Ok(Func::Cosh),
+            "tanh" => Ok(Func::Tanh),
+            "sech" => Ok(Func::Sech),
+            _ => err(format!("unknown function '{}' (allowed: {})", exact::quote(name, 40), FUNCTIONS.join(", ")), at),
         }
     }
 
@@ -520,6 +633,10 @@ impl Expr {
                         Func::Cos => x.sin_cos().1,
                         Func::Exp => x.exp(),
                         Func::Sqrt => x.sqrt(),
+                        Func::Sinh => x.sinh_cosh().0,
+                        Func::Cosh => x.sinh_cosh().1,
+                        Func::Tanh => x.tanh_sech().0,
+                        Func::Sech => x.tanh_sech().1,
                     }
                 }
             };
@@ -763,6 +880,123 @@ mod tests {
             let got = parse(text, &p).unwrap().derivatives(y)[3];
             assert!((got - want).abs() < 1e-13 * want.abs().max(1.0), "{text}: {got} vs {want}");
         }
+    }
+
+    /// The hyperbolic functions and their first three derivatives against
+    /// closed forms derived by hand from `s' = c`, `c' = s`, `t' = h^2`,
+    /// `h' = -h t` (`s, c, t, h` = sinh, cosh, tanh, sech of `y`):
+    /// `t'' = -2 h^2 t`, `t''' = 4 h^2 t^2 - 2 h^4`, `h'' = h (t^2 - h^2)`,
+    /// `h''' = h t (5 h^2 - t^2)`, and for the Bickley profile `h^2 = t'`:
+    /// `(h^2)''' = t'''' = 16 h^4 t - 8 h^2 t^3`.
+    #[test]
+    fn hyperbolic_functions_and_derivatives_in_closed_form() {
+        let p = BTreeMap::new();
+        for y in [-3.1f64, -0.4, 0.0, 0.7, 2.5, 19.0] {
+            let (s, c, t, h) = (y.sinh(), y.cosh(), y.tanh(), 1.0 / y.cosh());
+            // each closed form, with the size of the terms it is made of
+            // (the tolerance is relative to that)
+            let cases: [(&str, [f64; 4], f64); 5] = [
+                ("sinh(y)", [s, c, s, c], c),
+                ("cosh(y)", [c, s, c, s], c),
+                ("tanh(y)", [t, h * h, -2.0 * h * h * t, 4.0 * h * h * t * t - 2.0 * h.powi(4)], h * h),
+                ("sech(y)", [h, -h * t, h * (t * t - h * h), h * t * (5.0 * h * h - t * t)], h),
+                (
+                    "sech(y)^2",
+                    [
+                        h * h,
+                        -2.0 * h * h * t,
+                        4.0 * h * h * t * t - 2.0 * h.powi(4),
+                        16.0 * h.powi(4) * t - 8.0 * h * h * t.powi(3),
+                    ],
+                    h * h,
+                ),
+            ];
+            for (text, want, size) in cases {
+                let got = parse(text, &p).unwrap().derivatives(y);
+                for k in 0..4 {
+                    assert!(
+                        (got[k] - want[k]).abs() <= 1e-13 * (want[k].abs() + size),
+                        "{text} order {k} at {y}: {} vs {}",
+                        got[k],
+                        want[k]
+                    );
+                }
+            }
+            // sech = 1/cosh = 2/(e^y + e^-y): the Bickley profile's two spellings
+            let a = parse("sech(y)^2", &p).unwrap().derivatives(y);
+            let b = parse("4/(exp(y) + exp(-y))^2", &p).unwrap().derivatives(y);
+            for k in 0..4 {
+                assert!((a[k] - b[k]).abs() <= 1e-13 * (a[k].abs() + h * h), "{y} {k}: {a:?} vs {b:?}");
+            }
+        }
+        // the chain rule: d/dy tanh(2y) = 2 sech(2y)^2
+        let y = 0.3f64;
+        let d = parse("tanh(2*y)", &p).unwrap().derivatives(y)[1];
+        assert!((d - 2.0 / (2.0 * y).cosh().powi(2)).abs() < 1e-15);
+        // functions of constants fold to their values
+        assert_eq!(parse("tanh(0) + sinh(0) + cosh(0) + sech(0)", &p).unwrap().constant(), Some(2.0));
+        // the perturbed claim fails: tanh' is sech^2, not sech
+        let t1 = parse("tanh(y)", &p).unwrap().derivatives(0.7)[1];
+        assert!((t1 - 1.0 / 0.7f64.cosh()).abs() > 0.1);
+        // the allowed list names them
+        assert!(parse("coth(y)", &p)
+            .unwrap_err()
+            .message
+            .contains("allowed: sin, cos, exp, sqrt, sinh, cosh, tanh, sech"));
+    }
+
+    /// Far out the functions saturate or overflow as doubles do: `tanh` is
+    /// ±1 with derivatives 0 (not NaN from `inf / inf`), `sech` a positive
+    /// subnormal where `cosh` overflows, `sinh` and `cosh` infinite.
+    #[test]
+    fn hyperbolic_functions_far_out() {
+        let p = BTreeMap::new();
+        for y in [700.0f64, -700.0, 720.0, 1e308, -1e308] {
+            let t = parse("tanh(y)", &p).unwrap().derivatives(y);
+            assert_eq!(t[0], y.signum());
+            assert!(t[1..].iter().all(|d| d.abs() < 1e-300), "{y}: {t:?}");
+            let h = parse("sech(y)", &p).unwrap().derivatives(y);
+            assert!(h.iter().all(|d| d.is_finite() && d.abs() < 1e-300), "{y}: {h:?}");
+            assert!(h[0] >= 0.0);
+        }
+        // sech 720 = 2 e^-720 = 4.06e-313 (a subnormal), not 0
+        let h = parse("sech(y)", &p).unwrap().eval(720.0);
+        assert!(h > 4.0e-313 && h < 4.1e-313, "{h}");
+        assert_eq!(parse("cosh(y)", &p).unwrap().eval(1e308), f64::INFINITY);
+        assert_eq!(parse("sinh(y)", &p).unwrap().eval(-1e308), f64::NEG_INFINITY);
+    }
+
+    /// Interval jets of the hyperbolic functions enclose the `f64` jets at
+    /// sampled points (orders 0 to 3): near 0, straddling it, and far out.
+    #[test]
+    fn hyperbolic_enclosures_hold_values_and_derivatives() {
+        let p = BTreeMap::new();
+        for text in ["tanh(y)", "sech(y)^2", "sinh(y) - cosh(y/2)", "sech(3*y) * tanh(y - 1)", "sech(y)"] {
+            let e = Arc::new(parse(text, &p).unwrap());
+            for (lo, hi) in [(-0.25, 0.3), (1e-300, 2e-300), (-1e-9, 1e-9), (2.0, 2.5), (-6.0, -5.0), (698.0, 700.0)] {
+                for order in 0..4 {
+                    let d = Derivative::new(e.clone(), order);
+                    let enc = d.enclose(lo, hi);
+                    for i in 0..=20 {
+                        let y = lo + (hi - lo) * i as f64 / 20.0;
+                        let v = d.eval(y);
+                        let slack = 1e-12 * v.abs().max(1.0);
+                        assert!(
+                            enc.lo - slack <= v && v <= enc.hi + slack,
+                            "{text} order {order} at {y}: {v} not in {enc:?}"
+                        );
+                    }
+                }
+            }
+        }
+        // U'' of the Bickley jet U = sech^2 y is 4 h^2 t^2 - 2 h^4 =
+        // 2 h^2 (3 t^2 - 1) (above), zero at tanh^2 y = 1/3, y = atanh(1/sqrt 3)
+        // = 0.6585: proved negative inside, positive outside, changing across.
+        let bickley = Arc::new(parse("sech(y)^2", &p).unwrap());
+        let second = Derivative::new(bickley, 2);
+        assert_eq!(second.sign_on(-0.65, 0.65, 1e7), SignProof::Negative);
+        assert_eq!(second.sign_on(0.67, 8.0, 1e7), SignProof::Positive);
+        assert_eq!(second.sign_on(0.0, 8.0, 1e7), SignProof::Changes);
     }
 
     #[test]

@@ -3,8 +3,8 @@
 //!
 //! Written here rather than taken from a crate because the interval crates
 //! that round outward (inari) need a nightly toolchain and GMP; this module
-//! needs only the four operations, `sqrt`, `exp`, `sin`, `cos` and integer
-//! powers, and gets correct outward rounding on stable Rust from
+//! needs only the four operations, `sqrt`, `exp`, `sin`, `cos`, the
+//! hyperbolic `sinh`, `cosh`, `tanh`, `sech` and integer powers, and gets correct outward rounding on stable Rust from
 //! error-free transformations instead of switching the rounding mode:
 //!
 //! * `a + b`: TwoSum gives the exact error `e` of `s = fl(a + b)`, so the
@@ -18,14 +18,16 @@
 //! threshold, where the bounds are simply widened by one ulp both ways. So
 //! exact results stay exact (an interval `[0, 0]` stays `[0, 0]`), which is
 //! what lets [`crate::expr`] *prove* that `U'' = 0` for an affine profile.
-//! `exp`, `sin` and `cos` come from the platform's libm, whose error is below
-//! one ulp on the platforms Rust supports (glibc documents at most 1 ulp);
-//! their bounds are widened by [`LIBM_ULPS`] ulps. Overflow gives infinite
+//! `exp`, `sin`, `cos`, `sinh`, `cosh` and `tanh` come from the platform's
+//! libm, whose error is below one ulp for `exp`, `sin`, `cos` on the
+//! platforms Rust supports (glibc documents at most 1 ulp) and at most 3
+//! ulps for `sinh`, `cosh`, `tanh` (glibc's `libm-test-ulps` tables list
+//! 1 to 3 for them in double); the bounds are widened by [`LIBM_ULPS`] ulps. Overflow gives infinite
 //! bounds, and an operation that is undefined on part of its argument
 //! (division by an interval holding 0, `sqrt` of negatives) gives the whole
 //! line: such an enclosure never proves a sign.
 
-/// Ulps by which results of `exp`, `sin` and `cos` are widened.
+/// Ulps by which results of `exp`, `sin`, `cos`, `sinh`, `cosh` and `tanh` are widened.
 pub const LIBM_ULPS: u32 = 4;
 
 /// Below this magnitude the error-free transformations may be inexact
@@ -169,6 +171,57 @@ impl Interval {
         let lo = if self.lo == f64::NEG_INFINITY { 0.0 } else { down(self.lo.exp(), LIBM_ULPS).max(0.0) };
         let hi = if self.hi == 0.0 { 1.0 } else { up(self.hi.exp(), LIBM_ULPS) };
         Interval::new(if self.lo == 0.0 { 1.0 } else { lo }, hi)
+    }
+
+    /// `sinh`: increasing, so the image of the ends, each widened by
+    /// [`LIBM_ULPS`]. An end that overflows gives an infinite bound (its
+    /// outer side, `-inf` below or `+inf` above) or [`f64::MAX`] pulled in
+    /// by the widening (its inner side): never a tighter one.
+    pub fn sinh(self) -> Interval {
+        let lo = if self.lo == 0.0 { 0.0 } else { down(self.lo.sinh(), LIBM_ULPS) };
+        let hi = if self.hi == 0.0 { 0.0 } else { up(self.hi.sinh(), LIBM_ULPS) };
+        Interval::new(lo, hi)
+    }
+
+    /// `cosh`: even, decreasing on `x <= 0` and increasing on `x >= 0`, so
+    /// its minimum is at the end nearer 0 (exactly `1` when the interval
+    /// holds 0) and its maximum at the end farther from 0; at least 1. An
+    /// overflowing `cosh` is `+inf` above and `f64::MAX` (widened down)
+    /// below, both true bounds.
+    pub fn cosh(self) -> Interval {
+        let (near, far) = self.magnitudes();
+        let lo = if self.contains_zero() || near == 0.0 { 1.0 } else { down(near.cosh(), LIBM_ULPS).max(1.0) };
+        let hi = if far == 0.0 { 1.0 } else { up(far.cosh(), LIBM_ULPS) };
+        Interval::new(lo, hi)
+    }
+
+    /// `tanh`: increasing, so the image of the ends widened by
+    /// [`LIBM_ULPS`], within `[-1, 1]` (it saturates: `tanh 20` rounds to
+    /// 1, and the widened lower bound `1 - 4 ulp` is still below the true
+    /// `1 - 8.5e-18`).
+    pub fn tanh(self) -> Interval {
+        let lo = if self.lo == 0.0 { 0.0 } else { down(self.lo.tanh(), LIBM_ULPS).max(-1.0) };
+        let hi = if self.hi == 0.0 { 0.0 } else { up(self.hi.tanh(), LIBM_ULPS).min(1.0) };
+        Interval::new(lo, hi)
+    }
+
+    /// `sech = 1 / cosh`, by the outward division of 1 by [`Interval::cosh`]
+    /// (never 0 in it), within `[0, 1]`: even, largest (1) at 0. Where
+    /// `cosh` overflows, its bounds `[f64::MAX, inf]` give `sech` the true
+    /// bounds `[0, 1/f64::MAX]` (rounded up), never a tighter one.
+    pub fn sech(self) -> Interval {
+        let s = Interval::point(1.0) / self.cosh();
+        Interval::new(s.lo.max(0.0), s.hi.min(1.0))
+    }
+
+    /// `(min |x|, max |x|)` over the interval.
+    fn magnitudes(&self) -> (f64, f64) {
+        let (a, b) = (self.lo.abs(), self.hi.abs());
+        if self.contains_zero() {
+            (0.0, a.max(b))
+        } else {
+            (a.min(b), a.max(b))
+        }
     }
 
     /// `sin`.
@@ -391,6 +444,97 @@ mod tests {
         assert!(Interval::point(1000.0).exp().hi.is_infinite());
     }
 
+    /// Sampled points of `[lo, hi]`: the ends, 0 when inside, and 30
+    /// points between.
+    fn samples(lo: f64, hi: f64) -> Vec<f64> {
+        let mut out = vec![lo, hi];
+        if lo < 0.0 && hi > 0.0 {
+            out.push(0.0);
+        }
+        out.extend((1..30).map(|i| lo + (hi - lo) * (i as f64 / 30.0)).filter(|x| *x > lo && *x < hi));
+        out
+    }
+
+    /// The hyperbolic enclosures hold `f64`'s value at sampled points
+    /// (its error is a few ulps, within the widening) on intervals near 0,
+    /// straddling it, where `cosh` and `sinh` overflow (`|x| > 710.48`),
+    /// at `±700`, `±1e308` and the infinite ends; `tanh` and `sech` stay
+    /// within `[-1, 1]` and `[0, 1]`, `cosh` at or above 1.
+    #[test]
+    fn hyperbolic_enclosures_hold_sampled_values() {
+        let tiny = f64::MIN_POSITIVE;
+        let intervals = [
+            (-1e-300, 1e-300),
+            (0.0, 1e-300),
+            (-tiny, 0.0),
+            (-5e-324, 5e-324),
+            (0.0, 0.0),
+            (-0.3, 0.2),
+            (0.1, 0.7),
+            (-2.5, -1.0),
+            (19.0, 21.0),
+            (-21.0, 19.5),
+            (700.0, 700.0),
+            (-700.0, -700.0),
+            (-700.0, 700.0),
+            (699.0, 712.0),
+            (-712.0, -705.0),
+            (710.0, 711.0),
+            (1e308, 1e308),
+            (-1e308, -1e308),
+            (-1e308, 1e308),
+            (f64::MAX, f64::MAX),
+            (1.0, f64::INFINITY),
+            (f64::NEG_INFINITY, 3.0),
+        ];
+        for (lo, hi) in intervals {
+            let x = Interval::new(lo, hi);
+            let (sh, ch, th, se) = (x.sinh(), x.cosh(), x.tanh(), x.sech());
+            for p in samples(lo, hi) {
+                assert!(contains(sh, p.sinh()), "sinh {p} not in {sh:?} for [{lo}, {hi}]");
+                assert!(contains(ch, p.cosh()), "cosh {p} not in {ch:?} for [{lo}, {hi}]");
+                assert!(contains(th, p.tanh()), "tanh {p} not in {th:?} for [{lo}, {hi}]");
+                // sech as 1/cosh (0 where cosh overflows) and as 2 e^-|p| (its
+                // value there, a subnormal down to 745)
+                assert!(contains(se, 1.0 / p.cosh()), "sech {p} not in {se:?} for [{lo}, {hi}]");
+                if p.abs() > 20.0 {
+                    assert!(contains(se, 2.0 * (-p.abs()).exp()), "sech {p} not in {se:?} for [{lo}, {hi}]");
+                }
+            }
+            assert!(th.lo >= -1.0 && th.hi <= 1.0, "{th:?}");
+            assert!(se.lo >= 0.0 && se.hi <= 1.0, "{se:?}");
+            assert!(ch.lo >= 1.0, "{ch:?}");
+        }
+        // Overflow never tightens: cosh and sinh of 1e308 are infinite above,
+        // huge below; sech of it is at most 1/f64::MAX (rounded up), at least 0.
+        let big = Interval::point(1e308);
+        assert_eq!(big.cosh().hi, f64::INFINITY);
+        assert!(big.cosh().lo >= 1e307);
+        assert_eq!(big.sinh().hi, f64::INFINITY);
+        assert_eq!((-big).sinh().lo, f64::NEG_INFINITY);
+        assert!(big.sech().lo == 0.0 && big.sech().hi > 0.0 && big.sech().hi < 1e-307, "{:?}", big.sech());
+        // Saturation: tanh 20 rounds to 1, the enclosure reaches below the true 1 - 8.5e-18.
+        let t = Interval::point(20.0).tanh();
+        assert!(t.hi == 1.0 && t.lo < 1.0 - 8.5e-18 && t.lo > 1.0 - 1e-15, "{t:?}");
+        // Extremum at 0: an interval straddling 0 has cosh down to exactly 1
+        // and sech up to exactly 1, not the values at its ends.
+        let s = Interval::new(-0.5, 2.0);
+        assert_eq!(s.cosh().lo, 1.0);
+        assert_eq!(s.sech().hi, 1.0);
+        assert!(s.cosh().hi >= 2f64.cosh() && s.cosh().hi < 2f64.cosh() * (1.0 + 1e-15));
+        assert!(s.sech().lo <= 1.0 / 2f64.cosh() && s.sech().lo > (1.0 / 2f64.cosh()) * (1.0 - 1e-15));
+        // A positive interval: cosh from its near end, not 1.
+        let p = Interval::new(1.0, 2.0).cosh();
+        assert!(p.lo <= 1f64.cosh() && p.lo > 1.5);
+        // Exact zeros stay exact (as for exp at 0).
+        let z = Interval::point(0.0);
+        assert_eq!((z.sinh(), z.cosh(), z.tanh(), z.sech()), (z, Interval::point(1.0), z, Interval::point(1.0)));
+        // The whole line: the functions' ranges.
+        let e = Interval::ENTIRE;
+        assert_eq!((e.sinh(), e.cosh(), e.tanh()), (e, Interval::new(1.0, f64::INFINITY), Interval::new(-1.0, 1.0)));
+        assert_eq!(e.sech(), Interval::new(0.0, 1.0));
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
         /// Every operation's enclosure holds the double-precision result of
@@ -414,6 +558,10 @@ mod tests {
             if a + w < 40.0 {
                 prop_assert!(contains(x.exp(), p.exp()));
             }
+            prop_assert!(contains(x.sinh(), p.sinh()));
+            prop_assert!(contains(x.cosh(), p.cosh()));
+            prop_assert!(contains(x.tanh(), p.tanh()));
+            prop_assert!(contains(x.sech(), 1.0 / p.cosh()));
         }
     }
 }

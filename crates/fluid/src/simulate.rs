@@ -242,6 +242,30 @@ impl ModeSde {
         ticks: Ticks<'_>,
     ) -> Result<Option<Vec<EnsembleRow>>, Cancelled> {
         let Some(half) = self.drift_propagator(run.dt / 2.0) else { return Ok(None) };
+        self.ensemble_from(&half, w0, run, ticks).map(Some)
+    }
+
+    /// Wall-clock seconds of a run of [`Self::ensemble`] of these sizes:
+    /// `(setup, stepping)`, the drift propagator's once per run and the
+    /// paths' steps (on the thread pool, as a run takes them). `None` if
+    /// the propagator could not be formed.
+    pub(crate) fn time_ensemble(&self, w0: &[f64], run: &StrangRun) -> Option<(f64, f64)> {
+        let started = std::time::Instant::now();
+        let half = self.drift_propagator(run.dt / 2.0)?;
+        let setup = started.elapsed().as_secs_f64();
+        let stepping = std::time::Instant::now();
+        self.ensemble_from(&half, w0, run, Ticks { progress: &Progress::new(), weight: 1 }).ok()?;
+        Some((setup, stepping.elapsed().as_secs_f64()))
+    }
+
+    /// The ensemble with the half-step drift propagator `half`.
+    fn ensemble_from(
+        &self,
+        half: &DMatrix<C>,
+        w0: &[f64],
+        run: &StrangRun,
+        ticks: Ticks<'_>,
+    ) -> Result<Vec<EnsembleRow>, Cancelled> {
         let x0 = DVector::from_iterator(w0.len(), w0.iter().map(|x| C::new(*x, 0.0)));
         // The noise operators commute and are diagonal: the flow is a phase per node.
         let noise = |y: &DVector<C>, dws: &[f64], z: &mut DVector<C>| {
@@ -250,7 +274,7 @@ impl ModeSde {
                 z[a] = y[a] * C::from_polar(1.0, -self.k * phase);
             }
         };
-        strang_ensemble(&x0, &half, self.eta.len(), run, ticks, noise, |x| self.energy(x)).map(Some)
+        strang_ensemble(&x0, half, self.eta.len(), run, ticks, noise, |x| self.energy(x))
     }
 
     /// `A~ = A + (1/2) sum_j B_j^2` and the diagonals `-ik eta_j` of the
@@ -265,6 +289,43 @@ impl ModeSde {
             }
         }
         (a_tilde, bs)
+    }
+
+    /// `L S = A~ S + S A~^H + sum_j B_j S B_j^H` (the `B_j` diagonal), the
+    /// rate of the Itô moment equation.
+    fn moment_rate<'a>(a_tilde: &'a DMatrix<C>, bs: &'a [Vec<C>]) -> impl Fn(&DMatrix<C>) -> DMatrix<C> + 'a {
+        let a_adjoint = a_tilde.adjoint();
+        move |s: &DMatrix<C>| -> DMatrix<C> {
+            let n = s.nrows();
+            let mut out = a_tilde * s + s * &a_adjoint;
+            for b in bs {
+                for c in 0..n {
+                    for r in 0..n {
+                        out[(r, c)] += b[r] * s[(r, c)] * b[c].conj();
+                    }
+                }
+            }
+            out
+        }
+    }
+
+    /// Wall-clock seconds of the first Taylor step of
+    /// [`Self::exact_mean_energy`] for `(t_end, samples)` (every step has
+    /// the same length; the terms it sums vary little). `None` when the
+    /// run has no step or too many.
+    pub(crate) fn time_taylor_step(&self, w0: &[f64], t_end: f64, samples: usize) -> Option<f64> {
+        if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
+            return None;
+        }
+        let (a_tilde, bs) = self.moment_operators();
+        let apply = Self::moment_rate(&a_tilde, &bs);
+        let dt = t_end / samples as f64;
+        let h = dt / Self::taylor_steps(&a_tilde, &bs, dt)? as f64;
+        let x0 = DVector::from_iterator(w0.len(), w0.iter().map(|x| C::new(*x, 0.0)));
+        let s = &x0 * x0.adjoint();
+        let started = std::time::Instant::now();
+        taylor_exp(&s, h, apply, &Progress::new()).ok()?;
+        Some(started.elapsed().as_secs_f64())
     }
 
     /// Taylor steps over a time `dt`, each of norm at most 4 against
@@ -337,19 +398,7 @@ impl ModeSde {
         }
         let n = w0.len();
         let (a_tilde, bs) = self.moment_operators();
-        let a_adjoint = a_tilde.adjoint();
-        // L S = A~ S + S A~^H + sum_j B_j S B_j^H, the B_j diagonal.
-        let apply = |s: &DMatrix<C>| -> DMatrix<C> {
-            let mut out = &a_tilde * s + s * &a_adjoint;
-            for b in &bs {
-                for c in 0..n {
-                    for r in 0..n {
-                        out[(r, c)] += b[r] * s[(r, c)] * b[c].conj();
-                    }
-                }
-            }
-            out
-        };
+        let apply = Self::moment_rate(&a_tilde, &bs);
         let x0 = DVector::from_iterator(n, w0.iter().map(|x| C::new(*x, 0.0)));
         let mut s = &x0 * x0.adjoint();
         let vc = &self.vc;
@@ -359,7 +408,7 @@ impl ModeSde {
         let mut out = vec![];
         for j in 1..=samples {
             for _ in 0..sub {
-                s = taylor_exp(&s, h, apply, ticks.progress)?;
+                s = taylor_exp(&s, h, &apply, ticks.progress)?;
                 ticks.step(1);
             }
             // tr(V S) = sum_ab V_ab S_ba, without the product

@@ -77,7 +77,7 @@ impl JsonSchema for Expression {
     }
     fn json_schema(_: &mut SchemaGenerator) -> Schema {
         json_schema!({
-            "description": "An expression: a string (polynomial in the coordinates and parameters, + - * / ^ and parentheses; fluids also sin, cos, exp, sqrt, pi and y) or a number.",
+            "description": "An expression: a string (polynomial in the coordinates and parameters, + - * / ^ and parentheses; fluids also sin, cos, exp, sqrt, sinh, cosh, tanh, sech, pi and y) or a number.",
             "type": ["string", "number"]
         })
     }

@@ -246,7 +246,8 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
         let kpath = child(&ppath, key);
         let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
             && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if !valid || ["y", "pi", "sin", "cos", "exp", "sqrt", "compatible"].contains(&key.as_str()) {
+        if !valid || ["y", "pi", "compatible"].contains(&key.as_str()) || fluid::expr::FUNCTIONS.contains(&key.as_str())
+        {
             return Err(SpecError::new(
                 kpath,
                 format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi, a function or 'compatible')"),

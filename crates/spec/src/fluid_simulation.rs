@@ -26,13 +26,42 @@ pub const FLUID_SIMULATION_DEFAULT_PATHS: usize = 1000;
 const MAX_PATHS: usize = 10_000_000;
 /// At most this many steps per path.
 const MAX_STEPS: f64 = 1e8;
-/// Floating-point operations per second and thread assumed by the cost
-/// estimates. Measured on the 2-core machine (2026-11-27): the incompressible
-/// exact moment ran at about 1.7 times the speed its estimate assumes at
-/// ny = 128 and 256, the compressible one faster still (its Taylor steps stop
-/// before the 40 terms counted), the Monte Carlo at ny = 32 at about 1e10 of
-/// the estimate's flops per second on two threads.
+/// Floating-point operations per second and thread assumed for the exact
+/// moment when one of its Taylor steps is too long to time
+/// ([`EXACT_PILOT_SECONDS`]). Measured on the 2-core machine (2026-11-27):
+/// the incompressible exact moment ran at about 1.7 times the speed this
+/// assumes at ny = 128 and 256, the compressible one faster still (its
+/// Taylor steps stop before the 40 terms counted).
 const FLOPS_PER_SECOND: f64 = 6e9;
+/// Floating-point operations (as [`fluid::analysis::ModeStudy::flops_per_path_step`]
+/// counts them) of the pilot that times the ensemble: about 0.1 to 0.5 s,
+/// long enough that the scheduler's time slices and the pool's start do
+/// not decide it (a pilot of 400 path-steps, 2 ms, said 4 times the
+/// time). A tenth of the run's path-steps at most, so a short run is not
+/// dominated by it.
+const PILOT_FLOPS: f64 = 1e9;
+/// One Taylor step of the exact moment is timed when its flop count says
+/// it takes at most this many seconds; a longer one is estimated by
+/// [`FLOPS_PER_SECOND`].
+const EXACT_PILOT_SECONDS: f64 = 0.5;
+/// The default end time in growth times `1/Sigma_k^2`: at
+/// `t = 1/Sigma_k^2` the certified bound `exp(Sigma_k^2 t)` has grown by
+/// `e = 2.72`, a factor the chart shows plainly, and the exact moment,
+/// which starts along the fastest-growing direction, has grown by up to as
+/// much. A fixed end (10 once) shows a flat chart when `1/Sigma_k^2` is
+/// hundreds (784 for a jet with weak noise: `exp(10/784) = 1.013`).
+pub const FLUID_SIMULATION_GROWTH_TIMES: f64 = 1.0;
+/// The default end time is at least this (a fast-growing mode still runs
+/// long enough to see its drift).
+pub const FLUID_SIMULATION_MIN_T_END: f64 = 1.0;
+/// The default end time when the certified `Sigma_k^2` is 0 (nothing grows,
+/// no time scale to take).
+pub const FLUID_SIMULATION_NO_GROWTH_T_END: f64 = 10.0;
+/// A run with the default end time is kept to about this many seconds of
+/// computation (estimated by the pilot): one growth time is shortened to
+/// what fits, with a note; a longer run is asked for with `t_end`. Two
+/// minutes, the limit beyond which the exact moment is skipped too.
+pub const FLUID_SIMULATION_DEFAULT_SECONDS: f64 = 120.0;
 /// The exact second moment is skipped (with a note) above this estimate
 /// unless forced.
 pub const FLUID_EXACT_SECONDS: f64 = 120.0;
@@ -52,7 +81,11 @@ pub struct FluidSimulationOptions {
     pub paths: Option<usize>,
     /// Time step.
     pub dt: f64,
-    /// Final time (default `1 / Sigma_k^2` within `[1, 10]`).
+    /// Final time (default: one growth time `1 / Sigma_k^2`
+    /// ([`FLUID_SIMULATION_GROWTH_TIMES`]), at least
+    /// [`FLUID_SIMULATION_MIN_T_END`], shortened to what
+    /// [`FLUID_SIMULATION_DEFAULT_SECONDS`] of computation reach;
+    /// [`FLUID_SIMULATION_NO_GROWTH_T_END`] when `Sigma_k^2 = 0`).
     pub t_end: Option<f64>,
     /// Output times (about; every `record_every` steps).
     pub outputs: usize,
@@ -60,7 +93,8 @@ pub struct FluidSimulationOptions {
     pub seed: u64,
     /// Run whatever the estimated cost.
     pub force: bool,
-    /// The threads that work (for the estimate).
+    /// The threads that work (named in the estimate's note; the estimate
+    /// itself is timed on the thread pool).
     pub threads: f64,
 }
 
@@ -196,6 +230,11 @@ pub struct FluidSimulation {
     pub agreeing: Option<usize>,
     /// The first output time at which the exact moment exceeds the paper's bound.
     pub paper_exceeded_at: Option<f64>,
+    /// The run's estimated wall-clock seconds (the Monte Carlo and the
+    /// exact moment, not the analysis), from a pilot of its own stepping.
+    pub estimated_seconds: f64,
+    /// The wall-clock seconds the Monte Carlo and the exact moment took.
+    pub run_seconds: f64,
 }
 
 /// Notes for the user, in order, as the run is planned (the estimate, a
@@ -337,9 +376,13 @@ pub fn simulate_fluid_with(
     })?;
     let rate = study.initial_rate();
 
-    // Times: `steps` of `dt`, recorded every `record_every`. Default: long
-    // enough for the bound exp(Sigma_k^2 t) to reach e, within [1, 10].
-    let t_end = options.t_end.unwrap_or(if certified > 0.0 { (1.0 / certified).clamp(1.0, 10.0) } else { 10.0 });
+    // Times: `steps` of `dt`, recorded every `record_every`. Default: one
+    // growth time 1/Sigma_k^2 (see FLUID_SIMULATION_GROWTH_TIMES), at
+    // least 1, shortened to what FLUID_SIMULATION_DEFAULT_SECONDS of
+    // computation reach; 10 when nothing grows.
+    // (at most MAX_STEPS steps: a Sigma_k^2 of 1e-12 would ask for 1e14)
+    let longest = MAX_STEPS * dt * (1.0 - 1e-9);
+    let t_end = options.t_end.unwrap_or_else(|| default_t_end(certified, longest, |_| 0.0).0);
     if options.t_end.is_none() && dt > t_end {
         return Err(invalid("dt", format!("{dt:e} is longer than the default t_end = {t_end:e}")));
     }
@@ -357,21 +400,65 @@ pub fn simulate_fluid_with(
             ),
         ));
     }
-    // (t_end / dt within rounding of a whole number is that number: 0.9 / 0.03
-    // is 30.000000000000004)
-    let wanted = (t_end / dt * (1.0 - 1e-12)).ceil().max(1.0);
-    if wanted > MAX_STEPS {
-        return Err(invalid("t_end/dt", format!("{wanted:e} steps per path; at most {MAX_STEPS:e}")));
+    let mut grid = time_grid(t_end, dt, options.outputs)?;
+
+    // Costs, measured here: a pilot of the ensemble's own stepping (on the
+    // thread pool, under the machine's present load) and one Taylor step
+    // of the exact moment time them; a constant rate per flop cannot know
+    // the machine, its load or the cost of the noise's phases.
+    progress.check()?;
+    // The pilot: PILOT_FLOPS worth of path-steps, at most a tenth of the
+    // run's, as paths of the run's length or fewer steps (at least twice
+    // the pool's threads in paths, so that none idles).
+    let pool = rayon::current_num_threads().max(1);
+    let run_path_steps = paths as f64 * grid.steps as f64;
+    let pilot_path_steps = (PILOT_FLOPS / study.flops_per_path_step()).min(run_path_steps / 10.0).max(1.0);
+    let pilot_steps = ((pilot_path_steps / (2 * pool) as f64) as usize).clamp(1, grid.steps);
+    let pilot_paths = ((pilot_path_steps / pilot_steps as f64).ceil() as usize).clamp(1, paths);
+    let timing = study
+        .time_ensemble(dt, pilot_steps, pilot_paths, options.seed)
+        .ok_or_else(|| FluidSimulationError::Failed("the drift's propagator could not be formed".into()))?;
+    progress.check()?;
+    let step_flops = study.exact_step_flops();
+    // One Taylor step is timed when the flop count says it is short (at
+    // ny = 256 in the compressible model it takes about a minute); the
+    // seconds per flop it gives scale the whole exact moment's count.
+    let exact_rate = if step_flops / FLOPS_PER_SECOND <= EXACT_PILOT_SECONDS {
+        study.time_exact_step(grid.t_end, grid.records).map(|s| s / step_flops)
+    } else {
+        None
+    };
+    let estimate = |grid: &TimeGrid| -> Estimate {
+        let path_steps = paths as f64 * grid.steps as f64;
+        let monte_carlo = timing.setup_seconds + timing.path_step_seconds * path_steps;
+        let (flops, units) = study.exact_growth_cost(grid.t_end, grid.records);
+        let exact = flops * exact_rate.unwrap_or(1.0 / FLOPS_PER_SECOND);
+        Estimate { path_steps, monte_carlo, exact, exact_units: units }
+    };
+    if options.t_end.is_none() {
+        // (an exact moment of too many Taylor steps is not run: not counted)
+        let seconds = |t: f64| {
+            time_grid(t, dt, options.outputs).map_or(f64::INFINITY, |g| {
+                let e = estimate(&g);
+                e.wall(e.exact.is_finite())
+            })
+        };
+        if let (shortened, Some(growth)) = default_t_end(certified, longest, seconds) {
+            grid = time_grid(shortened, dt, options.outputs)?;
+            notes(format!(
+                "t_end = {}: one growth time 1/Sigma_k^2 = {} would take about {:.0} s, more than the {:.0} s a default run is kept to (ask for t_end {} to run it)",
+                short(grid.t_end),
+                short(growth),
+                seconds(growth),
+                FLUID_SIMULATION_DEFAULT_SECONDS,
+                short(growth)
+            ));
+        }
     }
-    let wanted = wanted as usize;
-    // At most `outputs` output times, each a whole number of steps apart,
-    // so the run may end a little after t_end (said in a note).
-    let record_every = wanted.div_ceil(options.outputs);
-    let records = wanted.div_ceil(record_every);
-    let steps = records * record_every;
-    let asked = t_end;
-    let t_end = steps as f64 * dt;
-    if (t_end - asked).abs() > 1e-9 * asked {
+    let cost = estimate(&grid);
+    let TimeGrid { steps, record_every, records, t_end, asked } = grid;
+    // (said only of an end asked for: a default one is a time scale, not a time)
+    if options.t_end.is_some() && (t_end - asked).abs() > 1e-9 * asked {
         notes(format!(
             "the run ends at t = {} ({records} output times of {record_every} steps of {}), not at t_end = {}",
             short(t_end),
@@ -379,10 +466,7 @@ pub fn simulate_fluid_with(
             short(asked)
         ));
     }
-
-    // Costs.
-    let path_steps = paths as f64 * steps as f64;
-    let mc_seconds = path_steps * study.flops_per_path_step() / (FLOPS_PER_SECOND * options.threads.max(1.0));
+    let Estimate { path_steps, monte_carlo: mc_seconds, exact: exact_seconds, exact_units } = cost;
     if mc_seconds > FLUID_SIMULATION_SECONDS && !options.force {
         return Err(FluidSimulationError::TooLong {
             path_steps,
@@ -390,8 +474,6 @@ pub fn simulate_fluid_with(
             minutes: mc_seconds / 60.0,
         });
     }
-    let (exact_flops, exact_units) = study.exact_growth_cost(t_end, records);
-    let exact_seconds = exact_flops / FLOPS_PER_SECOND;
     let run_exact = exact_seconds.is_finite() && (exact_seconds <= FLUID_EXACT_SECONDS || options.force);
     if !exact_seconds.is_finite() {
         notes(format!(
@@ -404,11 +486,12 @@ pub fn simulate_fluid_with(
             exact_seconds / 60.0
         ));
     }
-    let total = mc_seconds + if run_exact { exact_seconds } else { 0.0 };
-    if total > 10.0 {
+    let estimated_seconds = cost.wall(run_exact);
+    if estimated_seconds > 10.0 {
         notes(format!(
-            "about {total:.0} s of computation ({path_steps:.2e} path-steps on {} threads)",
-            options.threads
+            "about {estimated_seconds:.0} s of computation ({path_steps:.2e} path-steps on {} threads{})",
+            options.threads,
+            if exact_rate.is_some() { "; timed by a pilot run" } else { "; the exact moment by its flop count" }
         ));
     }
     progress.check()?;
@@ -416,10 +499,12 @@ pub fn simulate_fluid_with(
     // the count only needs its proportions)
     let planned = study.ensemble_units(steps, paths).saturating_add(if run_exact { exact_units } else { 0 });
     progress.plan(planned.min(u64::MAX / 4));
+    let started = std::time::Instant::now();
     let (rows, exact) = rayon::join(
         || study.ensemble_with(dt, steps, record_every, paths, options.seed, progress),
         || run_exact.then(|| study.exact_growth_with(t_end, records, progress)).transpose(),
     );
+    let run_seconds = started.elapsed().as_secs_f64();
     let (rows, exact) = (rows?, exact?);
     progress.settle();
     let rows = rows.ok_or_else(|| FluidSimulationError::Failed("the drift's propagator could not be formed".into()))?;
@@ -517,7 +602,106 @@ pub fn simulate_fluid_with(
         exact_over_bound,
         agreeing,
         paper_exceeded_at,
+        estimated_seconds,
+        run_seconds,
     })
+}
+
+/// The output times of a run: `steps` of `dt`, recorded every
+/// `record_every` steps (`records` times), ending at `t_end`, which may
+/// lie a little after the `asked` one.
+#[derive(Clone, Copy, Debug)]
+struct TimeGrid {
+    steps: usize,
+    record_every: usize,
+    records: usize,
+    t_end: f64,
+    asked: f64,
+}
+
+/// At most `outputs` output times, each a whole number of steps apart, so
+/// the run may end a little after `t_end`.
+fn time_grid(t_end: f64, dt: f64, outputs: usize) -> Result<TimeGrid, FluidSimulationError> {
+    // (t_end / dt within rounding of a whole number is that number: 0.9 / 0.03
+    // is 30.000000000000004)
+    let wanted = (t_end / dt * (1.0 - 1e-12)).ceil().max(1.0);
+    if wanted > MAX_STEPS {
+        return Err(invalid("t_end/dt", format!("{wanted:e} steps per path; at most {MAX_STEPS:e}")));
+    }
+    let wanted = wanted as usize;
+    let record_every = wanted.div_ceil(outputs);
+    let records = wanted.div_ceil(record_every);
+    let steps = records * record_every;
+    Ok(TimeGrid { steps, record_every, records, t_end: steps as f64 * dt, asked: t_end })
+}
+
+/// A run's estimated cost in wall-clock seconds.
+#[derive(Clone, Copy, Debug)]
+struct Estimate {
+    path_steps: f64,
+    /// The ensemble, on the thread pool (its setup and steps).
+    monte_carlo: f64,
+    /// The exact moment, on one thread.
+    exact: f64,
+    /// The exact moment's units of progress.
+    exact_units: u64,
+}
+
+impl Estimate {
+    /// The wall-clock time of the run: the exact moment (one thread) runs
+    /// beside the ensemble (every thread of the pool), so the run lasts
+    /// between `max(exact, monte_carlo + exact / cores)` on idle cores and
+    /// `monte_carlo + exact` when the cores are busy (on the 2-core machine
+    /// with another job running, the compressible fixture's default run took
+    /// 48.5 s where the first form said 38 s). The sum is taken: at most 1.5
+    /// times the first (at `exact = 2 monte_carlo` on two cores), and right
+    /// on a loaded machine.
+    fn wall(&self, with_exact: bool) -> f64 {
+        if with_exact {
+            self.monte_carlo + self.exact
+        } else {
+            self.monte_carlo
+        }
+    }
+}
+
+/// The default end time for the certified `sigma2`, and
+/// the growth time when it was shortened: one growth time
+/// `FLUID_SIMULATION_GROWTH_TIMES / sigma2`, at least
+/// [`FLUID_SIMULATION_MIN_T_END`], at most `longest`;
+/// [`FLUID_SIMULATION_NO_GROWTH_T_END`] when `sigma2` is 0. When
+/// `seconds(t)`, the run's estimated wall-clock cost to `t`, exceeds
+/// [`FLUID_SIMULATION_DEFAULT_SECONDS`], the end is shortened in proportion
+/// (the cost is about linear in `t`: the Monte Carlo's steps and the exact
+/// moment's Taylor steps both are), rounded down to two digits, and
+/// shortened again (by halves) until it fits or reaches the floor.
+fn default_t_end(sigma2: f64, longest: f64, seconds: impl Fn(f64) -> f64) -> (f64, Option<f64>) {
+    let floor = FLUID_SIMULATION_MIN_T_END;
+    if sigma2 <= 0.0 || !sigma2.is_finite() {
+        return (FLUID_SIMULATION_NO_GROWTH_T_END, None);
+    }
+    let growth = FLUID_SIMULATION_GROWTH_TIMES / sigma2;
+    let t = growth.min(longest).max(floor);
+    let budget = FLUID_SIMULATION_DEFAULT_SECONDS;
+    let cost = seconds(t);
+    if cost <= budget {
+        return (t, None);
+    }
+    let mut shorter = two_digits_down(t * budget / cost).max(floor);
+    while shorter > floor && seconds(shorter) > budget {
+        shorter = two_digits_down(shorter / 2.0).max(floor);
+    }
+    (shorter, Some(growth))
+}
+
+/// `x > 0` rounded down to two significant digits (`473.6` is `470`): a
+/// shortened default end time that reads as chosen, not computed.
+fn two_digits_down(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return x;
+    }
+    let unit = 10f64.powi(x.log10().floor() as i32 - 1);
+    ((x / unit).floor() * unit).max(unit)
 }
 
 /// `x` to 9 significant digits at most, without trailing zeros
@@ -529,5 +713,49 @@ fn short(x: f64) -> String {
     match exponent.parse::<i32>() {
         Ok(e) if (-4..15).contains(&e) => format!("{}", format!("{mantissa}e{e}").parse::<f64>().unwrap_or(x)),
         _ => format!("{mantissa}e{exponent}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The default end time: one growth time `1/Sigma^2` when it is cheap
+    /// (784 for `Sigma^2 = 1/784`, the case whose chart was flat at the old
+    /// cap of 10), the floor 1 for fast growth, 10 without growth, at most
+    /// `longest`; shortened to the budget (120 s) when the run would cost
+    /// more, in proportion to two digits: at 0.5 s per unit time one
+    /// growth time costs 392 s, so `784 * 120 / 392 = 240`, which costs
+    /// exactly the budget. A cost that grows faster than `t` is halved
+    /// until it fits, and a cost that never fits stops at the floor.
+    #[test]
+    fn default_end_is_one_growth_time_within_the_budget() {
+        let free = |_: f64| 0.0;
+        let (t, growth) = default_t_end(1.0 / 784.0, 1e6, free);
+        assert!((t - 784.0).abs() < 1e-9 && growth.is_none(), "{t}");
+        assert_eq!(default_t_end(5.0, 1e6, free), (FLUID_SIMULATION_MIN_T_END, None));
+        assert_eq!(default_t_end(0.0, 1e6, free), (FLUID_SIMULATION_NO_GROWTH_T_END, None));
+        assert_eq!(default_t_end(1e-12, 1e6, free), (1e6, None));
+        // linear cost: shortened in proportion
+        let (t, growth) = default_t_end(1.0 / 784.0, 1e6, |t| 0.5 * t);
+        assert!((growth.unwrap() - 784.0).abs() < 1e-9);
+        assert!((t - 240.0).abs() < 1e-9, "{t}");
+        assert!(0.5 * t <= FLUID_SIMULATION_DEFAULT_SECONDS);
+        // super-linear cost t^2 / 1000: 614.7 s at 784; 784 * 120 / 614.7 =
+        // 153 -> 150 costs 22.5 s, within the budget
+        let (t, _) = default_t_end(1.0 / 784.0, 1e6, |t| t * t / 1000.0);
+        assert!(t * t / 1000.0 <= FLUID_SIMULATION_DEFAULT_SECONDS && t >= FLUID_SIMULATION_MIN_T_END, "{t}");
+        assert!((t - 150.0).abs() < 1e-9, "{t}");
+        // a cost that never fits stops at the floor
+        let (t, growth) = default_t_end(1.0 / 784.0, 1e6, |_| 1e9);
+        assert!(t == FLUID_SIMULATION_MIN_T_END && growth.is_some(), "{t}");
+    }
+
+    #[test]
+    fn two_digits_round_down() {
+        assert_eq!(two_digits_down(473.6), 470.0);
+        assert_eq!(two_digits_down(153.6), 150.0);
+        assert_eq!(two_digits_down(0.0357), 0.035);
+        assert_eq!(two_digits_down(7.0), 7.0);
     }
 }

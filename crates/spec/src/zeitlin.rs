@@ -218,8 +218,15 @@ fn read_npy(
         ));
     }
     let full = base.unwrap_or(Path::new(".")).join(rel);
+    let folder = match base {
+        Some(dir) if !dir.as_os_str().is_empty() => {
+            format!("the spec's folder {}", exact::quote(&dir.display().to_string(), 200))
+        }
+        Some(_) => "the spec's folder, the current one".to_string(),
+        None => "the current folder: the spec came as text, with no folder of its own".to_string(),
+    };
     let meta = std::fs::metadata(&full)
-        .map_err(|e| SpecError::new(&npath, format!("cannot read {shown} (relative to the spec's folder): {e}")))?;
+        .map_err(|e| SpecError::new(&npath, format!("cannot read {shown} (relative to {folder}): {e}")))?;
     if !meta.is_file() {
         return Err(SpecError::new(npath, format!("{shown} is not a file")));
     }
@@ -285,7 +292,7 @@ pub fn zeitlin_spec_from_value_in(value: Value, base: Option<&Path>) -> Result<Z
         let kpath = child(&ppath, key);
         let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
             && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if !valid || ["z", "pi", "sin", "cos", "exp", "sqrt"].contains(&key.as_str()) {
+        if !valid || ["z", "pi"].contains(&key.as_str()) || fluid::expr::FUNCTIONS.contains(&key.as_str()) {
             return Err(SpecError::new(
                 kpath,
                 format!(

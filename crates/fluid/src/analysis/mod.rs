@@ -32,7 +32,7 @@ use scaling::*;
 pub use forms::chosen_form;
 pub use incompressible::prove_mode_bounds;
 pub use pseudomomentum::{discrete_pseudomomentum, DiscretePseudomomentum, PseudomomentumRow};
-pub use simulation::{mode_study, ModeStudy};
+pub use simulation::{mode_study, EnsembleTiming, ModeStudy};
 
 /// Incompressible or compressible (barotropic, `rho_e = 1`).
 #[derive(Clone, Copy, Debug, PartialEq)]

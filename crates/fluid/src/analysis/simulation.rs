@@ -51,6 +51,17 @@ pub struct ModeStudy {
     sde: Sde,
 }
 
+/// What a short run of [`ModeStudy::ensemble`]'s actual stepping took
+/// ([`ModeStudy::time_ensemble`]): wall-clock seconds on this machine, its
+/// threads and its present load, for a caller's estimate of a long run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnsembleTiming {
+    /// Forming the drift propagator, once per run.
+    pub setup_seconds: f64,
+    /// Per path and step, the thread pool's threads all stepping.
+    pub path_step_seconds: f64,
+}
+
 /// The wavenumber of mode `m` of `problem`, if it is one.
 fn wavenumber(problem: &FluidProblem, m: usize) -> Option<f64> {
     wavenumbers(problem).into_iter().find(|(mm, _)| *mm == m).map(|(_, k)| k)
@@ -207,6 +218,54 @@ impl ModeStudy {
                 units(step_flops).saturating_mul(steps as u64),
             ),
             None => (f64::INFINITY, 0),
+        }
+    }
+
+    /// Time a short run of [`Self::ensemble`] (`paths` paths of `steps`
+    /// steps of `dt`, on the thread pool as a run takes them): see
+    /// [`EnsembleTiming`]. Give at least twice the pool's threads in paths,
+    /// or the pilot leaves threads idle that the run keeps busy. `None` if
+    /// the drift's propagator could not be formed.
+    ///
+    /// ```
+    /// # use fluid::analysis::{analyse, mode_study, FluidModel, FluidProblem, FluidSettings};
+    /// # use fluid::{expr::parse, grid::Boundary, profile::Profile};
+    /// # let p = |s: &str| parse(s, &Default::default()).unwrap();
+    /// # let profile = Profile::new(p("sin(y)"), vec![p("0.3*cos(y)")], (0.0, std::f64::consts::PI), Boundary::Walls);
+    /// # let problem = FluidProblem { model: FluidModel::Incompressible, profile, x_period: 6.283185307179586, ny: 16, x_modes: 1 };
+    /// # let analysis = analyse(&problem, &FluidSettings::default()).unwrap();
+    /// let study = mode_study(&problem, analysis.form.galilean_shift, 1).unwrap();
+    /// let timing = study.time_ensemble(0.01, 50, 8, 1).unwrap();
+    /// assert!(timing.path_step_seconds > 0.0 && timing.setup_seconds >= 0.0);
+    /// ```
+    pub fn time_ensemble(&self, dt: f64, steps: usize, paths: usize, seed: u64) -> Option<EnsembleTiming> {
+        let run = StrangRun { dt, steps: steps.max(1), record_every: steps.max(1), paths: paths.max(1), seed };
+        let (setup, stepping) = match &self.sde {
+            Sde::Incompressible { sde, start } => sde.time_ensemble(start, &run)?,
+            Sde::Compressible { sde, start } => sde.time_ensemble(start, &run),
+        };
+        let path_steps = (run.steps * run.paths) as f64;
+        Some(EnsembleTiming { setup_seconds: setup, path_step_seconds: stepping / path_steps })
+    }
+
+    /// Wall-clock seconds of one Taylor step of [`Self::exact_growth`] for
+    /// `(t_end, samples)` (every step of a run has the same length), on
+    /// one thread as the run takes it; `None` when the run has no step or
+    /// too many. A step costs about [`Self::exact_step_flops`]: at ny = 256
+    /// in the compressible model, about a minute.
+    pub fn time_exact_step(&self, t_end: f64, samples: usize) -> Option<f64> {
+        match &self.sde {
+            Sde::Incompressible { sde, start } => sde.time_taylor_step(start, t_end, samples),
+            Sde::Compressible { sde, .. } => sde.time_taylor_step(t_end, samples),
+        }
+    }
+
+    /// The floating-point operations [`Self::exact_growth_cost`] counts per
+    /// Taylor step.
+    pub fn exact_step_flops(&self) -> f64 {
+        match &self.sde {
+            Sde::Incompressible { sde, .. } => sde.taylor_step_flops(),
+            Sde::Compressible { sde, .. } => sde.taylor_step_flops(),
         }
     }
 
