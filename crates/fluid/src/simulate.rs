@@ -12,8 +12,8 @@
 //! The exact second moment `S(t) = E[w w^H]` solves the Itô moment equation
 //! `S' = A~ S + S A~^H + sum_j B_j S B_j^H`, `A~ = A + 1/2 sum_j B_j^2`, and
 //! `E V(t) = tr(V S(t))`; it is integrated by the Taylor series of the
-//! exponential (until 2026-11-27 by classical Runge–Kutta with
-//! `h |A~|_F <= 0.01`, about 300 times slower at ny = 128).
+//! exponential (classical Runge–Kutta, which needs `h |A~|_F <= 0.01`, is
+//! about 300 times slower at ny = 128).
 
 use crate::grid::YGrid;
 use crate::modes::{Coefficients, Form, Mode};

@@ -71,14 +71,14 @@ pub const MAX_DENSE_FLOPS: f64 = 1e12;
 /// the compressible one runs the incompressible analysis first;
 /// [`fluid::walls_check::lifted_size`]), in bytes: 256 MiB. A check keeps
 /// about six such copies and two modes ran at once on the 2-core machine,
-/// so the peak was about 3 GiB (measured 2026-11-28: 28 noise fields at
+/// so the peak was about 3 GiB (measured: 28 noise fields at
 /// `ny = 4096`, 265 MB a copy, peak 3.18 GB); on more cores
 /// `fluid::analysis::check_threads` keeps the modes at once within 4 GiB.
 pub const MAX_BANDED_BYTES: f64 = 268_435_456.0;
 
 /// Largest accepted work of the banded verified checks, `x_modes rows
 /// (bandwidth + 1)^2` ([`fluid::walls_check::lifted_size`]): about four
-/// minutes on two cores (measured 2026-11-28: 4 modes of 28 noise fields
+/// minutes on two cores (measured: 4 modes of 28 noise fields
 /// at `ny = 4096`, work 3.6e10, took 11 s).
 pub const MAX_BANDED_WORK: f64 = 1e12;
 

@@ -28,7 +28,7 @@ const MAX_PATHS: usize = 10_000_000;
 const MAX_STEPS: f64 = 1e8;
 /// Floating-point operations per second and thread assumed for the exact
 /// moment when one of its Taylor steps is too long to time
-/// ([`EXACT_PILOT_SECONDS`]). Measured on the 2-core machine (2026-11-27):
+/// ([`EXACT_PILOT_SECONDS`]). Measured on the 2-core machine:
 /// the incompressible exact moment ran at about 1.7 times the speed this
 /// assumes at ny = 128 and 256, the compressible one faster still (its
 /// Taylor steps stop before the 40 terms counted).
