@@ -2,7 +2,7 @@
 # The README's test command: the Rust test suite, then the Python package's.
 #
 # The Python part builds the extension (python/, PyO3 + maturin, abi3; the
-# dev profile, on the crates the Rust tests built) into a
+# dev profile) into a
 # private virtual environment under target/python-venv, installing maturin,
 # pytest, numpy and matplotlib (for examples/rigid_body.py) there from PyPI
 # when they are missing, and runs the pytest suite (python/tests) and the
@@ -36,8 +36,8 @@ if ! "$venv/bin/python" -c 'import maturin, pytest, numpy, matplotlib' 2>/dev/nu
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "maturin>=1.9,<2" "pytest>=7" numpy matplotlib
 fi
 # One target folder for both workspaces, and the extension built in the dev
-# profile (python/Cargo.toml repeats the root's): the engine's crates that
-# `cargo test` built are reused, so no release build is needed here.
+# profile (python/Cargo.toml repeats the root's): the dependencies `cargo
+# test` built are reused and no release build is needed here.
 export CARGO_TARGET_DIR="$PWD/target"
 part "Python environment ready"
 VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --quiet -m python/Cargo.toml
