@@ -47,7 +47,7 @@ fn distinct_triple() -> impl Strategy<Value = [Rational; 3]> {
 }
 
 proptest! {
-    #![proptest_config(proptest_config(128, 4096))]
+    #![proptest_config(proptest_config(128, 4096, module_path!()))]
 
     /// Every ordering of three distinct inertias: major and minor axes are
     /// stable with the closed-form Sigma^2, the intermediate axis is unstable.
@@ -221,7 +221,7 @@ fn fluctuating_gravity_spec(i1: &Rational, i3: &Rational, mgl: &Rational, p: &Ra
 }
 
 proptest! {
-    #![proptest_config(proptest_config(48, 1024))]
+    #![proptest_config(proptest_config(48, 1024, module_path!()))]
 
     #[test]
     fn fluctuating_lagrange_top_matches_closed_form(

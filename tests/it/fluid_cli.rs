@@ -5,23 +5,10 @@ use crate::common;
 
 use common::*;
 use serde_json::Value;
-use std::io::Write;
-use std::process::{Command, Output};
-
-fn verify(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
-}
+use std::process::Output;
 
 fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("verify-fluid-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::File::create(&path).unwrap().write_all(contents.as_bytes()).unwrap();
-    path
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    common::temp_file("fluid-cli", name, contents)
 }
 
 /// A small valid incompressible spec, edited by `edit`.

@@ -55,7 +55,7 @@ fn mutate(v: &mut Value, choice: &mut u64, replacement: &Value) -> bool {
 }
 
 proptest! {
-    #![proptest_config(proptest_config(300, 10_000))]
+    #![proptest_config(proptest_config(300, 10_000, module_path!()))]
 
     #[test]
     fn random_text_never_panics(text in ".{0,200}") {

@@ -76,7 +76,7 @@ fn every_fixture_agrees_with_the_exact_pipeline() {
 }
 
 proptest! {
-    #![proptest_config(proptest_config(64, 2000))]
+    #![proptest_config(proptest_config(64, 2000, module_path!()))]
 
     /// The rigid body about `e1`: `Sigma^2 = sigma^2 (hi - lo)/lo` with
     /// `a_i = 1/I_i - 1/I1` (`generator::closed_forms::rigid_body_sigma2`,

@@ -92,7 +92,7 @@ fn a_wrong_representation_is_rejected() {
 }
 
 proptest! {
-    #![proptest_config(proptest_config(64, 2048))]
+    #![proptest_config(proptest_config(64, 2048, module_path!()))]
 
     /// <ad*_xi mu, eta> = <mu, ad_xi eta> on every algebra of the zoo.
     #[test]

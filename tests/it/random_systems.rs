@@ -187,7 +187,7 @@ fn confirm_with_moments(cert: &spec::Certificate) -> Result<(), TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(proptest_config(64, 10_000))]
+    #![proptest_config(proptest_config(64, 10_000, module_path!()))]
 
     #[test]
     fn random_certificates_check_and_stable_ones_are_confirmed(c in case()) {

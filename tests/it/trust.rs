@@ -335,7 +335,7 @@ fn noise_too_small_for_doubles_is_inconclusive_and_rechecks() {
 }
 
 proptest! {
-    #![proptest_config(proptest_config(24, 400))]
+    #![proptest_config(proptest_config(24, 400, module_path!()))]
 
     /// Whatever the scale of the noise, down to the smallest normal double,
     /// the certified Sigma^2 is exactly 3 sigma^2 (sharp), and the

@@ -2,27 +2,16 @@
 //! verdict path, bad input (exit 2, the JSON path named), tampered
 //! certificates (exit 1), determinism and scale invariance.
 
+use crate::common;
 use serde_json::Value;
-use std::io::Write;
-use std::process::{Command, Output};
 use zeitlin::analysis::{analyse, ZeitlinProblem, ZeitlinSettings};
 use zeitlin::zonal::quantise;
 
-fn verify(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
-}
-
 fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("verify-zeitlin-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::File::create(&path).unwrap().write_all(contents.as_bytes()).unwrap();
-    path
+    common::temp_file("zeitlin-cli", name, contents)
 }
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{stderr, verify};
 
 /// A small valid spec (the monotone profile at N = 16), edited by `edit`.
 fn spec_with(edit: impl FnOnce(&mut Value)) -> Value {

@@ -3,25 +3,16 @@
 //! state against its zonal original, the compatible part pasted back, bad
 //! input (exit 2, the JSON path named) and tampering (exit 1).
 
+use crate::common;
 use serde_json::{json, Value};
 use std::io::Write;
-use std::process::{Command, Output};
-
-fn verify(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
-}
+use std::process::Command;
 
 fn temp_file(name: &str, contents: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("verify-zeitlin-harmonics-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::File::create(&path).unwrap().write_all(contents.as_bytes()).unwrap();
-    path
+    common::temp_file("zeitlin-harmonics", name, contents)
 }
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{stderr, verify};
 
 fn fixture(name: &str) -> Value {
     let path = format!("{}/../fixtures/zeitlin/{name}.json", env!("CARGO_MANIFEST_DIR"));

@@ -84,20 +84,50 @@ pub fn f(r: &Rational) -> f64 {
 
 /// Proptest settings with a fixed seed (reproducible runs; the failure
 /// persistence file still records any counterexample), `cases` cases, or
-/// `heavy` cases with the `heavy-tests` feature.
-pub fn proptest_config(cases: u32, heavy: u32) -> ProptestConfig {
+/// `heavy` cases with the `heavy-tests` feature. `module` is the caller's
+/// `module_path!()`: its counterexamples are kept in, and replayed from,
+/// `tests/it/proptest-regressions/MODULE.txt`.
+pub fn proptest_config(cases: u32, heavy: u32, module: &str) -> ProptestConfig {
     ProptestConfig {
         cases: if cfg!(feature = "heavy-tests") { heavy } else { cases },
         rng_seed: proptest::test_runner::RngSeed::Fixed(0x5EC_CA51),
         // The tests live outside the package's src/, so name the file directly.
-        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::Direct(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../tests/proptest-regressions/",
-            env!("CARGO_CRATE_NAME"),
-            ".txt"
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::Direct(Box::leak(
+            regressions_file(module).into_boxed_str(),
         )))),
         ..ProptestConfig::default()
     }
+}
+
+/// The proptest regressions file of a test module (`it::trust` ->
+/// `tests/it/proptest-regressions/trust.txt`).
+pub fn regressions_file(module: &str) -> String {
+    let name = module.rsplit("::").next().unwrap_or(module);
+    format!("{}/../tests/it/proptest-regressions/{name}.txt", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The committed counterexamples are where the property tests read them.
+#[test]
+fn the_committed_proptest_regressions_are_replayed() {
+    for module in ["it::closed_forms", "it::numeric_level", "it::random_systems", "it::trust"] {
+        let path = regressions_file(module);
+        assert!(std::path::Path::new(&path).is_file(), "{path}");
+    }
+}
+
+/// The `verify` binary with `args`.
+pub fn verify(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_verify")).args(args).output().expect("run verify")
+}
+
+/// A file `name` with `contents` in a temporary folder of this process,
+/// `tag` keeping the modules' files apart.
+pub fn temp_file(tag: &str, name: &str, contents: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("verify-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, contents).unwrap();
+    path
 }
 
 /// `verify simulate ARGS` with `RAYON_NUM_THREADS=threads`.
