@@ -207,6 +207,26 @@ impl<T: Scalar> Jet<T> {
         T::constant(x)
     }
 
+    /// The Taylor coefficients of `(s, c) = (sin a, cos a)` or `(sinh a,
+    /// cosh a)` from their values `s0`, `c0` at the point: `s' = c a'` and
+    /// `c' = -s a'` (`negate`) or `c' = s a'`, coefficient by coefficient,
+    /// `k s_k = sum_j j a_j c_(k-j)`.
+    fn coupled_pair(a: [T; 4], s0: T, c0: T, negate: bool) -> (Self, Self) {
+        let mut s = [s0; 4];
+        let mut c = [c0; 4];
+        for k in 1..4 {
+            let (mut ss, mut cc) = (T::constant(0.0), T::constant(0.0));
+            for j in 1..=k {
+                let ja = a[j] * Self::c(j as f64);
+                ss = ss + ja * c[k - j];
+                cc = cc + ja * s[k - j];
+            }
+            s[k] = ss / Self::c(k as f64);
+            c[k] = if negate { -(cc / Self::c(k as f64)) } else { cc / Self::c(k as f64) };
+        }
+        (Jet(s), Jet(c))
+    }
+
     /// The k-th derivative, `k! t_k`.
     pub fn derivative(&self, k: usize) -> T {
         let factorial = [1.0, 1.0, 2.0, 6.0][k];
@@ -275,21 +295,8 @@ impl<T: Scalar> Scalar for Jet<T> {
         Jet([T::constant(x), z, z, z])
     }
     fn sin_cos(self) -> (Self, Self) {
-        let a = self.0;
-        let (s0, c0) = a[0].sin_cos();
-        let mut s = [s0; 4];
-        let mut c = [c0; 4];
-        for k in 1..4 {
-            let (mut ss, mut cc) = (T::constant(0.0), T::constant(0.0));
-            for j in 1..=k {
-                let ja = a[j] * Self::c(j as f64);
-                ss = ss + ja * c[k - j];
-                cc = cc + ja * s[k - j];
-            }
-            s[k] = ss / Self::c(k as f64);
-            c[k] = -(cc / Self::c(k as f64));
-        }
-        (Jet(s), Jet(c))
+        let (s0, c0) = self.0[0].sin_cos();
+        Self::coupled_pair(self.0, s0, c0, true)
     }
     fn exp(self) -> Self {
         let a = self.0;
@@ -317,21 +324,8 @@ impl<T: Scalar> Scalar for Jet<T> {
         Jet(r)
     }
     fn sinh_cosh(self) -> (Self, Self) {
-        let a = self.0;
-        let (s0, c0) = a[0].sinh_cosh();
-        let mut s = [s0; 4];
-        let mut c = [c0; 4];
-        for k in 1..4 {
-            let (mut ss, mut cc) = (T::constant(0.0), T::constant(0.0));
-            for j in 1..=k {
-                let ja = a[j] * Self::c(j as f64);
-                ss = ss + ja * c[k - j];
-                cc = cc + ja * s[k - j];
-            }
-            s[k] = ss / Self::c(k as f64);
-            c[k] = cc / Self::c(k as f64);
-        }
-        (Jet(s), Jet(c))
+        let (s0, c0) = self.0[0].sinh_cosh();
+        Self::coupled_pair(self.0, s0, c0, false)
     }
     fn tanh_sech(self) -> (Self, Self) {
         let a = self.0;
