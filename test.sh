@@ -2,10 +2,9 @@
 # The README's test command: the Rust test suite, then the Python package's.
 #
 # The Python part builds the extension (python/, PyO3 + maturin, abi3; the
-# dev profile) into a
-# private virtual environment under target/python-venv, installing maturin,
-# pytest, numpy and matplotlib (for examples/rigid_body.py) there from PyPI
-# when they are missing, and runs the pytest suite (python/tests) and the
+# dev profile) into a private virtual environment under target/python-venv,
+# installing maturin, pytest, numpy and matplotlib (for
+# examples/rigid_body.py) there from PyPI when they are missing, and runs the pytest suite (python/tests) and the
 # package's doc examples from the repository root (they read fixtures/).
 # Between the two, tests/browser/report.sh opens `verify report`'s page in
 # headless Chromium (BROWSER_TESTS=0 skips it).
@@ -35,10 +34,8 @@ fi
 if ! "$venv/bin/python" -c 'import maturin, pytest, numpy, matplotlib' 2>/dev/null; then
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "maturin>=1.9,<2" "pytest>=7" numpy matplotlib
 fi
-# One target folder for both workspaces, and the extension built in the dev
-# profile (python/Cargo.toml repeats the root's): the dependencies `cargo
-# test` built are reused and no release build is needed here.
-export CARGO_TARGET_DIR="$PWD/target"
+# The extension is a member of the workspace, built in the dev profile: on
+# the engine's crates `cargo test` built, so only the binding crate compiles.
 part "Python environment ready"
 VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" maturin develop --quiet -m python/Cargo.toml
 part "extension built (maturin, dev profile)"

@@ -192,7 +192,7 @@ fn relative_mean(sde: &BarotropicSde, g: &DMatrix<Complex<f64>>, x0: &nalgebra::
 }
 
 #[test]
-#[cfg_attr(not(feature = "heavy-tests"), ignore = "heavy: CI runs it in release (.ci/run, heavy tests)")]
+#[ignore = "heavy: run by CI's heavy stage (VERIFY_HEAVY_TESTS=1 ... -- --include-ignored)"]
 fn exact_second_moments_of_the_discrete_sde_obey_the_certified_growth_plus_the_defect() {
     // The discretised linear SDE dX = A X dt + B X o dW of the paper's flow
     // (ny = 16, c_s = 2, c = 1.2). Ito: dE V/dt = E X^H Q_B X with Q_B the

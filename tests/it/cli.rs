@@ -105,7 +105,7 @@ fn summary_goes_to_stderr_and_output_file_is_written() {
 }
 
 #[test]
-#[cfg_attr(not(feature = "heavy-tests"), ignore = "heavy: CI runs it in release (.ci/run, heavy tests)")]
+#[ignore = "heavy: run by CI's heavy stage (VERIFY_HEAVY_TESTS=1 ... -- --include-ignored)"]
 fn fixture_table_lists_every_fixture() {
     let out = verify(&["--fixtures", fixture_path("").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));

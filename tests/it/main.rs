@@ -2,8 +2,10 @@
 //! own test file, and one binary links the engine once instead of 33 times.
 //!
 //! Run one module with a filter, e.g. `cargo test -p verify --test it boxes::`.
-//! The long property runs are behind `--features heavy-tests` (CI runs them
-//! in release, `.ci/run`); docs/architecture.md has the developer's loop.
+//! The heavy run, `VERIFY_HEAVY_TESTS=1 cargo test -p verify --test it --
+//! --include-ignored` (CI's heavy stage), takes the long property runs'
+//! heavy case counts and runs the tests marked `ignore = "heavy..."`;
+//! docs/architecture.md has the developer's loop.
 
 mod common;
 #[path = "common/su_n.rs"]

@@ -6,7 +6,7 @@
 //! starts, and from the fastest direction the growth rate at t -> 0 is the
 //! largest generalized eigenvalue of the certified pair (P, Q) (sharp).
 //!
-//! 64 cases by default; `--features heavy-tests` runs 10,000 (CI, release).
+//! 64 cases by default; the heavy run (`VERIFY_HEAVY_TESTS=1`, CI) 10,000.
 
 use crate::common;
 

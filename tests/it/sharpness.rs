@@ -13,7 +13,7 @@
 //! check (`Sigma^2 = sigma^2 I1 (I2 - I3) / (I3 (I1 - I2))` for the rigid
 //! body). The tolerance is the optimisation tolerance, `1e-6` relative.
 //!
-//! 24 cases by default; `--features heavy-tests` runs 400 (CI, release).
+//! 24 cases by default; the heavy run (`VERIFY_HEAVY_TESTS=1`, CI) 400.
 
 use crate::common;
 
@@ -23,7 +23,7 @@ use num_traits::Zero;
 use proptest::prelude::*;
 
 fn cases() -> u32 {
-    if cfg!(feature = "heavy-tests") {
+    if heavy() {
         400
     } else {
         24

@@ -114,7 +114,7 @@ fn fixed_size_kernels_agree_with_the_generic_stepper() {
 /// error stays within the Monte Carlo error at every dt (its bias is below
 /// what 2 x 10^5 paths resolve).
 #[test]
-#[cfg_attr(not(feature = "heavy-tests"), ignore = "heavy: CI runs it in release (.ci/run, heavy tests)")]
+#[ignore = "heavy: run by CI's heavy stage (VERIFY_HEAVY_TESTS=1 ... -- --include-ignored)"]
 fn weak_order_on_the_kubo_rigid_body() {
     let text = r#"{"name": "kubo", "algebra": "so3", "parameters": {"sigma": "1/2"},
         "hamiltonian": "Pi1^2/2 + (Pi2^2 + Pi3^2)/8", "equilibrium": [1, 0, 0], "noise": [["sigma", 0, 0]]}"#;
@@ -153,7 +153,7 @@ fn weak_order_on_the_kubo_rigid_body() {
 /// the exact second moments within 4 standard errors at every output time,
 /// and both stay under the certified bound e^{Sigma^2 t}.
 #[test]
-#[cfg_attr(not(feature = "heavy-tests"), ignore = "heavy: CI runs it in release (.ci/run, heavy tests)")]
+#[ignore = "heavy: run by CI's heavy stage (VERIFY_HEAVY_TESTS=1 ... -- --include-ignored)"]
 fn linearised_ensembles_match_the_exact_moments() {
     for name in fixture_specs() {
         let spec = spec_of(&name);

@@ -177,7 +177,7 @@ fn class_of<'a>(pointer: &str, rows: &'a [(String, String)]) -> Option<&'a str> 
 /// except the fields `docs/ci.md` declares free text, whose edits must pass
 /// (so the table is exact both ways).
 #[test]
-#[cfg_attr(not(feature = "heavy-tests"), ignore = "heavy: CI runs it in release (.ci/run, heavy tests)")]
+#[ignore = "heavy: run by CI's heavy stage (VERIFY_HEAVY_TESTS=1 ... -- --include-ignored)"]
 fn every_field_of_every_kind_is_read_by_check() {
     let classes = documented_classes();
     let mut tried = 0;
@@ -492,7 +492,7 @@ fn a_review_of_the_statements_found_these_and_they_hold_now() {
 /// (308 log2 10 = 1023.2), so the budget is `4096 (128/1024)^2 = 64`
 /// sub-boxes analysed, and the sub-boxes left by it say so.
 #[test]
-#[cfg_attr(not(feature = "heavy-tests"), ignore = "heavy: CI runs it in release (.ci/run, heavy tests)")]
+#[ignore = "heavy: run by CI's heavy stage (VERIFY_HEAVY_TESTS=1 ... -- --include-ignored)"]
 fn a_box_with_long_bounds_spends_a_budget_scaled_to_their_length() {
     let mut v = committed("boxes/lagrange-top-fluctuating-gravity-box.json");
     v["box"]["parameters"]["p"] = json!([1e-308, "7/2"]);

@@ -140,7 +140,7 @@ fn bad_harmonics_name_the_field_and_exit_2() {
 }
 
 #[test]
-#[cfg_attr(not(feature = "heavy-tests"), ignore = "heavy: CI runs it in release (.ci/run, heavy tests)")]
+#[ignore = "heavy: run by CI's heavy stage (VERIFY_HEAVY_TESTS=1 ... -- --include-ignored)"]
 fn the_cli_certifies_checks_and_refuses_tampering() {
     for name in ["tesseral-noise-n16", "rossby-haurwitz-l3-n8", "rossby-haurwitz-l2-n7", "tilted-energy-casimir-n32"] {
         let spec_file = temp_file(&format!("{name}.json"), &fixture(name).to_string());

@@ -82,14 +82,21 @@ pub fn f(r: &Rational) -> f64 {
     exact::rational_to_f64(r)
 }
 
+/// Whether this is the heavy run: `VERIFY_HEAVY_TESTS=1` in the environment
+/// (CI's heavy stage). It is read at run time, not a cargo feature, so the
+/// heavy run reuses the test binary `./test.sh` built.
+pub fn heavy() -> bool {
+    std::env::var_os("VERIFY_HEAVY_TESTS").is_some_and(|v| v == "1")
+}
+
 /// Proptest settings with a fixed seed (reproducible runs; the failure
 /// persistence file still records any counterexample), `cases` cases, or
-/// `heavy` cases with the `heavy-tests` feature. `module` is the caller's
+/// `heavy` cases in the heavy run ([`heavy`]). `module` is the caller's
 /// `module_path!()`: its counterexamples are kept in, and replayed from,
 /// `tests/it/proptest-regressions/MODULE.txt`.
-pub fn proptest_config(cases: u32, heavy: u32, module: &str) -> ProptestConfig {
+pub fn proptest_config(cases: u32, heavy_cases: u32, module: &str) -> ProptestConfig {
     ProptestConfig {
-        cases: if cfg!(feature = "heavy-tests") { heavy } else { cases },
+        cases: if heavy() { heavy_cases } else { cases },
         rng_seed: proptest::test_runner::RngSeed::Fixed(0x5EC_CA51),
         // The tests live outside the package's src/, so name the file directly.
         failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::Direct(Box::leak(
