@@ -12,11 +12,12 @@ one script, against the speed targets below:
   same thread count, best of three each; the target is the CLI's rate
   within 20%.
 
-Run from the repository root after ``./test.sh`` (which installs the
-package into ``target/python-venv``)::
+Run from the repository root, with the release wheel installed into the
+Python that runs it (``./test.sh`` installs a dev-profile wheel, slower)::
 
+    python/wheel.sh --release dist && pip install dist/energy_casimir-*.whl
     cargo build --release -p verify --example bench_certify --bin verify
-    target/python-venv/bin/python bench/python_side_by_side.py [--reps 3000] [--grid 100]
+    python bench/python_side_by_side.py [--reps 3000] [--grid 100]
 """
 
 import argparse
