@@ -4,8 +4,9 @@
 # The Python part builds the package's abi3 wheel and sdist
 # (python/wheel.sh: maturin, the dev profile, with maturin in
 # target/python-venv), installs the wheel into a new virtual environment
-# (target/python-wheel-venv) whose PATH has no Rust toolchain, with pytest
-# and matplotlib (for examples/rigid_body.py) from PyPI, and runs the pytest
+# (target/python-wheel-venv) whose PATH has no Rust toolchain, with its
+# quflow extra (h5py), pytest, matplotlib (for examples/rigid_body.py) and
+# scipy (the quflow tests' independent harmonics) from PyPI, and runs the pytest
 # suite (python/tests) and the package's doc examples against it, from the
 # repository root (they read fixtures/).
 # Between the two, tests/browser/report.sh opens `verify report`'s page in
@@ -62,7 +63,7 @@ if PATH="$no_rust_path" command -v cargo >/dev/null || PATH="$no_rust_path" comm
   exit 1
 fi
 PATH="$no_rust_path" "$wheel_env/bin/python" -m pip install --quiet --disable-pip-version-check \
-  target/wheels/energy_casimir-*.whl "pytest>=7" matplotlib
+  "$(ls target/wheels/energy_casimir-*.whl)[quflow]" "pytest>=7" matplotlib scipy
 part "wheel installed into a new environment without Rust"
 # From the repository root (the tests read fixtures/), against the installed
 # package: python/pysrc is not on the path, and the check below says so.
