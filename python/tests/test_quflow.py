@@ -71,6 +71,9 @@ def test_a_file_quflow_wrote_certifies_as_the_matrices_it_was_written_from():
     assert (cert.verdict, cert.level) == ("stable", "verified_float")
     assert cert.sigma2 == pytest.approx(committed["sigma2"], rel=1e-9)
     assert cert.sigma2_upper == pytest.approx(committed["sigma2_upper"], rel=1e-9)
+    # The axis pins the signs of the m < 0 coefficients (Sigma^2 does not
+    # see a mirror image).
+    assert cert["frame"]["axis"] == pytest.approx(committed["frame"]["axis"], abs=1e-12)
     assert ec.check(cert).verdict == "stable"
 
 
@@ -112,6 +115,14 @@ def test_a_tilted_state_from_scipy_harmonics_certifies_as_the_zonal_one(tmp_path
     assert cert.verdict == "stable"
     assert cert["frame"]["kind"] == "rotated"
     assert cert.sigma2 == pytest.approx(certificate("energy-casimir-n32")["sigma2"], rel=1e-8)
+    # The axis, derived: these coefficients are of quflow's function picture
+    # (shc2shr), which is its matrix frame mirrored in y, so the state's l = 1
+    # part (omega_11, omega_1-1, omega_10) points along (0.48, 0.6, 0.64); the
+    # engine reports axes in its own frame, quflow's turned by pi about z
+    # (x and y change sign; docs/python.md), with the largest component
+    # positive: (-0.48, -0.6, 0.64).
+    assert (omega[3], omega[1], omega[2]) == pytest.approx(tuple(0.6812733176437584 * np.array([0.48, 0.6, 0.64])), rel=1e-12)
+    assert cert["frame"]["axis"] == pytest.approx([-0.48, -0.6, 0.64], abs=1e-12)
 
 
 def test_written_files_have_quflows_layout_and_read_back(tmp_path):
@@ -144,23 +155,82 @@ def test_written_files_have_quflows_layout_and_read_back(tmp_path):
 
 
 def test_shc_rows_are_read_as_quflows_real_coefficients(tmp_path):
-    # A complex row (quflow.save with qtype "shc") of the real one: c_l0 = r_l0,
-    # c_{l,m} = (-1)^m (r_{l,m} + i r_{l,-m}) / sqrt(2) (quflow's shr2shc).
-    N = 4
-    rng = np.random.default_rng(3)
-    r = rng.standard_normal(N * N)
-    c = np.zeros(N * N, dtype=complex)
-    for l in range(N):
-        c[l * l + l] = r[l * l + l]
-        for m in range(1, l + 1):
-            c[l * l + l + m] = (-1) ** m * (r[l * l + l + m] + 1j * r[l * l + l - m]) / math.sqrt(2)
-            c[l * l + l - m] = (-1) ** m * np.conj(c[l * l + l + m])
+    # quflow 0.1.0's own shr2shc of omega = (-1, -11/12, ..., 1) rounded to
+    # 3 decimals, N = 5 (printed by quflow, not computed here).
+    omega = np.round(np.linspace(-1, 1, 25), 3)
+    re = [-1.0, -0.5303300858899106, -0.833, 0.5303300858899106, -0.23546655813512032, -0.2948635277547903, -0.5,
+          0.2948635277547903, -0.23546655813512032, 0.17677669529663687, 0.11808683245815343, 0.058689862838483445,
+          0.0, -0.058689862838483445, 0.11808683245815343, -0.17677669529663687, 0.7071067811865475, 0.648416918348064,
+          0.589019948728394, 0.5303300858899106, 0.667, -0.5303300858899106, 0.589019948728394, -0.648416918348064,
+          0.7071067811865475]
+    im = [0.0, 0.648416918348064, 0.0, 0.648416918348064, 0.47164022305142717, 0.41224325343175716, 0.0,
+          0.41224325343175716, -0.47164022305142717, 0.17677669529663687, 0.11808683245815343, 0.058689862838483445,
+          0.0, 0.058689862838483445, -0.11808683245815343, 0.17677669529663687, -0.23546655813512032,
+          -0.2948635277547903, -0.35355339059327373, -0.41224325343175716, 0.0, -0.41224325343175716,
+          0.35355339059327373, -0.2948635277547903, 0.23546655813512032]
     path = tmp_path / "shc.hdf5"
     with h5py.File(path, "w") as f:
-        f.attrs["N"] = np.int64(N)
-        s = f.create_dataset("state", data=c[None, :])
+        f.attrs["N"] = np.int64(5)
+        s = f.create_dataset("state", data=(np.array(re) + 1j * np.array(im))[None, :])
         s.attrs["qtype"] = "shc"
-    np.testing.assert_allclose(quflow.read(path).omega, r, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(quflow.read(path).omega, omega, rtol=0, atol=1e-15)
+    # Complex values under qtype "shr" (or real ones under "shc") are refused.
+    bad = tmp_path / "bad.hdf5"
+    with h5py.File(bad, "w") as f:
+        f.create_dataset("state", data=np.ones((1, 16), dtype=complex)).attrs["qtype"] = "shr"
+    with pytest.raises(ValueError, match=r"qtype 'shr' but complex values"):
+        quflow.read(bad)
+
+
+def test_a_refused_write_leaves_the_file_as_it_was(tmp_path):
+    # Appending to complex rows, to a QuSimulation file, or with bad times
+    # changes nothing; a refused first write creates no file.
+    shc = tmp_path / "shc.hdf5"
+    with h5py.File(shc, "w") as f:
+        f.attrs["N"] = np.int64(4)
+        f.create_dataset("state", data=np.ones((1, 16), dtype=complex), maxshape=(None, 16), chunks=(1, 16)).attrs["qtype"] = "shc"
+        f.create_dataset("qtime", data=[0.0], maxshape=(None,))
+        f.create_dataset("time", data=[0.0], maxshape=(None,))
+    sim = tmp_path / "sim.hdf5"
+    with h5py.File(sim, "w") as f:
+        f.attrs["N"] = np.int64(4)
+        f.create_dataset("mat", data=np.zeros((1, 4, 4), dtype=complex))
+        f.create_dataset("time", data=[0.0])
+    ours = tmp_path / "ours.hdf5"
+    quflow.write(ours, np.ones(16), time=[0.0])
+    before = {p: p.read_bytes() for p in (shc, sim, ours)}
+    with pytest.raises(ValueError, match=r"only real float64 rows"):
+        quflow.write(shc, np.ones(16))
+    with pytest.raises(ValueError, match=r"has mat, time but no `state`"):
+        quflow.write(sim, np.ones(16))
+    with pytest.raises(ValueError, match=r"time: a value .* is not finite"):
+        quflow.write(ours, np.ones(16), time=[np.inf])
+    with pytest.raises(ValueError, match=r"time: a value .* is not finite"):
+        quflow.write(ours, np.ones(16), time=[1e308])  # qtime = time / hbar overflows
+    assert {p: p.read_bytes() for p in (shc, sim, ours)} == before
+    fresh = tmp_path / "fresh.hdf5"
+    with pytest.raises(ValueError, match=r"time: 2 values for 1 states"):
+        quflow.write(fresh, np.zeros(16), time=[0.0, 1.0])
+    with pytest.raises(ValueError, match=r"harmonics need the file's N"):
+        quflow.write(fresh, [[1, 0, 1.0]])
+    assert not fresh.exists()
+    # Times are stored as given.
+    quflow.write(ours, np.ones(16), time=[7.3])
+    with h5py.File(ours, "r") as f:
+        assert f["time"][-1] == 7.3
+
+
+def test_files_of_quflows_old_scaling_are_refused(tmp_path):
+    # Before December 2023 quflow wrote time = qtime sqrt(16 pi) / N^(3/2).
+    N = 4
+    path = tmp_path / "old.hdf5"
+    with h5py.File(path, "w") as f:
+        f.attrs["N"] = np.int64(N)
+        f.create_dataset("state", data=np.ones((1, N * N))).attrs["qtype"] = "shr"
+        f.create_dataset("qtime", data=[2.0])
+        f.create_dataset("time", data=[2.0 * math.sqrt(16 * math.pi) / N**1.5])
+    with pytest.raises(ValueError, match=r"is not qtime \* hbar .* before December 2023"):
+        quflow.read(path)
 
 
 def test_bad_files_and_arguments_name_what_is_wrong(tmp_path):
@@ -191,6 +261,21 @@ def test_bad_files_and_arguments_name_what_is_wrong(tmp_path):
         quflow.write(out, np.full(16, np.nan))
     with pytest.raises(ValueError, match=r"harmonics\[0\]: \(l, m\) = \(4, 0\) is not a harmonic of N = 4"):
         quflow.omega_from_harmonics([[4, 0, 1.0]], 4)
+    with h5py.File(tmp_path / "odd.hdf5", "w") as f:
+        f.attrs["N"] = 4.5
+        f.create_dataset("state", data=np.ones((1, 16)))
+        f.create_dataset("data", data=[1.0])
+        f.create_dataset("time", data=[np.nan])
+    with pytest.raises(ValueError, match=r"the attribute N = 4.5 is not an integer"):
+        quflow.read(tmp_path / "odd.hdf5")
+    with pytest.raises(ValueError, match=r"'/data' is a dataset, not a group"):
+        quflow.read(tmp_path / "odd.hdf5", datapath="/data")
+    with h5py.File(tmp_path / "odd.hdf5", "a") as f:
+        f.attrs["N"] = np.int64(4)
+    with pytest.raises(ValueError, match=r"`time` at output 0 is nan, not finite"):
+        quflow.read(tmp_path / "odd.hdf5")
+    with pytest.raises(FileNotFoundError, match=r"no such file"):
+        quflow.read(tmp_path / "missing.hdf5")
     with pytest.raises(ValueError, match=r"every coefficient with l >= 1 is zero"):
         quflow.zeitlin_spec(np.zeros(16), noise=[])
     with pytest.raises(ValueError, match=r"noise\[0\]: 9 coefficients, expected N\^2 = 16"):

@@ -20,6 +20,10 @@ stopping time in a certificate are per unit ``t``. quflow's integrators
 step in ``qtime = t / hbar``; a rate per unit ``qtime`` is ``hbar`` times
 the rate per unit ``t`` (:func:`rate_per_qtime`).
 
+**Axes**: a certificate's ``frame.axis`` is in the engine's frame,
+quflow's matrix frame (that of ``quflow.geometry.rotate``) turned by pi
+about z: quflow's axis is ``(-x, -y, z)`` of the reported ``(x, y, z)``.
+
 h5py is needed (``pip install h5py``, or the ``quflow`` extra of this
 package); nothing else here imports it.
 
@@ -62,6 +66,10 @@ PathLike = Union[str, "os.PathLike[str]"]
 #: (quflow's ``version`` attribute; the scaling of ``T_lm`` and of ``time``
 #: is the one quflow has used since December 2023).
 QUFLOW_VERSION = "0.1.0"
+
+#: The largest N read: the engine's Zeitlin model goes to N = 4096 (fields
+#: given by harmonics to 1024).
+MAX_N = 4096
 
 
 def hbar(N: int) -> float:
@@ -142,43 +150,41 @@ def read(path: PathLike, step: int = -1, *, datapath: str = "/") -> QuflowState:
     ``-1`` the last) of a file quflow wrote with ``quflow.save`` or
     ``quflow.QuData``: the ``state`` dataset under ``datapath``, its
     ``time`` and ``qtime``, and the group's ``N``. Complex coefficients
-    (``qtype`` ``"shc"``) are converted to quflow's real ones."""
+    (``qtype`` ``"shc"``) are converted to quflow's real ones. Files of
+    quflow's scaling before December 2023 (``time`` not ``qtime * hbar``)
+    are refused."""
     h5py = _h5py()
     path = os.fspath(path)
-    with h5py.File(path, "r") as f:
-        if datapath not in f:
-            raise ValueError(f"{path}: no group {datapath!r}")
-        group = f[datapath]
+    if not isinstance(step, (int, np.integer)) or isinstance(step, bool):
+        raise ValueError(f"step: expected an integer, got {step!r}")
+    with _open(h5py, path, "r") as f:
+        group = _group(h5py, f, datapath, path)
         if "state" not in group:
             found = ", ".join(sorted(group.keys())) or "nothing"
             hint = " (a quflow QuSimulation file: its `mat` dataset holds matrices; save them with numpy.save and give the spec {\"npy\": ...})" if "mat" in group else ""
             raise ValueError(f"{path}: no dataset `state` in {datapath!r} (found {found}){hint}")
-        states = group["state"]
+        states = _dataset(h5py, group, "state", path)
         if states.ndim != 2:
             raise ValueError(f"{path}: `state` has shape {states.shape}, expected (outputs, N^2)")
         rows, width = states.shape
         N = _n_of(group, width, path)
         if rows == 0:
             raise ValueError(f"{path}: `state` has no rows")
-        if not isinstance(step, (int, np.integer)) or isinstance(step, bool):
-            raise ValueError(f"step: expected an integer, got {step!r}")
         if not -rows <= step < rows:
             raise ValueError(f"step: {step} is out of range for {rows} outputs (0 to {rows - 1}, or -1 to -{rows})")
         row = int(step) % rows
-        qtype = states.attrs.get("qtype", "shr")
-        if isinstance(qtype, bytes):
-            qtype = qtype.decode()
+        qtype = _qtype(states, path)
         data = np.asarray(states[row])
-        if qtype == "shr":
-            omega = np.asarray(data, dtype=float)
-        elif qtype == "shc":
-            omega = _shc_to_shr(np.asarray(data, dtype=complex), N)
-        else:
-            raise ValueError(f"{path}: `state` has qtype {qtype!r}; expected 'shr' or 'shc'")
+        omega = np.asarray(data, dtype=float) if qtype == "shr" else _shc_to_shr(np.asarray(data, dtype=complex), N)
         if not np.all(np.isfinite(omega)):
             raise ValueError(f"{path}: `state` row {row} has a value that is not finite")
-        time = _entry(group, "time", row, rows, path)
-        qtime = _entry(group, "qtime", row, rows, path)
+        time = _entry(h5py, group, "time", row, rows, path)
+        qtime = _entry(h5py, group, "qtime", row, rows, path)
+    if time is not None and qtime is not None and not math.isclose(time, qtime * hbar(N), rel_tol=1e-9, abs_tol=0.0):
+        raise ValueError(
+            f"{path}: time {time!r} is not qtime * hbar = {qtime * hbar(N)!r} (hbar = 2/sqrt(N^2 - 1)): "
+            "a file of quflow's scaling before December 2023 (its T_lm and time differ), which is not read"
+        )
     return QuflowState(omega=omega, N=N, time=time, qtime=qtime, step=row, path=path)
 
 
@@ -187,6 +193,7 @@ def zeitlin_spec(
     *,
     noise: Sequence[Any],
     step: int = -1,
+    datapath: str = "/",
     N: Optional[int] = None,
     name: Optional[str] = None,
     parameters: Optional[Dict[str, Any]] = None,
@@ -194,9 +201,10 @@ def zeitlin_spec(
     settings: Optional[Dict[str, Any]] = None,
 ) -> Dict[str, Any]:
     """A Zeitlin spec (a dict for :func:`energy_casimir.certify`) whose
-    equilibrium is a quflow state: a file's output ``step`` (see
-    :func:`read`), a :class:`QuflowState`, or an ``omega`` vector (then
-    ``N`` is ``sqrt(len(omega))``).
+    equilibrium is a quflow state: a file's output ``step`` under
+    ``datapath`` (see :func:`read`), a :class:`QuflowState` (``step`` is
+    then unused), or an ``omega`` vector (then ``N`` is
+    ``sqrt(len(omega))``).
 
     Each ``noise`` entry is a profile expression in ``z`` (a string, as in
     any Zeitlin spec), a dict passed through (``{"harmonics": ...}``,
@@ -204,8 +212,10 @@ def zeitlin_spec(
     (converted to harmonics)."""
     if isinstance(state, QuflowState):
         qs = state
+        if len(qs.omega) != qs.N * qs.N:
+            raise ValueError(f"state: {len(qs.omega)} coefficients, but N = {qs.N} needs N^2 = {qs.N * qs.N}")
     elif isinstance(state, (str, os.PathLike)):
-        qs = read(state, step)
+        qs = read(state, step, datapath=datapath)
     else:
         omega = _omega_vector(state, "state")
         qs = QuflowState(omega=omega, N=math.isqrt(len(omega)), time=None, qtime=None, step=0, path="")
@@ -251,27 +261,36 @@ def write(
 ) -> None:
     """Append states to a quflow file in ``quflow.save``'s layout (created
     if missing): ``omegas`` is one ``omega`` (length ``N^2``) or rows of
-    them, or harmonics lists ``[[l, m, value], ...]`` (then the file's
-    ``N`` must exist). Give the times as ``time`` (``t``) or ``qtime``, one
-    per row; without either, ``qtime`` counts on from the file's last in
-    steps of 1, as quflow's ``save`` does. quflow reads the result with
-    ``quflow.load`` or ``h5py`` (``quflow.shr2mat(f["state"][-1])``)."""
+    them, or harmonics ``[[l, m, value], ...]`` (then the file's ``N`` must
+    exist). Give the times as ``time`` (``t``) or ``qtime``, one per row;
+    without either, ``qtime`` counts on from the file's last in steps of 1,
+    as quflow's ``save`` does. Everything is checked before the file is
+    changed: a refused call leaves it as it was (and creates none). quflow
+    reads the result with ``quflow.load`` or ``h5py``
+    (``quflow.shr2mat(f["state"][-1])``)."""
     h5py = _h5py()
     path = os.fspath(path)
     if time is not None and qtime is not None:
         raise ValueError("give time or qtime, not both")
-    with h5py.File(path, "a") as f:
+    existing_n, before, last_qtime = None, 0, None
+    if os.path.exists(path):
+        with _open(h5py, path, "r") as f:
+            if datapath in f:
+                existing_n, before, last_qtime = _appendable(h5py, _group(h5py, f, datapath, path), path)
+    rows = _rows(omegas, existing_n)
+    width = rows.shape[1]
+    N = math.isqrt(width)
+    if N * N != width or N < 2:
+        raise ValueError(f"omegas: rows of {width} coefficients; expected N^2 with N >= 2")
+    if existing_n is not None and existing_n != N:
+        raise ValueError(f"{path}: the file has N = {existing_n}, the states N = {N}")
+    count = rows.shape[0]
+    if count == 0:
+        raise ValueError("omegas: no states to write")
+    qtimes, times = _times(time, qtime, count, N, last_qtime)
+    now = datetime.datetime.now().isoformat()
+    with _open(h5py, path, "a") as f:
         group = f.require_group(datapath)
-        existing_n = int(group.attrs["N"]) if "N" in group.attrs else None
-        rows = _rows(omegas, existing_n)
-        width = rows.shape[1]
-        N = math.isqrt(width)
-        if N * N != width or N < 2:
-            raise ValueError(f"omegas: rows of {width} coefficients; expected N^2 with N >= 2")
-        if existing_n is not None and existing_n != N:
-            raise ValueError(f"{path}: the file has N = {existing_n}, the states N = {N}")
-        count = rows.shape[0]
-        now = datetime.datetime.now().isoformat()
         if "state" not in group:
             states = group.create_dataset("state", (0, width), dtype="f8", maxshape=(None, width), chunks=(1, width))
             states.attrs["qtype"] = "shr"
@@ -280,17 +299,12 @@ def write(
             group.attrs["N"] = np.int64(N)
             group.attrs["version"] = QUFLOW_VERSION
             group.attrs["created"] = now
-        states = group["state"]
-        if states.shape[1] != width:
-            raise ValueError(f"{path}: `state` rows hold {states.shape[1]} coefficients, the states {width}")
-        before = states.shape[0]
-        qtimes = _times(time, qtime, count, N, group, before)
         for name in ("state", "qtime", "time"):
             group[name].resize(before + count, axis=0)
             group[name].attrs["modified"] = now
-        states[before:, :] = rows
+        group["state"][before:, :] = rows
         group["qtime"][before:] = qtimes
-        group["time"][before:] = qtimes * hbar(N)
+        group["time"][before:] = times
 
 
 def _h5py():
@@ -319,26 +333,104 @@ def _omega_vector(values: Any, what: str) -> np.ndarray:
     return omega
 
 
+def _open(h5py: Any, path: str, mode: str):
+    try:
+        return h5py.File(path, mode)
+    except BlockingIOError as e:
+        raise OSError(f"{path}: the file is locked (another process has it open): {e}") from e
+    except OSError as e:
+        if mode == "r" and not os.path.exists(path):
+            raise FileNotFoundError(f"{path}: no such file") from e
+        raise OSError(f"{path}: not an HDF5 file that can be opened ({e})") from e
+
+
+def _group(h5py: Any, f: Any, datapath: str, path: str) -> Any:
+    if datapath not in f:
+        raise ValueError(f"{path}: no group {datapath!r}")
+    group = f[datapath]
+    if not isinstance(group, h5py.Group):
+        raise ValueError(f"{path}: {datapath!r} is a dataset, not a group")
+    return group
+
+
+def _dataset(h5py: Any, group: Any, name: str, path: str) -> Any:
+    data = group[name]
+    if not isinstance(data, h5py.Dataset):
+        raise ValueError(f"{path}: `{name}` is a group, not a dataset")
+    return data
+
+
+def _qtype(states: Any, path: str) -> str:
+    qtype = states.attrs.get("qtype", None)
+    if isinstance(qtype, bytes):
+        qtype = qtype.decode()
+    kind = states.dtype.kind
+    if kind not in "fc":
+        raise ValueError(f"{path}: `state` holds {states.dtype}, not real or complex numbers")
+    expected = "shc" if kind == "c" else "shr"
+    if qtype is None:
+        return expected
+    if qtype != expected:
+        raise ValueError(f"{path}: `state` has qtype {qtype!r} but {'complex' if kind == 'c' else 'real'} values (qtype {expected!r} expected)")
+    return qtype
+
+
 def _n_of(group: Any, width: int, path: str) -> int:
     n = math.isqrt(width)
     if n * n != width:
         raise ValueError(f"{path}: `state` rows hold {width} coefficients, not N^2")
     if "N" in group.attrs:
-        attr = int(group.attrs["N"])
-        if attr != n:
-            raise ValueError(f"{path}: the attribute N = {attr} does not match `state` rows of {width} = {n}^2 coefficients")
-    if n < 2:
-        raise ValueError(f"{path}: N = {n}; the engine needs N >= 2")
+        attr = np.asarray(group.attrs["N"])
+        try:
+            value = float(attr.reshape(-1)[0]) if attr.size == 1 else None
+        except (TypeError, ValueError):
+            value = None
+        if value is None or not math.isfinite(value) or value != int(value):
+            raise ValueError(f"{path}: the attribute N = {attr.tolist()!r} is not an integer")
+        if int(value) != n:
+            raise ValueError(f"{path}: the attribute N = {int(value)} does not match `state` rows of {width} = {n}^2 coefficients")
+    if not 2 <= n <= MAX_N:
+        raise ValueError(f"{path}: N = {n}; the engine's Zeitlin model takes 2 <= N <= {MAX_N}")
     return n
 
 
-def _entry(group: Any, name: str, row: int, rows: int, path: str) -> Optional[float]:
+def _entry(h5py: Any, group: Any, name: str, row: int, rows: int, path: str) -> Optional[float]:
     if name not in group:
         return None
-    data = group[name]
+    data = _dataset(h5py, group, name, path)
     if data.ndim != 1 or data.shape[0] != rows:
         raise ValueError(f"{path}: `{name}` has shape {data.shape}, expected ({rows},) like `state`")
-    return float(data[row])
+    if data.dtype.kind not in "fiu":
+        raise ValueError(f"{path}: `{name}` holds {data.dtype}, not real numbers")
+    value = float(data[row])
+    if not math.isfinite(value):
+        raise ValueError(f"{path}: `{name}` at output {row} is {value!r}, not finite")
+    return value
+
+
+def _appendable(h5py: Any, group: Any, path: str) -> tuple:
+    """The file's ``N``, rows and last ``qtime``, after checking that rows can
+    be appended to it in quflow.save's layout."""
+    if "state" not in group:
+        clash = [name for name in ("mat", "time", "qtime", "step") if name in group]
+        if clash:
+            raise ValueError(f"{path}: has {', '.join(clash)} but no `state` (a quflow QuSimulation file, or another layout): not written to")
+        return None, 0, None
+    states = _dataset(h5py, group, "state", path)
+    if states.ndim != 2 or states.maxshape[0] is not None:
+        raise ValueError(f"{path}: `state` has shape {states.shape} (maximum {states.maxshape}); rows cannot be appended")
+    if _qtype(states, path) != "shr" or states.dtype != np.float64:
+        raise ValueError(f"{path}: `state` holds {states.dtype} (qtype 'shc'); only real float64 rows ('shr') are appended")
+    rows, width = states.shape
+    n = _n_of(group, width, path)
+    for name in ("qtime", "time"):
+        if name not in group:
+            raise ValueError(f"{path}: no dataset `{name}` beside `state`")
+        data = _dataset(h5py, group, name, path)
+        if data.ndim != 1 or data.shape[0] != rows or data.maxshape[0] is not None or data.chunks is None:
+            raise ValueError(f"{path}: `{name}` has shape {data.shape} (maximum {data.maxshape}); expected a resizable ({rows},)")
+    last = float(group["qtime"][rows - 1]) if rows > 0 else None
+    return n, rows, last
 
 
 def _shc_to_shr(c: np.ndarray, N: int) -> np.ndarray:
@@ -355,12 +447,12 @@ def _shc_to_shr(c: np.ndarray, N: int) -> np.ndarray:
 
 
 def _rows(omegas: Any, n: Optional[int]) -> np.ndarray:
-    # Rows of three numbers are harmonics entries: no omega has 3 = N^2 entries.
-    if isinstance(omegas, list) and omegas and isinstance(omegas[0], (list, tuple)) and len(omegas[0]) == 3:
-        if n is None:
-            raise ValueError("omegas: harmonics lists need the file's N (write an omega vector first)")
-        return omega_from_harmonics(omegas, n)[None, :]
     rows = np.asarray(omegas, dtype=float)
+    # Rows of three numbers are harmonics entries: no omega has 3 = N^2 entries.
+    if rows.ndim == 2 and rows.shape[1] == 3:
+        if n is None:
+            raise ValueError("omegas: harmonics need the file's N (write an omega vector first)")
+        return omega_from_harmonics(rows.tolist(), n)[None, :]
     if rows.ndim == 1:
         rows = rows[None, :]
     if rows.ndim != 2:
@@ -370,15 +462,24 @@ def _rows(omegas: Any, n: Optional[int]) -> np.ndarray:
     return rows
 
 
-def _times(time: Any, qtime: Any, count: int, N: int, group: Any, before: int) -> np.ndarray:
-    given = time if time is not None else qtime
-    if given is None:
-        start = float(group["qtime"][before - 1]) + 1.0 if before > 0 else 0.0
-        return start + np.arange(count, dtype=float)
-    values = np.atleast_1d(np.asarray(given, dtype=float))
-    what = "time" if time is not None else "qtime"
-    if values.shape != (count,):
-        raise ValueError(f"{what}: {values.size} values for {count} states")
-    if not np.all(np.isfinite(values)):
-        raise ValueError(f"{what}: a value is not finite")
-    return values / hbar(N) if time is not None else values
+def _times(time: Any, qtime: Any, count: int, N: int, last_qtime: Optional[float]) -> tuple:
+    """``(qtime, time)`` of the rows to write: the given times as given, the
+    other ones converted; counted on from the file's last ``qtime`` when
+    neither is given."""
+    hb = hbar(N)
+    if time is None and qtime is None:
+        start = last_qtime + 1.0 if last_qtime is not None else 0.0
+        qtimes = start + np.arange(count, dtype=float)
+        times = qtimes * hb
+        if (count > 1 and np.any(qtimes[1:] == qtimes[:-1])) or (last_qtime is not None and qtimes[0] == last_qtime):
+            raise ValueError("qtime: counting on in steps of 1 from the file's last qtime no longer changes it (give the times)")
+    else:
+        what = "time" if time is not None else "qtime"
+        values = np.atleast_1d(np.asarray(time if time is not None else qtime, dtype=float))
+        if values.shape != (count,):
+            raise ValueError(f"{what}: {values.size} values for {count} states")
+        with np.errstate(over="ignore"):  # an overflow is refused below
+            qtimes, times = (values / hb, values) if time is not None else (values, values * hb)
+    if not (np.all(np.isfinite(qtimes)) and np.all(np.isfinite(times))):
+        raise ValueError("time: a value (or its qtime = time / hbar) is not finite")
+    return qtimes, times
