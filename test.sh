@@ -51,7 +51,7 @@ part "wheel and sdist built (maturin, dev profile)"
 import glob, sys, tarfile
 sdist, = glob.glob("target/wheels/energy_casimir-*.tar.gz")
 names = tarfile.open(sdist).getnames()
-for need in ("pyproject.toml", "src/lib.rs", "crates/spec/src/lib.rs", "crates/fluid/src/lib.rs"):
+for need in ("/pyproject.toml", "/python/src/lib.rs", "/crates/spec/src/lib.rs", "/crates/fluid/src/lib.rs"):
     if not any(n.endswith(need) for n in names):
         sys.exit(f"{sdist} has no {need}")
 PY

@@ -11,14 +11,17 @@
 # Needs maturin on PATH (./test.sh installs it in target/python-venv) and
 # the Rust toolchain; the wheel itself needs neither.
 set -euo pipefail
-cd "$(dirname "$0")/.."
 profile=(--profile dev)
 if [ "${1:-}" = "--release" ]; then
   profile=(--release --strip)
   shift
 fi
-out="${1:-target/wheels}"
+# OUTDIR is relative to where the script is called from; the default is
+# the repository's target/wheels.
+out="${1:-$(dirname "$0")/../target/wheels}"
 mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+cd "$(dirname "$0")/.."
 # One wheel and one sdist in OUTDIR: older builds of this version go first,
 # so `pip install OUTDIR/*.whl` takes the one just built.
 rm -f "$out"/energy_casimir-*.whl "$out"/energy_casimir-*.tar.gz
