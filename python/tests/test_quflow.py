@@ -117,12 +117,11 @@ def test_a_tilted_state_from_scipy_harmonics_certifies_as_the_zonal_one(tmp_path
     assert cert.sigma2 == pytest.approx(certificate("energy-casimir-n32")["sigma2"], rel=1e-8)
     # The axis, derived: these coefficients are of quflow's function picture
     # (shc2shr), which is its matrix frame mirrored in y, so the state's l = 1
-    # part (omega_11, omega_1-1, omega_10) points along (0.48, 0.6, 0.64); the
-    # engine reports axes in its own frame, quflow's turned by pi about z
-    # (x and y change sign; docs/python.md), with the largest component
-    # positive: (-0.48, -0.6, 0.64).
+    # part (omega_11, omega_1-1, omega_10) points along (0.48, 0.6, 0.64);
+    # certificates report axes in quflow's matrix frame, as that direction
+    # (largest component positive; docs/python.md).
     assert (omega[3], omega[1], omega[2]) == pytest.approx(tuple(0.6812733176437584 * np.array([0.48, 0.6, 0.64])), rel=1e-12)
-    assert cert["frame"]["axis"] == pytest.approx([-0.48, -0.6, 0.64], abs=1e-12)
+    assert cert["frame"]["axis"] == pytest.approx([0.48, 0.6, 0.64], abs=1e-12)
 
 
 def test_written_files_have_quflows_layout_and_read_back(tmp_path):

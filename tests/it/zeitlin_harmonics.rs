@@ -47,10 +47,34 @@ fn every_verdict_path_of_the_general_pipeline() {
         let (a, b) = (tilted[key].as_f64().unwrap(), zonal[key].as_f64().unwrap());
         assert!((a - b).abs() <= 1e-12 * b, "{key}: {a} vs {b}");
     }
+    // The axis is quflow's: the direction of the spec's own l = 1
+    // coefficients (omega_11, omega_1-1, omega_10), largest component
+    // positive (here (-0.48, 0.6, 0.64), as the fixture's description says).
+    let rows = tilted["spec"]["zeitlin"]["equilibrium"]["harmonics"].as_array().unwrap().clone();
+    let l1 = |m: i64| rows.iter().find(|r| r[0] == 1 && r[1] == m).map_or(0.0, |r| r[2].as_f64().unwrap());
+    let direction = [l1(1), l1(-1), l1(0)];
+    let length = direction.iter().map(|x| x * x).sum::<f64>().sqrt();
     let axis: Vec<f64> = tilted["frame"]["axis"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-    for (a, b) in axis.iter().zip([0.48, -0.6, 0.64]) {
-        assert!((a - b).abs() < 1e-12, "axis {axis:?}");
+    for (a, b) in axis.iter().zip(direction) {
+        assert!((a - b / length).abs() < 1e-12, "axis {axis:?} against the l = 1 part {direction:?}");
     }
+    assert!((axis[0] + 0.48).abs() < 1e-12 && (axis[1] - 0.6).abs() < 1e-12, "{axis:?}");
+    // Rates and the stopping time per unit qtime = t / hbar beside those per
+    // unit t, hbar = 2 / sqrt(N^2 - 1) computed here: rates times hbar,
+    // times divided by it; bounds rounded outward by at most 1e-15.
+    let hbar = 2.0 / (32.0f64 * 32.0 - 1.0).sqrt();
+    let per = &tilted["time"]["per_qtime"];
+    assert_eq!(tilted["time"]["unit"], "t");
+    let (s, s_q) = (tilted["sigma2"].as_f64().unwrap(), per["sigma2"].as_f64().unwrap());
+    assert!((s_q - s * hbar).abs() <= 1e-15 * s * hbar, "{s_q} vs {}", s * hbar);
+    let (u, u_q) = (tilted["sigma2_upper"].as_f64().unwrap(), per["sigma2_upper"].as_f64().unwrap());
+    assert!(u_q >= u * hbar && u_q <= u * hbar * (1.0 + 2e-15), "{u_q} vs {}", u * hbar);
+    let (t, t_q) = (tilted["stopping"]["T"].as_f64().unwrap(), per["T"].as_f64().unwrap());
+    assert!(t_q <= t / hbar && t_q >= t / hbar * (1.0 - 2e-15), "{t_q} vs {}", t / hbar);
+    let unstable = certify(&fixture("rossby-haurwitz-l3-n8"));
+    let hbar8 = 2.0 / 63.0f64.sqrt();
+    let g = unstable["growth_rate"].as_f64().unwrap();
+    assert!((unstable["time"]["per_qtime"]["growth_rate"].as_f64().unwrap() - g * hbar8).abs() <= 1e-15 * g);
     // The unstable state's rate is positive, the spectrally stable one has none.
     assert!(certify(&fixture("rossby-haurwitz-l3-n8"))["growth_rate"].as_f64().unwrap() > 0.1);
     let l2 = certify(&fixture("rossby-haurwitz-l2-n7"));
@@ -172,6 +196,14 @@ fn the_cli_certifies_checks_and_refuses_tampering() {
         ("$.residuals.noise", edit("tesseral-noise-n16", &|c| scale(&mut c["residuals"]["noise"], 1.0 - 1e-7))),
         ("$.frame.axis[0]", edit("tilted-energy-casimir-n32", &|c| scale(&mut c["frame"]["axis"][0], 1.0 + 1e-7))),
         ("$.sigma2_upper", edit("tilted-energy-casimir-n32", &|c| scale(&mut c["sigma2_upper"], 1.0 - 1e-7))),
+        (
+            "$.time.per_qtime.sigma2_upper",
+            edit("tilted-energy-casimir-n32", &|c| scale(&mut c["time"]["per_qtime"]["sigma2_upper"], 1.0 - 1e-7)),
+        ),
+        (
+            "$.time.per_qtime.T",
+            edit("tilted-energy-casimir-n32", &|c| scale(&mut c["time"]["per_qtime"]["T"], 1.0 + 1e-7)),
+        ),
         ("$.growth_rate", edit("rossby-haurwitz-l3-n8", &|c| scale(&mut c["growth_rate"], 1.0 - 1e-7))),
         (
             "$.matrix_free.eigenvalue[0]",

@@ -14,7 +14,7 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// Version of the certificate format.
-pub const CERTIFICATE_VERSION: u64 = 3;
+pub const CERTIFICATE_VERSION: u64 = 4;
 
 /// The engine version written into certificates.
 pub const ENGINE_VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -829,6 +829,9 @@ pub struct ZeitlinCertificateDocument {
     /// structure, or when no bound was proved).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopping: Option<StoppingRecord>,
+    /// Which time the rates and the stopping time are per: quflow's `t`,
+    /// with the same quantities per unit `qtime` beside them.
+    pub time: ZeitlinTimeRecord,
     /// SHA-256 of the embedded spec's compact JSON.
     pub spec_sha256: String,
     /// The model and its conventions.
@@ -867,6 +870,37 @@ pub struct ZeitlinCertificateDocument {
     pub settings: crate::document::ZeitlinSettingsDoc,
     /// The spec exactly as given.
     pub spec: Value,
+}
+
+/// The time a Zeitlin certificate's rates are per.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinTimeRecord {
+    /// `t`: the model's time, quflow's `time` dataset.
+    pub unit: String,
+    /// What that means for a quflow user, in words.
+    pub meaning: String,
+    /// `sigma2`, `sigma2_upper`, `growth_rate` and the stopping time `T`
+    /// per unit `qtime = t / hbar`, the unit of quflow's integrator steps.
+    pub per_qtime: ZeitlinPerQtimeRecord,
+}
+
+/// A Zeitlin certificate's rates and stopping time per unit `qtime`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ZeitlinPerQtimeRecord {
+    /// `hbar sigma2` (an estimate, as `sigma2` is).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2: Option<Float>,
+    /// `hbar sigma2_upper`, rounded up (still a bound).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma2_upper: Option<Float>,
+    /// `hbar growth_rate`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth_rate: Option<Float>,
+    /// `stopping.T / hbar`, rounded down (still a time the bound holds to).
+    #[serde(default, rename = "T", skip_serializing_if = "Option::is_none")]
+    pub stopping_time: Option<Float>,
 }
 
 /// The Zeitlin model's conventions.

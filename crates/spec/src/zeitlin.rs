@@ -21,7 +21,8 @@ use crate::json::{as_object, child, index, required, type_name, Result, SpecErro
 use crate::parse::Stopping;
 use crate::record::{
     Engine, Float, LevelOrNone, ZeitlinBlockRecord, ZeitlinCertificateDocument, ZeitlinDenseRecord, ZeitlinFileRecord,
-    ZeitlinFormRecord, ZeitlinFrameRecord, ZeitlinMatrixFreeRecord, ZeitlinModelRecord, ZeitlinResidualsRecord,
+    ZeitlinFormRecord, ZeitlinFrameRecord, ZeitlinMatrixFreeRecord, ZeitlinModelRecord, ZeitlinPerQtimeRecord,
+    ZeitlinResidualsRecord, ZeitlinTimeRecord,
 };
 use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use serde_json::Value;
@@ -563,6 +564,7 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
         sigma2: None,
         sigma2_upper: None,
         stopping: None,
+        time: time_record(n, None, None, None, None),
         spec_sha256: spec_digest(&spec.raw),
         model,
         form: None,
@@ -604,6 +606,13 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
         }
     }
     doc.checks = checks;
+    doc.time = time_record(
+        n,
+        doc.sigma2.map(|x| x.0),
+        doc.sigma2_upper.map(|x| x.0),
+        doc.growth_rate.map(|x| x.0),
+        doc.stopping.as_ref().map(|s| s.t.0),
+    );
     let subject = crate::theorem::zeitlin_subject(
         &spec.name,
         n,
@@ -622,6 +631,39 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
         doc.growth_rate.map(|x| x.0),
     );
     doc
+}
+
+/// The certificate's rates and stopping time per unit `qtime = t / hbar`
+/// beside the ones per unit `t`. Bounds are moved outward by a relative
+/// 1e-15 (over 4 ulps), more than the rounding of `hbar = 2 / sqrt(N^2 -
+/// 1)` (two correctly rounded operations on an exact `N^2 - 1`) and of the
+/// product: a bound per `qtime` is still a bound.
+fn time_record(
+    n: usize,
+    sigma2: Option<f64>,
+    sigma2_upper: Option<f64>,
+    growth_rate: Option<f64>,
+    stopping_time: Option<f64>,
+) -> ZeitlinTimeRecord {
+    let h = hbar(n);
+    let outward = 1e-15_f64;
+    ZeitlinTimeRecord {
+        unit: "t".into(),
+        meaning: format!(
+            "sigma2, sigma2_upper, growth_rate and stopping.T are per unit of the model's time t, quflow's time dataset (dW/dt = [P, W]/hbar); quflow's integrators step in qtime = t/hbar, hbar = 2/sqrt(N^2 - 1) = {h:e}, so per unit qtime a rate is hbar times the rate per unit t and a time 1/hbar times the time in t: per_qtime (bounds rounded outward)"
+        ),
+        per_qtime: ZeitlinPerQtimeRecord {
+            sigma2: sigma2.map(|s| Float(s * h)),
+            sigma2_upper: sigma2_upper.map(|s| Float(s * h * (1.0 + outward.copysign(s)))),
+            growth_rate: growth_rate.map(|g| Float(g * h)),
+            // (a finite T whose quotient overflows is kept finite: an
+            // infinite T would claim the bound for all time)
+            stopping_time: stopping_time.map(|t| {
+                let q = t / h * (1.0 - outward);
+                Float(if t.is_finite() && !q.is_finite() { f64::MAX } else { q })
+            }),
+        },
+    }
 }
 
 /// The verdict and its evidence from a general analysis.
@@ -666,7 +708,7 @@ fn fill_general(
                 Some(Frame::Rotated { axis }) => (
                     "rotated",
                     Some(axis.map(Float)),
-                    "W_e commutes with n.S for the axis n (the null vector of the Gram matrix of [S_a, W_e], measured directly); V = exp(-i theta u.S) takes n to the pole and V^* W_e V is diagonal up to off_diagonal (dropped). The Laplacian and the inner product commute with Ad_V, so the rotated system is the same stochastic system: the zonal pipeline's claims below are about the rotated, diagonal problem as stored",
+                    "W_e commutes with a.S for a spin axis a (the null vector of the Gram matrix of [S_a, W_e], measured directly); frame.axis is a in quflow's frame, (-a_1, -a_2, a_3) scaled to unit length with its largest component positive: the direction of the l = 1 harmonic coefficients (omega_{1,1}, omega_{1,-1}, omega_{1,0}) of a state zonal about it, the frame of quflow.geometry.rotate (quflow's shr2fun pictures mirror y). V = exp(-i theta u.S) takes a to the pole and V^* W_e V is diagonal up to off_diagonal (dropped). The Laplacian and the inner product commute with Ad_V, so the rotated system is the same stochastic system: the zonal pipeline's claims below are about the rotated, diagonal problem as stored",
                 ),
                 _ => ("zonal", None, "W_e and the noise are diagonal as given (up to off_diagonal, dropped): the zonal pipeline's claims below are about the diagonal problem as stored"),
             };

@@ -21,7 +21,8 @@
 //!   ([`crate::sphere::rotation_to_axis`]). The Laplacian commutes with
 //!   `Ad_V`, and so does the inner product, so the stochastic system in the
 //!   rotated frame is the same system: every quantity of the analysis
-//!   (verdict, `Sigma^2`, growth rate) is the same. The noise must be
+//!   (verdict, `Sigma^2`, growth rate) is the same. The axis is reported
+//!   in quflow's frame ([`crate::sphere::quflow_axis`]). The noise must be
 //!   diagonal in that frame too (it is when it commutes with `W_e` and the
 //!   eigenvalues are distinct).
 //!
@@ -33,7 +34,7 @@
 use crate::analysis::{analyse_with, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
 use crate::isospectral::StreamSolver;
 use crate::matrix_free::{matrix_free_analysis, MatrixFreeAnalysis, MatrixFreeSettings};
-use crate::sphere::rotation_to_axis;
+use crate::sphere::{quflow_axis, rotation_to_axis};
 use nalgebra::{Complex, DMatrix};
 use outcome::{Progress, Verdict, VerificationLevel};
 
@@ -93,7 +94,10 @@ impl Default for GeneralSettings {
 pub enum Frame {
     /// `W_e` and the noise are diagonal as given.
     Zonal,
-    /// Zonal about this unit axis (`n.S` commutes with `W_e`).
+    /// Zonal about this unit axis, in quflow's frame
+    /// ([`crate::sphere::quflow_axis`]: the direction of a zonal state's
+    /// `l = 1` coefficients `(v_{1,1}, v_{1,-1}, v_{1,0})`), largest
+    /// component positive.
     Rotated {
         /// The axis `n`.
         axis: [f64; 3],
@@ -314,7 +318,8 @@ fn compatible_part(x: &DMatrix<C>, u: &DMatrix<C>, cl: &[usize]) -> DMatrix<C> {
 /// ```
 /// use zeitlin::general::{analyse_general, Frame, GeneralProblem, GeneralSettings};
 /// use zeitlin::sphere::{from_harmonics, rotation_to_axis};
-/// // A zonal state, z + 0.3 z^3-like, with zonal noise, tilted to the axis (0.6, 0, 0.8).
+/// // A zonal state, z + 0.3 z^3-like, with zonal noise, tilted to the spin
+/// // axis (0.6, 0, 0.8): quflow's axis (-0.6, 0, 0.8) (`quflow_axis`).
 /// let n = 8;
 /// let w = from_harmonics(n, &[(1, 0, 1.0), (3, 0, 0.2)]).unwrap();
 /// let x = from_harmonics(n, &[(2, 0, 0.1)]).unwrap();
@@ -322,7 +327,7 @@ fn compatible_part(x: &DMatrix<C>, u: &DMatrix<C>, cl: &[usize]) -> DMatrix<C> {
 /// let tilt = |m: &nalgebra::DMatrix<nalgebra::Complex<f64>>| &v * m * v.adjoint();
 /// let a = analyse_general(&GeneralProblem { n, w: tilt(&w), noise: vec![tilt(&x)] }, &GeneralSettings::default()).unwrap();
 /// assert_eq!(a.verdict, outcome::Verdict::Stable);
-/// match a.frame { Some(Frame::Rotated { axis }) => assert!((axis[0] - 0.6).abs() < 1e-9 || (axis[0] + 0.6).abs() < 1e-9), _ => panic!() }
+/// match a.frame { Some(Frame::Rotated { axis }) => assert!((axis[0] + 0.6).abs() < 1e-9 && (axis[2] - 0.8).abs() < 1e-9), _ => panic!() }
 /// ```
 pub fn analyse_general(problem: &GeneralProblem, settings: &GeneralSettings) -> Result<GeneralAnalysis, ZeitlinError> {
     analyse_general_with(problem, settings, &Progress::new())
@@ -406,7 +411,7 @@ pub fn analyse_general_with(
     if reduced.is_none() {
         if let Some(axis) = symmetry_axis(&w, tol) {
             let v = rotation_to_axis(n, axis).map_err(|e| ZeitlinError::Numerical(e.to_string()))?;
-            reduced = zonal_in(Some(&v)).map(|r| (Frame::Rotated { axis }, r));
+            reduced = zonal_in(Some(&v)).map(|r| (Frame::Rotated { axis: quflow_axis(axis) }, r));
         }
     }
     if let Some((frame, (wf, xs, off))) = reduced {

@@ -262,6 +262,41 @@ pub fn rotation(n: usize, u: [f64; 3], theta: f64) -> Result<DMatrix<C>, SphereE
     Ok(crate::eigen::complex_product(&scaled, &y.adjoint()))
 }
 
+/// The axis of a state as quflow means it, from the axis `a` of the spin
+/// matrices with `[a.S, W] = 0`: `(-a_1, -a_2, a_3)`, scaled to unit length
+/// with its largest component positive (an axis is a line).
+///
+/// quflow's frame (that of `quflow.geometry.rotate`) is the one in which a
+/// state zonal about `n` has its `l = 1` coefficients
+/// `(v_{1,1}, v_{1,-1}, v_{1,0})` along `n`. quflow's spin matrices are
+/// `i (S_1, S_2, -S_3)` of these (its `S_3` runs `-s..s` where this
+/// module's runs `s..-s`), so `T_{1,1}`, `T_{1,-1}` and `T_{1,0}` are
+/// multiples of `S_1`, `S_2` and `-S_3`: the spin frame is quflow's turned
+/// by pi about z. The map is its own inverse up to sign.
+///
+/// ```
+/// use zeitlin::sphere::{from_harmonics, quflow_axis, spin};
+/// // A state with l = 1 coefficients (v_11, v_1-1, v_10) = (0.48, 0.6, 0.64):
+/// let w = from_harmonics(6, &[(1, 1, 0.48), (1, -1, 0.6), (1, 0, 0.64)]).unwrap();
+/// // commutes with a.S for a = (-0.48, -0.6, 0.64) ...
+/// let [s1, s2, s3] = spin(6);
+/// let c = |x: f64| nalgebra::Complex::new(x, 0.0);
+/// let a_s = &s1 * c(-0.48) + &s2 * c(-0.6) + &s3 * c(0.64);
+/// assert!((&a_s * &w - &w * &a_s).norm() < 1e-12 * w.norm());
+/// // ... and its axis in quflow's frame is its l = 1 direction.
+/// let n = quflow_axis([-0.48, -0.6, 0.64]);
+/// assert!((n[0] - 0.48).abs() < 1e-15 && (n[1] - 0.6).abs() < 1e-15 && (n[2] - 0.64).abs() < 1e-15);
+/// ```
+pub fn quflow_axis(a: [f64; 3]) -> [f64; 3] {
+    let n = [-a[0], -a[1], a[2]];
+    let norm = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let big = n.iter().copied().fold(0.0f64, |b, x| if x.abs() > b.abs() { x } else { b });
+    if !(norm > 0.0 && norm.is_finite()) {
+        return n;
+    }
+    n.map(|x| x * big.signum() / norm)
+}
+
 /// The unitary `V` (a rotation of the sphere) that takes the axis `n` (unit)
 /// to the pole: `V^* (n.S) V = S_3`, so a state zonal about `n` becomes
 /// diagonal under `W -> V^* W V`.

@@ -20,9 +20,11 @@ stopping time in a certificate are per unit ``t``. quflow's integrators
 step in ``qtime = t / hbar``; a rate per unit ``qtime`` is ``hbar`` times
 the rate per unit ``t`` (:func:`rate_per_qtime`).
 
-**Axes**: a certificate's ``frame.axis`` is in the engine's frame,
-quflow's matrix frame (that of ``quflow.geometry.rotate``) turned by pi
-about z: quflow's axis is ``(-x, -y, z)`` of the reported ``(x, y, z)``.
+**Axes**: a certificate's ``frame.axis`` is in quflow's matrix frame
+(that of ``quflow.geometry.rotate``): the direction of the ``l = 1``
+coefficients ``(omega_11, omega_1-1, omega_10)`` of a state zonal about
+it, with its largest component positive. A Zeitlin certificate's
+``time.per_qtime`` gives its rates and stopping time per unit ``qtime``.
 
 h5py is needed (``pip install h5py``, or the ``quflow`` extra of this
 package); nothing else here imports it.

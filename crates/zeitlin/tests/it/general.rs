@@ -7,7 +7,7 @@ use nalgebra::{Complex, DMatrix};
 use outcome::Verdict;
 use zeitlin::analysis::{analyse, ZeitlinProblem, ZeitlinSettings};
 use zeitlin::general::{analyse_general, Frame, GeneralProblem, GeneralSettings};
-use zeitlin::sphere::{from_harmonics, harmonic, rotation_to_axis, spin};
+use zeitlin::sphere::{from_harmonics, harmonic, rotation_to_axis, spin, to_harmonics};
 use zeitlin::zonal::quantise;
 
 type C = Complex<f64>;
@@ -49,10 +49,20 @@ fn a_tilted_zonal_state_gives_the_zonal_answer() {
         let settings = GeneralSettings { zonal: zs.clone(), ..Default::default() };
         let g = analyse_general(&GeneralProblem { n, w, noise: vec![x] }, &settings).unwrap();
         assert_eq!(g.verdict, verdict, "{}", g.reason);
+        // The reported axis is quflow's: the direction of the l = 1
+        // coefficients (v_11, v_1-1, v_10) of T_10 under the same rotation
+        // (read off by to_harmonics; the jet has no l = 1 part of its own),
+        // largest component positive.
+        let h = to_harmonics(&tilt(&from_harmonics(n, &[(1, 0, 1.0)]).unwrap()), 1).unwrap();
+        let v1 = |m: i64| h.iter().find(|(l, mm, _)| *l == 1 && *mm == m).map_or(0.0, |x| x.2);
+        let l1 = [v1(1), v1(-1), v1(0)];
+        let len = l1.iter().map(|x| x * x).sum::<f64>().sqrt();
         match &g.frame {
             Some(Frame::Rotated { axis: a }) => {
-                let dot: f64 = a.iter().zip(&axis).map(|(p, q)| p * q).sum();
-                assert!((dot.abs() - 1.0).abs() < 1e-9, "axis {a:?}");
+                let dot: f64 = a.iter().zip(&l1).map(|(p, q)| p * q).sum::<f64>() / len;
+                assert!((dot.abs() - 1.0).abs() < 1e-9, "axis {a:?} against l = 1 part {l1:?}");
+                let big = a.iter().copied().fold(0.0f64, |b, x| if x.abs() > b.abs() { x } else { b });
+                assert!(big > 0.0, "{a:?}");
             }
             other => panic!("{other:?}"),
         }
@@ -401,4 +411,26 @@ fn the_matrix_free_analysis_is_reproducible_and_cancellable() {
         matrix_free_analysis(&solver, &w, &p, &settings, &cancelled),
         Err(zeitlin::analysis::ZeitlinError::Cancelled(_))
     ));
+}
+
+/// A state of degree 1 with coefficients `(v_11, v_1-1, v_10)` is the
+/// function `n.x` for `n` along them (quflow's frame, where `rotate` and
+/// `shr2mat` agree), so its reported axis is their direction: the
+/// convention of `frame.axis`, fixed from the harmonics alone.
+#[test]
+fn the_axis_is_the_direction_of_the_degree_one_coefficients() {
+    let n = 7;
+    for l1 in [[0.48, 0.6, 0.64], [-0.48, 0.6, 0.64], [0.0, -0.6, 0.8], [0.8, 0.0, -0.6]] {
+        let w = from_harmonics(n, &[(1, 1, l1[0]), (1, -1, l1[1]), (1, 0, l1[2])]).unwrap();
+        let g = analyse_general(&GeneralProblem { n, w, noise: vec![] }, &GeneralSettings::default()).unwrap();
+        let sign = l1.iter().copied().fold(0.0f64, |b, x| if x.abs() > b.abs() { x } else { b }).signum();
+        match &g.frame {
+            Some(Frame::Rotated { axis }) => {
+                for k in 0..3 {
+                    assert!((axis[k] - sign * l1[k]).abs() < 1e-12, "{axis:?} against {l1:?}");
+                }
+            }
+            other => panic!("{l1:?}: {other:?}"),
+        }
+    }
 }
