@@ -175,10 +175,15 @@ fn stopping_time(epsilon: f64, delta: f64, sigma2: f64) -> Option<f64> {
 /// file `verify simulate` writes). Refuses, like the CLI, a study estimated
 /// at more than 15 minutes unless `force`. Ctrl-C stops it;
 /// `progress(done, total)` counts paths, from the calling thread.
+///
+/// `shard=(k, n)` runs only shard `k` of `n` and returns its shard file
+/// (`verify simulate --shard k/n`'s JSON); `merge=[(label, json_text), ...]`
+/// runs nothing and merges shard files into the report an unsharded run
+/// gives (`--merge`).
 // One argument per Python keyword argument.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (text, base=None, paths=10_000, dt=0.01, t_end=None, outputs=200, seed=1, bins=80, scheme="lie", observable=None, epsilon=None, delta=None, force=false, progress=None))]
+#[pyo3(signature = (text, base=None, paths=10_000, dt=0.01, t_end=None, outputs=200, seed=1, bins=80, scheme="lie", observable=None, epsilon=None, delta=None, force=false, progress=None, shard=None, merge=None))]
 fn simulate_text(
     py: Python<'_>,
     text: String,
@@ -195,7 +200,17 @@ fn simulate_text(
     delta: Option<f64>,
     force: bool,
     progress: Option<Bound<'_, PyAny>>,
+    shard: Option<(u64, u64)>,
+    merge: Option<Vec<(String, String)>>,
 ) -> PyResult<String> {
+    if let Some((k, n)) = shard {
+        if n == 0 || k >= n {
+            return Err(PyValueError::new_err(format!("shard: ({k}, {n}) is not a shard: need 0 <= k < n")));
+        }
+        if merge.is_some() {
+            return Err(PyValueError::new_err("shard/merge: a run is either a shard or a merge"));
+        }
+    }
     let scheme = simulate::Scheme::from_name(scheme)
         .ok_or_else(|| PyValueError::new_err(format!("scheme: {scheme:?} is not 'lie' or 'heun'")))?;
     let spec =
@@ -239,20 +254,45 @@ fn simulate_text(
     // only up to the cores that work, as `verify simulate` does.
     let threads = rayon::current_num_threads();
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
-    let estimate = prepared.estimated_seconds(threads.min(cores) as f64);
+    // A shard runs its share of the paths (and the whole pilot); a merge runs none.
+    let share = shard.map_or(1.0, |(_, n)| 1.0 / n as f64);
+    let estimate = if merge.is_some() { 0.0 } else { prepared.estimated_seconds(threads.min(cores) as f64) * share };
     if estimate > 900.0 && !force {
         return Err(PyValueError::new_err(format!(
-            "paths/dt/t_end: {:.2e} path-steps would take about {:.0} minutes here; lower them or pass force=True",
-            prepared.ensemble.path_steps(),
+            "paths/dt/t_end: {:.2e} path-steps would take about {:.0} minutes here; lower them, split the run (shard=(k, n)) or pass force=True",
+            prepared.ensemble.path_steps() * share,
             estimate / 60.0
         )));
     }
-    let state = Progress::new();
-    state.plan(paths as u64 * prepared.ensembles());
-    let study = interruptible(py, progress.as_ref(), &state, || {
-        simulate::run_cancellable(&prepared, &|n: u64| state.step(n), state.cancel_flag())
-    })?
-    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let identity = simulate::study_identity(&spec::spec_digest(&spec.raw), &spec.name, &settings, &prepared, coords);
+    let sums = match &merge {
+        Some(files) => {
+            let mut documents = Vec::with_capacity(files.len());
+            for (label, text) in files {
+                let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
+                    PyValueError::new_err(format!("{label}: not JSON ({e}); was the shard interrupted?"))
+                })?;
+                documents.push((label.clone(), v));
+            }
+            simulate::merge_shard_documents(&documents, &identity, &prepared)
+                .map_err(|e| PyValueError::new_err(format!("merge: {e}")))?
+        }
+        None => {
+            let (k, n) = shard.unwrap_or((0, 1));
+            let shard_paths = simulate::block_paths(paths, &simulate::shard_blocks(paths, k, n)).len();
+            let state = Progress::new();
+            state.plan(shard_paths as u64 * prepared.ensembles());
+            let sums = interruptible(py, progress.as_ref(), &state, || {
+                simulate::run_shard_cancellable(&prepared, k, n, &|c: u64| state.step(c), state.cancel_flag())
+            })?
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+            if shard.is_some() {
+                return Ok(spec::to_pretty_json(&simulate::shard_document(&identity, &sums)));
+            }
+            sums
+        }
+    };
+    let study = simulate::finish(&prepared, &sums);
     let verdict = cert.json["verdict"].as_str().unwrap_or_default();
     let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, threads as u64);
     Ok(report.to_string())

@@ -114,10 +114,6 @@ fn isotropic_system(system: &casimir::System) -> Option<casimir::System> {
     .ok()
 }
 
-/// What kind of file a shard file is, and its format version.
-const SHARD_KIND: &str = "simulate-shard";
-const SHARD_FORMAT: u64 = 1;
-
 fn bad(message: String) -> Failure {
     Failure::BadInput(message)
 }
@@ -239,20 +235,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     };
     // Everything that fixes the numbers of the study: shards of one study
     // carry the same identity, and `--merge` insists on it.
-    let identity = json!({
-        "spec_digest": spec::spec_digest(&spec.raw),
-        "name": spec.name,
-        "paths": settings.paths,
-        "dt": settings.dt,
-        "t_end": prepared.ensemble.t_end,
-        "outputs": settings.outputs,
-        "seed": settings.seed,
-        "bins": settings.bins,
-        "scheme": settings.scheme.as_str(),
-        "observable": coords[prepared.observable],
-        "epsilon": prepared.epsilon,
-        "delta": prepared.delta,
-    });
+    let identity = simulate::study_identity(&spec::spec_digest(&spec.raw), &spec.name, &settings, &prepared, coords);
     let threads = rayon::current_num_threads() as f64;
     // More threads than cores (RAYON_NUM_THREADS up to 4 per core) do not
     // run faster: the estimate counts the cores that work.
@@ -309,13 +292,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         }
         if shard.is_some() {
             let path = args.out.join(format!("{file_stem}.shard-{index}-of-{count}.json"));
-            let document = json!({
-                "kind": SHARD_KIND,
-                "format": SHARD_FORMAT,
-                "engine": env!("CARGO_PKG_VERSION"),
-                "study": identity,
-                "shard": sums.to_json(),
-            });
+            let document = simulate::shard_document(&identity, &sums);
             write_atomic(&path, spec::to_pretty_json(&document).as_bytes()).map_err(|e| write_failure(&path, &e))?;
             eprintln!(
                 "{}: shard {index} of {count}: {} paths of each ensemble; merge all {count} with `verify simulate {} [the same options] --merge FILES`; wrote {}",
@@ -470,110 +447,28 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Read the shard files of a study and merge their exact sums, after
-/// checking that together they are exactly the study `identity` describes:
-/// every file is a shard of it (same spec digest and options), no shard
-/// index is given twice with different contents (the same file twice is
-/// harmless), and every index of `0..N` is there. Malformed files are bad
-/// input (exit 2); a shard of another study or an incomplete set is a
-/// failure (exit 1).
+/// Read the shard files of a study and merge their exact sums
+/// ([`simulate::merge_shard_documents`]: exactly the study `identity`
+/// describes). Unreadable and malformed files are bad input (exit 2); a
+/// shard of another study or an incomplete set is a failure (exit 1).
 fn merge_shards(
     files: &[PathBuf],
     identity: &serde_json::Value,
     prepared: &simulate::Prepared<'_>,
 ) -> Result<simulate::StudyShard, Failure> {
-    use std::collections::BTreeMap;
-    let mut shards: BTreeMap<u64, (simulate::StudyShard, String)> = BTreeMap::new();
-    let mut count: Option<(u64, String)> = None;
-    let mut range: Option<((f64, f64), String)> = None;
+    let mut documents = Vec::with_capacity(files.len());
     for path in files {
         let at = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{at}: cannot read: {e}")))?;
         let v: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| bad(format!("{at}: not JSON ({e}); was the shard interrupted?")))?;
-        if v.get("kind").and_then(serde_json::Value::as_str) != Some(SHARD_KIND) {
-            return Err(bad(format!("{at}: $.kind: not a shard of `verify simulate --shard`")));
-        }
-        if v.get("format").and_then(serde_json::Value::as_u64) != Some(SHARD_FORMAT) {
-            return Err(bad(format!("{at}: $.format: expected {SHARD_FORMAT}")));
-        }
-        let stated = v.get("study").ok_or_else(|| bad(format!("{at}: $.study: missing")))?;
-        if stated != identity {
-            let key = identity
-                .as_object()
-                .and_then(|m| m.iter().find(|(k, want)| stated.get(k.as_str()) != Some(*want)).map(|(k, _)| k.clone()))
-                .unwrap_or_else(|| "study".into());
-            return Err(Failure::Failed(format!(
-                "{at}: $.study.{key}: the shard belongs to another study (another spec or other options: {} here, {} in the file); give the options the shards ran with",
-                excerpt(&identity.get(&key).map_or(String::new(), |x| x.to_string())),
-                excerpt(&stated.get(&key).map_or("nothing".to_string(), |x| x.to_string())),
-            )));
-        }
-        let shard_json = v.get("shard").ok_or_else(|| bad(format!("{at}: $.shard: missing")))?;
-        let shard =
-            simulate::StudyShard::from_json(shard_json, "$.shard", prepared).map_err(|m| bad(format!("{at}: {m}")))?;
-        // Another engine may integrate or bin differently: only this one's
-        // shards are merged, and they all ran the same pilot (one
-        // histogram range).
-        let engine = v.get("engine").and_then(serde_json::Value::as_str).unwrap_or_default();
-        if engine != env!("CARGO_PKG_VERSION") {
-            return Err(Failure::Failed(format!(
-                "{at}: $.engine: written by engine {}, not this one ({}); rerun the shard",
-                excerpt(engine),
-                env!("CARGO_PKG_VERSION")
-            )));
-        }
-        match &range {
-            Some((r, first)) if *r != shard.histogram_range => {
-                return Err(Failure::Failed(format!(
-                    "{at}: $.shard.histogram_range: {:?}, but {first} has {r:?}: the shards' pilot runs differ",
-                    shard.histogram_range
-                )))
-            }
-            Some(_) => {}
-            None => range = Some((shard.histogram_range, at.clone())),
-        }
-        match &count {
-            Some((n, first)) if *n != shard.count => {
-                return Err(Failure::Failed(format!(
-                "{at}: a shard of {} shards, but {first} is a shard of {n}: shards of different splits do not merge",
-                shard.count
-            )))
-            }
-            Some(_) => {}
-            None => count = Some((shard.count, at.clone())),
-        }
-        match shards.get(&shard.index) {
-            Some((seen, _)) if *seen == shard => {} // the same shard twice: harmless
-            Some((_, first)) => {
-                return Err(Failure::Failed(format!(
-                    "shard {} of {} is given twice with different numbers: {first} and {at} (runs of different engines or seeds?)",
-                    shard.index, shard.count
-                )))
-            }
-            None => {
-                shards.insert(shard.index, (shard, at));
-            }
-        }
+        documents.push((at, v));
     }
-    let n = count.map_or(0, |(n, _)| n);
-    // Counted, not listed: N comes from the files and may be huge. The first
-    // ten missing indices lie below the number of shards given plus ten.
-    let missing = n - shards.len() as u64;
-    if missing > 0 {
-        let shown: Vec<String> = (0..n).filter(|k| !shards.contains_key(k)).take(10).map(|k| k.to_string()).collect();
-        return Err(Failure::Failed(format!(
-            "incomplete: {missing} of the {n} shards are missing ({}{}); run them with --shard K/{n}",
-            shown.join(", "),
-            if missing > 10 { ", ..." } else { "" }
-        )));
-    }
-    let mut all = shards.into_values().map(|(s, _)| s);
-    let mut total = all.next().ok_or_else(|| bad("--merge: no shard files".into()))?;
-    for s in all {
-        total.merge(&s);
-    }
-    Ok(total)
+    simulate::merge_shard_documents(&documents, identity, prepared).map_err(|e| match e {
+        simulate::MergeError::BadInput(m) if files.is_empty() => bad(format!("--merge: {m}")),
+        simulate::MergeError::BadInput(m) => bad(m),
+        other => Failure::Failed(other.to_string()),
+    })
 }
 
 fn write_csv(

@@ -35,6 +35,7 @@ mod kernel;
 mod model;
 mod report;
 mod scheme;
+mod shard_file;
 mod study;
 
 pub use ensemble::{
@@ -45,6 +46,9 @@ pub use exact_sum::ExactSum;
 pub use model::Model;
 pub use report::study_report;
 pub use scheme::{LinearModel, Scheme, Stepper};
+pub use shard_file::{
+    merge_shard_documents, shard_document, study_identity, MergeError, SHARD_ENGINE, SHARD_FORMAT, SHARD_KIND,
+};
 pub use study::{
     finish, prepare, run, run_cancellable, run_shard_cancellable, Exceedance, Prepared, Study, StudyError,
     StudySettings, StudyShard,

@@ -43,6 +43,7 @@ __all__ = [
     "SpecError",
     "certify",
     "check",
+    "merge_shards",
     "simulate",
     "simulate_fluid",
     "sweep",
@@ -467,6 +468,7 @@ def simulate(
     force: bool = False,
     progress: ProgressLike = None,
     base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+    shard: Optional[Union[str, Tuple[int, int]]] = None,
 ) -> Dict[str, Any]:
     """Monte Carlo of the stochastic system next to what the certificate claims.
 
@@ -490,6 +492,13 @@ def simulate(
     ten times a second from the calling thread (``True``: a tqdm bar, as
     in :func:`certify`).
 
+    ``shard=(k, n)`` (or ``"k/n"``) runs only shard ``k`` of ``n`` (a share
+    of the paths of each ensemble, as ``verify simulate --shard k/n``, for a
+    job array) and returns its shard file as a dict, the JSON the CLI
+    writes: save it with ``json.dump`` and merge all ``n`` with
+    :func:`merge_shards` (or ``verify simulate --merge``). The estimate that
+    refuses long runs counts the shard's share.
+
     >>> import energy_casimir as ec
     >>> r = ec.simulate("fixtures/rigid-body-major-axis.json", paths=200, t_end=2.0)
     >>> float(r["nonlinear"]["times"][-1]), r["sigma2"]
@@ -498,8 +507,99 @@ def simulate(
     True
     """
     text, base = _read_input(spec, "simulate", base_dir)
+    shard_pair = None if shard is None else _shard_pair(shard)
     with _Progress(progress, "simulate") as p:
-        out = _simulate(text, base, p.callback, paths, dt, t_end, outputs, seed, bins, scheme, observable, epsilon, delta, force)
+        out = _simulate(
+            text, base, p.callback, paths, dt, t_end, outputs, seed, bins, scheme, observable, epsilon, delta, force, shard=shard_pair
+        )
+    if shard_pair is not None:
+        return json.loads(out)
+    return _arrays(json.loads(out))
+
+
+def _shard_pair(shard: Any) -> Tuple[int, int]:
+    """``(k, n)`` from ``(k, n)`` or ``"k/n"``."""
+    try:
+        if isinstance(shard, str):
+            k_text, n_text = shard.split("/")
+            k, n = int(k_text), int(n_text)
+        else:
+            k, n = shard
+            if isinstance(k, bool) or isinstance(n, bool) or int(k) != k or int(n) != n:
+                raise ValueError
+            k, n = int(k), int(n)
+    except (TypeError, ValueError):
+        raise ValueError(f"shard: expected (k, n) or 'k/n' with 0 <= k < n, got {shard!r}") from None
+    if not 0 <= k < n:
+        raise ValueError(f"shard: expected 0 <= k < n, got ({k}, {n})")
+    return k, n
+
+
+def merge_shards(
+    spec: SpecLike,
+    shards: Sequence[Union[str, "os.PathLike[str]", Mapping[str, Any]]],
+    *,
+    paths: int = 10_000,
+    dt: float = 0.01,
+    t_end: Optional[float] = None,
+    seed: int = 1,
+    outputs: int = 200,
+    bins: int = 80,
+    scheme: str = "lie",
+    observable: Optional[str] = None,
+    epsilon: Optional[float] = None,
+    delta: Optional[float] = None,
+    base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+) -> Dict[str, Any]:
+    """Merge the shards of a study into the report an unsharded run gives.
+
+    ``shards`` are shard files (paths, as ``verify simulate --shard``
+    writes them) or the dicts :func:`simulate` returns with ``shard=``,
+    all ``n`` of one split; the options are those the shards ran with.
+    The merge is exact (the shards hold exact sums): the report equals
+    :func:`simulate`'s without ``shard``, number for number. Shards of
+    another spec or other options, of another engine version, two
+    different shards with one index, or a missing shard raise
+    ``ValueError`` naming the file and the field.
+
+    >>> import energy_casimir as ec
+    >>> spec = "fixtures/rigid-body-major-axis.json"
+    >>> parts = [ec.simulate(spec, paths=600, t_end=1.0, outputs=20, shard=(k, 3)) for k in range(3)]
+    >>> merged = ec.merge_shards(spec, parts, paths=600, t_end=1.0, outputs=20)
+    >>> whole = ec.simulate(spec, paths=600, t_end=1.0, outputs=20)
+    >>> bool((merged["nonlinear"]["norm_mean_over_delta"] == whole["nonlinear"]["norm_mean_over_delta"]).all())
+    True
+    """
+    if isinstance(shards, (str, bytes, os.PathLike, Mapping)):
+        raise TypeError("shards: expected a list of shard files or dicts, got one")
+    text, base = _read_input(spec, "merge_shards", base_dir)
+    documents = []
+    for i, shard in enumerate(shards):
+        if isinstance(shard, Mapping):
+            documents.append((f"shards[{i}]", json.dumps(shard, default=_json_default)))
+        elif isinstance(shard, (str, os.PathLike)):
+            path = os.fspath(shard)
+            with open(path, encoding="utf-8") as f:
+                documents.append((path, f.read()))
+        else:
+            raise TypeError(f"shards[{i}]: expected a path or a dict, got {type(shard).__name__}")
+    if not documents:
+        raise ValueError("shards: no shard files")
+    out = _core.simulate_text(
+        text,
+        _base(base),
+        paths=int(paths),
+        dt=float(dt),
+        t_end=None if t_end is None else float(t_end),
+        outputs=int(outputs),
+        seed=int(seed),
+        bins=int(bins),
+        scheme=str(scheme),
+        observable=observable,
+        epsilon=None if epsilon is None else float(epsilon),
+        delta=None if delta is None else float(delta),
+        merge=documents,
+    )
     return _arrays(json.loads(out))
 
 
@@ -518,6 +618,7 @@ def _simulate(
     epsilon: Optional[float],
     delta: Optional[float],
     force: bool,
+    shard: Optional[Tuple[int, int]] = None,
 ) -> str:
     return _core.simulate_text(
         text,
@@ -534,6 +635,7 @@ def _simulate(
         delta=None if delta is None else float(delta),
         force=bool(force),
         progress=progress,
+        shard=shard,
     )
 
 

@@ -42,6 +42,8 @@ def simulate_text(
     delta: Optional[float] = None,
     force: bool = False,
     progress: Optional[Callable[[int, int], Any]] = None,
+    shard: Optional[Tuple[int, int]] = None,
+    merge: Optional[List[Tuple[str, str]]] = None,
 ) -> str: ...
 def simulate_fluid_text(
     text: str,
