@@ -277,10 +277,17 @@ class Certificate:
 
     @property
     def growth_rate(self) -> Optional[float]:
-        """The real part of the unstable eigenvalue of the linearised drift (``linearly_unstable``)."""
+        """The real part of the unstable eigenvalue of the linearised drift
+        (``linearly_unstable``): of a finite-dimensional system, of a fluid's
+        fastest x-mode (``instability.growth_rate``), or of a Zeitlin
+        state (``growth_rate``, per unit of quflow's ``t``)."""
         inst = self._data.get("instability")
         if isinstance(inst, dict) and isinstance(inst.get("eigenvalue"), dict):
             return float(inst["eigenvalue"]["re"])
+        if isinstance(inst, dict) and isinstance(inst.get("growth_rate"), (int, float)):
+            return float(inst["growth_rate"])
+        if isinstance(self._data.get("growth_rate"), (int, float)):
+            return float(self._data["growth_rate"])
         return None
 
     # The evidence.
