@@ -5,7 +5,8 @@
 # (python/wheel.sh: maturin, the dev profile, with maturin in
 # target/python-venv), installs the wheel into a new virtual environment
 # (target/python-wheel-venv) whose PATH has no Rust toolchain, with its
-# quflow extra (h5py), pytest, matplotlib (for the gallery, examples/*.py),
+# quflow and xarray extras (h5py, xarray), pytest, matplotlib (for the
+# gallery, examples/*.py),
 # jupytext (the gallery read as notebooks) and scipy (the quflow tests'
 # independent harmonics) from PyPI, and runs the pytest
 # suite (python/tests) and the package's doc examples against it, from the
@@ -64,7 +65,7 @@ if PATH="$no_rust_path" command -v cargo >/dev/null || PATH="$no_rust_path" comm
   exit 1
 fi
 PATH="$no_rust_path" "$wheel_env/bin/python" -m pip install --quiet --disable-pip-version-check \
-  "$(ls target/wheels/energy_casimir-*.whl)[quflow]" "pytest>=7" matplotlib scipy jupytext
+  "$(ls target/wheels/energy_casimir-*.whl)[quflow,xarray]" "pytest>=7" matplotlib scipy jupytext
 part "wheel installed into a new environment without Rust"
 # From the repository root (the tests read fixtures/), against the installed
 # package: python/pysrc is not on the path, and the check below says so.

@@ -10,7 +10,8 @@ use serde_json::{json, Value};
 /// error, `exceedance`, `casimir_drift`), the exact second moments, the
 /// worst start, the bound `exp(Sigma^2 t)`, the moment Lyapunov exponent,
 /// the observable's histogram and the exceedance levels.
-/// `coordinates` names the algebra's coordinates (for the observable);
+/// `coordinates` names the algebra's coordinates (recorded, the columns of
+/// each `mean`, and the observable's name);
 /// `threads` is recorded as run.
 pub fn study_report(
     name: &str,
@@ -44,6 +45,7 @@ pub fn study_report(
     json!({
         "name": name,
         "verdict": verdict,
+        "coordinates": coordinates,
         "sigma2": prepared.sigma2,
         "stopping_time": prepared.stopping_time,
         "epsilon": prepared.epsilon,

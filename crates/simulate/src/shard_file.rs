@@ -136,10 +136,12 @@ pub fn merge_shard_documents(
             None => range = Some((shard.histogram_range, at.clone())),
         }
         match &count {
-            Some((n, first)) if *n != shard.count => return Err(mismatch(format!(
+            Some((n, first)) if *n != shard.count => {
+                return Err(mismatch(format!(
                 "{at}: a shard of {} shards, but {first} is a shard of {n}: shards of different splits do not merge",
                 shard.count
-            ))),
+            )))
+            }
             Some(_) => {}
             None => count = Some((shard.count, at.clone())),
         }

@@ -47,6 +47,7 @@ __all__ = [
     "simulate",
     "simulate_fluid",
     "sweep",
+    "to_xarray",
     "validate",
     "__version__",
 ]
@@ -794,3 +795,41 @@ def sweep(
     columns["error"] = error
     columns["lines"] = lines
     return columns
+
+
+def to_xarray(result: Mapping[str, Any]) -> Any:
+    """A result as an ``xarray.Dataset``, with dimensions, units and long
+    names, as climate and ocean tools expect (needs xarray; without it the
+    results stay dicts of numpy arrays).
+
+    * :func:`simulate` / :func:`merge_shards`: dimensions ``t`` (output
+      times, the model's time), ``coordinate`` (the algebra's coordinate
+      names) and ``bin`` (histogram bin centres of the observable);
+      variables ``nonlinear_mean`` (t, coordinate),
+      ``nonlinear_norm_mean_over_delta``, its standard error and
+      ``nonlinear_exceedance`` (the same for ``linearised_`` on stable
+      systems), ``exact_moments_over_delta``, ``worst_case_over_delta``,
+      ``bound_over_delta`` and ``histogram_counts`` (t, bin); the scalars
+      (``sigma2``, ``stopping_time``, ``epsilon``, ``delta``, the
+      settings as ``parameters_*``, each ensemble's Casimir drift) as
+      attributes.
+    * :func:`simulate_fluid`: dimension ``t``; ``monte_carlo_mean``,
+      ``monte_carlo_std_error``, ``exact``, ``certified_bound``,
+      ``initial_rate_bound``; the mode, grid and summary as attributes.
+    * :func:`sweep`: one dimension per swept parameter when the points are a
+      full grid (else a ``point`` dimension with the parameters as
+      coordinates); ``verdict``, ``level``, ``sigma2``, ``T`` and ``error``.
+
+    Attributes are numbers and strings only, so ``to_netcdf`` writes them.
+
+    >>> import energy_casimir as ec
+    >>> ds = ec.to_xarray(ec.simulate("fixtures/rigid-body-major-axis.json", paths=200, t_end=2.0, outputs=20))
+    >>> dict(ds["nonlinear_mean"].sizes), ds["coordinate"].values.tolist(), ds.attrs["sigma2"]
+    ({'t': 21, 'coordinate': 3}, ['Pi1', 'Pi2', 'Pi3'], 0.27)
+    >>> grid = ec.to_xarray(ec.sweep("fixtures/rigid-body-major-axis.json", {"I2": (1.5, 2.5, 3), "I3": (0.5, 1.0, 2)}))
+    >>> dict(grid["sigma2"].sizes)
+    {'I2': 3, 'I3': 2}
+    """
+    from ._xarray import to_xarray as convert
+
+    return convert(result)
