@@ -355,6 +355,59 @@ fn simulate_fluid_text(
     Ok(report.to_string())
 }
 
+/// One block (azimuthal wavenumber `m`) of a Zeitlin spec's linearised SDE
+/// simulated beside the certificate's bound (`spec::simulate_zeitlin`, as
+/// `verify simulate` runs it): the report as JSON text, with `notes`.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+#[pyo3(signature = (text, base=None, block=None, paths=None, dt=0.01, t_end=None, outputs=200, seed=1, force=false, progress=None))]
+fn simulate_zeitlin_text(
+    py: Python<'_>,
+    text: String,
+    base: Option<PathBuf>,
+    block: Option<usize>,
+    paths: Option<usize>,
+    dt: f64,
+    t_end: Option<f64>,
+    outputs: usize,
+    seed: u64,
+    force: bool,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<String> {
+    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
+        spec::AnySpec::Zeitlin(s) => s,
+        _ => {
+            return Err(PyValueError::new_err(
+                "simulate_zeitlin runs Zeitlin specs; use simulate or simulate_fluid for the others",
+            ))
+        }
+    };
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let options = spec::ZeitlinSimulationOptions {
+        block,
+        paths,
+        dt,
+        t_end,
+        outputs,
+        seed,
+        force,
+        threads: rayon::current_num_threads().min(cores) as f64,
+    };
+    let mut notes = vec![];
+    let state = Progress::new();
+    let run = interruptible(py, progress.as_ref(), &state, || {
+        spec::simulate_zeitlin(&spec, &options, &state, &mut |n: String| notes.push(n))
+    })?;
+    let mut report = run.map_err(|e| match e {
+        spec::ZeitlinSimulationError::TooLong { .. } => {
+            PyValueError::new_err(format!("{e}; lower them, or pass force=True"))
+        }
+        e => PyValueError::new_err(e.to_string()),
+    })?;
+    report["notes"] = notes.into();
+    Ok(report.to_string())
+}
+
 /// Run `work` on a worker thread while this (the calling, usually the main)
 /// thread, without the GIL, wakes every 100 ms to honour Ctrl-C
 /// (`check_signals`, which only the main thread can) and to call
@@ -597,6 +650,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stopping_time, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_text, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_fluid_text, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate_zeitlin_text, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_text, m)?)?;
     m.add_function(wrap_pyfunction!(engine_version, m)?)?;
     Ok(())

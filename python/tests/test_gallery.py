@@ -65,6 +65,8 @@ def test_zeitlin_quflow(tmp_path):
     for n in (16, 32, 64, 128, 256):
         assert (tmp_path / f"zonal-n{n}.hdf5").exists()
     assert (tmp_path / "zeitlin-convergence.png").stat().st_size > 10_000
+    assert "block m = 1: Sigma^2 = " in text
+    assert (tmp_path / "zeitlin-monte-carlo.png").stat().st_size > 10_000
 
 
 @pytest.mark.parametrize("name", GALLERY)

@@ -249,3 +249,134 @@ fn the_cli_certifies_and_checks_and_refuses_tampering() {
         assert!(stderr(&out).contains(path), "{path}: {}", stderr(&out));
     }
 }
+
+/// `verify simulate` on Zeitlin specs: the block's exact second moment
+/// under the certificate's proved bound, the Monte Carlo beside it, the
+/// outputs written, times per qtime = t / hbar; states with nothing to set
+/// a simulation beside, and flags that mean nothing here, refused with
+/// exit 2 and named.
+#[test]
+fn simulate_runs_a_block_beside_the_certified_bound() {
+    // Noise 3 z^2: the energy–Casimir form (casimir_momentum false) with a
+    // Sigma^2 of about 4e-4.
+    let spec = spec_with(|v| {
+        v["parameters"]["a"] = 3.0.into();
+        v["zeitlin"]["N"] = 8.into();
+        v["settings"] = serde_json::json!({"casimir_momentum": false});
+    });
+    let file = temp_file("sim.json", &spec.to_string());
+    let out_dir = file.parent().unwrap().join("sim-out");
+    let out = verify(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--paths",
+        "400",
+        "--t-end",
+        "2",
+        "--dt",
+        "0.01",
+        "--outputs",
+        "20",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--npz",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let cert = certify(&spec);
+    // One report, named by the block: t-mM.json.
+    let reports: Vec<_> = std::fs::read_dir(&out_dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    assert_eq!(reports.len(), 1, "{reports:?}");
+    let report: Value = serde_json::from_str(&std::fs::read_to_string(&reports[0]).unwrap()).unwrap();
+    assert_eq!(report["kind"], "zeitlin-simulation");
+    let m = report["block"].as_u64().unwrap();
+    // The block is the certificate's largest lambda_max, and it is Sigma^2.
+    let blocks = cert["blocks"].as_array().unwrap();
+    let largest =
+        blocks.iter().max_by(|a, b| a["lambda_max"].as_f64().partial_cmp(&b["lambda_max"].as_f64()).unwrap()).unwrap();
+    assert_eq!(largest["m"].as_u64().unwrap(), m);
+    assert!(
+        (report["initial_rate"].as_f64().unwrap() - cert["sigma2"].as_f64().unwrap()).abs()
+            <= 1e-8 * cert["sigma2"].as_f64().unwrap()
+    );
+    let floats = |k: &str| -> Vec<f64> { report[k].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+    let (times, qtimes, exact, bound, mean, se) = (
+        floats("times"),
+        floats("times_qtime"),
+        floats("exact"),
+        floats("certified_bound"),
+        floats("monte_carlo_mean"),
+        floats("monte_carlo_std_error"),
+    );
+    let hbar = 2.0 / 63.0f64.sqrt(); // N = 8
+    let upper = cert["sigma2_upper"].as_f64().unwrap();
+    for i in 0..times.len() {
+        assert!((qtimes[i] - times[i] / hbar).abs() <= 1e-12 * qtimes[i].max(1.0));
+        assert!((bound[i] - (upper * times[i]).exp()).abs() <= 1e-12 * bound[i]);
+        assert!(exact[i] <= bound[i] * (1.0 + 1e-6), "t {}: {} > {}", times[i], exact[i], bound[i]);
+        assert!(
+            (mean[i] - exact[i]).abs() <= 4.0 * se[i] + 1e-3 * exact[i],
+            "t {}: {} +- {} vs {}",
+            times[i],
+            mean[i],
+            se[i],
+            exact[i]
+        );
+    }
+    let stem = format!("t-m{m}");
+    for ext in [".csv", ".npz", "-growth.svg", "-growth.png"] {
+        assert!(out_dir.join(format!("{stem}{ext}")).exists(), "{stem}{ext}");
+    }
+    // Nothing to compare: a linearly unstable state, and one zonal in no frame.
+    let jet = temp_file("jet.json", &std::fs::read_to_string(common::fixture_path("zeitlin/jet-n64.json")).unwrap());
+    let out = verify(&["simulate", jet.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("a simulation is set beside a stable certificate's conserved form"),
+        "{}",
+        stderr(&out)
+    );
+    let rh = common::fixture_path("zeitlin/rossby-haurwitz-l2-n7.json");
+    let out = verify(&["simulate", rh.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("only states zonal in some frame are simulated"), "{}", stderr(&out));
+    // A noise at 1e150: Sigma^2 near 1e295, and exp(Sigma^2 t) is no double:
+    // refused, not drawn as a chart of infinities.
+    let huge = spec_with(|v| {
+        v["parameters"]["a"] = 1e150.into();
+        v["settings"] = serde_json::json!({"casimir_momentum": false});
+    });
+    let huge = temp_file("huge.json", &huge.to_string());
+    let out = verify(&[
+        "simulate",
+        huge.to_str().unwrap(),
+        "--t-end",
+        "0.1",
+        "--paths",
+        "10",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("is beyond the doubles: lower t_end"), "{}", stderr(&out));
+    // Flags and options named.
+    for (args, named) in [
+        (vec!["--shard", "0/2"], "--shard/--merge"),
+        (vec!["--observable", "x"], "--observable"),
+        (vec!["--ny", "8"], "--ny"),
+        (vec!["--delta", "0.001"], "--delta/--epsilon"),
+        (vec!["--mode", "8"], "--mode: need 1 <= block <= N - 1 = 7, got 8"),
+        (vec!["--dt", "0"], "--dt: must be positive"),
+        (vec!["--paths", "1"], "--paths: need 2 to"),
+        (vec!["--t-end", "1e9", "--dt", "1e-3"], "--t-end/--dt"),
+    ] {
+        let mut all = vec!["simulate", file.to_str().unwrap(), "--out", out_dir.to_str().unwrap()];
+        all.extend(args.iter());
+        let out = verify(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(named), "{args:?}: {}", stderr(&out));
+    }
+}

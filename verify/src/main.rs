@@ -46,6 +46,7 @@ mod sweep_cmd;
 mod sweep_plots;
 mod table;
 mod threads;
+mod zeitlin_simulate;
 
 #[derive(Parser)]
 #[command(

@@ -53,6 +53,8 @@ pub struct SimulateArgs {
     pub epsilon: Option<f64>,
     /// Fluid specs: the x-mode to simulate (default: the one with the
     /// largest certified growth; the gravest for the compressible model).
+    /// Zeitlin specs: the azimuthal wavenumber m, the diagonal of the
+    /// perturbation (default: the largest lambda_max(Q_m, P_m)).
     #[arg(long)]
     pub mode: Option<usize>,
     /// Fluid specs: the y-grid of the simulated SDE, 16 to 512 (default: the
@@ -194,8 +196,11 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     if serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| spec::is_fluid_spec(&v)) {
         return crate::fluid_simulate::run(args, &text);
     }
+    if serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| spec::is_zeitlin_spec(&v)) {
+        return crate::zeitlin_simulate::run(args, &text);
+    }
     if args.mode.is_some() || args.ny.is_some() {
-        return Err(bad("--mode/--ny: for fluid specs only".into()));
+        return Err(bad("--mode/--ny: for fluid and Zeitlin specs only".into()));
     }
     let paths = args.paths.unwrap_or(10_000);
     let spec = spec::parse_spec(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;

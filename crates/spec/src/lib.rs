@@ -60,6 +60,8 @@ mod sweep;
 pub mod theorem;
 #[cfg(feature = "fluid")]
 mod zeitlin;
+#[cfg(feature = "fluid")]
+mod zeitlin_simulation;
 
 pub use certificate::{
     certificate_json, certify, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
@@ -88,6 +90,13 @@ pub use zeitlin::{
     analyse_zeitlin, analyse_zeitlin_with, certify_zeitlin, certify_zeitlin_with, check_zeitlin_certificate,
     check_zeitlin_certificate_in, parse_zeitlin_spec, zeitlin_certificate_document, zeitlin_spec_from_value,
     zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
+};
+
+#[cfg(feature = "fluid")]
+pub use zeitlin_simulation::{
+    simulate_zeitlin, ZeitlinSimulationError, ZeitlinSimulationOptions, ZEITLIN_EXACT_SECONDS,
+    ZEITLIN_SIMULATION_DEFAULT_PATHS, ZEITLIN_SIMULATION_DEFAULT_SECONDS, ZEITLIN_SIMULATION_MAX_N,
+    ZEITLIN_SIMULATION_NO_GROWTH_T_END, ZEITLIN_SIMULATION_SECONDS,
 };
 
 #[cfg(feature = "fluid")]

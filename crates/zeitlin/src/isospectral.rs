@@ -94,6 +94,9 @@ pub enum IsospectralError {
     /// A value became non-finite, or a factorisation failed.
     #[error("numerical breakdown: {0}")]
     Numerical(String),
+    /// The run was stopped through its `Progress` before it ended.
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// `P = Delta_N^{-1} W` in `O(N^2)`, diagonal by diagonal.

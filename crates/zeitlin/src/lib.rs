@@ -20,6 +20,7 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+pub mod block_sde;
 pub mod eigen;
 pub mod general;
 pub mod isospectral;

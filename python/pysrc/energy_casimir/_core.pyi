@@ -58,6 +58,18 @@ def simulate_fluid_text(
     force: bool = False,
     progress: Optional[Callable[[int, int], Any]] = None,
 ) -> str: ...
+def simulate_zeitlin_text(
+    text: str,
+    base: Optional[_Path] = None,
+    block: Optional[int] = None,
+    paths: Optional[int] = None,
+    dt: float = 0.01,
+    t_end: Optional[float] = None,
+    outputs: int = 200,
+    seed: int = 1,
+    force: bool = False,
+    progress: Optional[Callable[[int, int], Any]] = None,
+) -> str: ...
 def engine_version() -> str: ...
 def sweep_text(
     text: str,

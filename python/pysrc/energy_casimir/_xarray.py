@@ -92,6 +92,29 @@ def _fluid(xr: Any, r: Mapping[str, Any]) -> Any:
     )
 
 
+def _zeitlin(xr: Any, r: Mapping[str, Any]) -> Any:
+    """One block of a Zeitlin spec (`simulate_zeitlin`)."""
+    data: Dict[str, Any] = {
+        "monte_carlo_mean": _var("t", r["monte_carlo_mean"], "Monte Carlo E|z_t|_P^2 / |z_0|_P^2"),
+        "monte_carlo_std_error": _var("t", r["monte_carlo_std_error"], "standard error of E|z_t|_P^2 / |z_0|_P^2"),
+        "certified_bound": _var("t", r["certified_bound"], "certified bound exp(Sigma^2 t)"),
+        "block_bound": _var("t", r["block_bound"], "the block's exp(lambda_max t)"),
+    }
+    if r.get("exact") is not None:
+        data["exact"] = _var("t", r["exact"], "exact E|z_t|_P^2 / |z_0|_P^2 of the split scheme")
+    attrs = _attrs(r)
+    attrs.update(_attrs({f"summary_{k}": v for k, v in (r.get("summary") or {}).items()}))
+    return xr.Dataset(
+        data,
+        coords={
+            "t": ("t", np.asarray(r["times"], dtype=float), {"long_name": "time", "units": TIME_UNITS}),
+            "qtime": ("t", np.asarray(r["times_qtime"], dtype=float),
+                      {"long_name": "quflow's integrator time t / hbar", "units": "qtime"}),
+        },
+        attrs=attrs,
+    )
+
+
 def _sweep(xr: Any, cols: Mapping[str, Any]) -> Any:
     """A sweep's columns: one point per index, unstacked into a grid when
     the points are one."""
@@ -132,13 +155,15 @@ def to_xarray(result: Mapping[str, Any]) -> Any:
             "to_xarray needs xarray (pip install xarray); without it the results are dicts of numpy arrays"
         ) from None
     if not isinstance(result, Mapping):
-        raise TypeError(f"to_xarray: expected the dict simulate, simulate_fluid, merge_shards or sweep returned, got {type(result).__name__}")
+        raise TypeError(f"to_xarray: expected the dict simulate, simulate_fluid, simulate_zeitlin, merge_shards or sweep returned, got {type(result).__name__}")
     if result.get("kind") == "fluid-simulation":
         return _fluid(xr, result)
+    if result.get("kind") == "zeitlin-simulation":
+        return _zeitlin(xr, result)
     if "nonlinear" in result and "histogram" in result:
         return _study(xr, result)
     if "lines" in result and "verdict" in result and "index" in result:
         return _sweep(xr, result)
     if result.get("kind") == "simulate-shard":
         raise ValueError("to_xarray: a shard holds sums, not results: merge the shards first (merge_shards)")
-    raise ValueError("to_xarray: not a result of simulate, simulate_fluid, merge_shards or sweep")
+    raise ValueError("to_xarray: not a result of simulate, simulate_fluid, simulate_zeitlin, merge_shards or sweep")
