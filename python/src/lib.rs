@@ -408,6 +408,25 @@ fn simulate_zeitlin_text(
     Ok(report.to_string())
 }
 
+/// A Zeitlin spec's fields as quflow's `omega` vectors
+/// (`spec::zeitlin_fields`): JSON text `{"N", "state", "noise", "mode"}`.
+#[pyfunction]
+#[pyo3(signature = (text, base=None))]
+fn zeitlin_fields_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<String> {
+    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
+        spec::AnySpec::Zeitlin(s) => s,
+        _ => return Err(PyValueError::new_err("zeitlin_fields takes Zeitlin specs")),
+    };
+    let fields = py.detach(|| spec::zeitlin_fields(&spec)).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let mode = fields.mode.map(|m| {
+        serde_json::json!({
+            "kind": m.kind, "block": m.block, "rate": m.rate, "frequency": m.frequency,
+            "real": m.real, "imaginary": m.imaginary,
+        })
+    });
+    Ok(serde_json::json!({"N": fields.n, "state": fields.state, "noise": fields.noise, "mode": mode}).to_string())
+}
+
 /// Run `work` on a worker thread while this (the calling, usually the main)
 /// thread, without the GIL, wakes every 100 ms to honour Ctrl-C
 /// (`check_signals`, which only the main thread can) and to call
@@ -651,6 +670,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate_text, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_fluid_text, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_zeitlin_text, m)?)?;
+    m.add_function(wrap_pyfunction!(zeitlin_fields_text, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_text, m)?)?;
     m.add_function(wrap_pyfunction!(engine_version, m)?)?;
     Ok(())

@@ -279,3 +279,39 @@ def test_bad_files_and_arguments_name_what_is_wrong(tmp_path):
         quflow.zeitlin_spec(np.zeros(16), noise=[])
     with pytest.raises(ValueError, match=r"noise\[0\]: 9 coefficients, expected N\^2 = 16"):
         quflow.zeitlin_spec(np.ones(16), noise=[np.ones(9)])
+
+
+def test_the_engines_fields_go_into_quflow_files_and_back(tmp_path):
+    # The jet (linearly unstable at N = 64): its state and the state pushed
+    # along its fastest-growing eigenvector, written in quflow's layout as
+    # quflow's own integrator would start from them.
+    fields = ec.zeitlin_fields(REPO / "fixtures" / "zeitlin" / "jet-n64.json")
+    mode = fields["mode"]
+    assert mode["kind"] == "unstable_eigenvector"
+    committed = certificate("jet-n64")
+    assert mode["rate"] == pytest.approx(committed["growth_rate"], rel=1e-6)
+    path = tmp_path / "jet.hdf5"
+    quflow.write(path, [fields["state"], fields["state"] + 1e-4 * mode["real"]], qtime=[0.0, 0.0])
+    back0, back1 = quflow.read(path, step=0), quflow.read(path, step=1)
+    assert np.array_equal(back0.omega, fields["state"]) and back0.N == 64
+    assert np.allclose((back1.omega - back0.omega) / 1e-4, mode["real"], rtol=0, atol=1e-9)
+    # The state read back certifies as the fixture did (its noise as given).
+    spec = quflow.zeitlin_spec(path, step=0, noise=[fields["noise"][0]])
+    cert = ec.certify(spec)
+    assert cert.verdict == "linearly_unstable"
+    assert cert.growth_rate == pytest.approx(committed["growth_rate"], rel=1e-8)
+    # The zonal mode lives on one azimuthal wavenumber: |m| = block.
+    for index in np.flatnonzero(np.abs(mode["real"]) > 1e-12):
+        assert abs(quflow.ind2elm(int(index))[1]) == mode["block"]
+
+
+def test_a_tilted_states_fields_read_back_to_its_axis(tmp_path):
+    fields = ec.zeitlin_fields(REPO / "fixtures" / "zeitlin" / "tilted-energy-casimir-n32.json")
+    assert fields["mode"]["kind"] == "fastest_growing_start"
+    path = tmp_path / "tilted.hdf5"
+    quflow.write(path, fields["state"], qtime=[0.0])
+    cert = ec.certify(quflow.zeitlin_spec(path, noise=[fields["noise"][0]], settings={"casimir_momentum": False}))
+    committed = certificate("tilted-energy-casimir-n32")
+    assert cert["frame"]["axis"] == pytest.approx(committed["frame"]["axis"], abs=1e-12)
+    assert cert.sigma2 == pytest.approx(committed["sigma2"], rel=1e-9)
+    assert fields["mode"]["rate"] == pytest.approx(committed["sigma2"], rel=1e-6)

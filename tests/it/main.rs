@@ -43,6 +43,7 @@ mod sweep_cli;
 mod tamper;
 mod trust;
 mod zeitlin_cli;
+mod zeitlin_fields;
 mod zeitlin_generic;
 mod zeitlin_harmonics;
 mod zeitlin_su_n;

@@ -61,6 +61,8 @@ pub mod theorem;
 #[cfg(feature = "fluid")]
 mod zeitlin;
 #[cfg(feature = "fluid")]
+mod zeitlin_fields;
+#[cfg(feature = "fluid")]
 mod zeitlin_simulation;
 
 pub use certificate::{
@@ -91,6 +93,9 @@ pub use zeitlin::{
     check_zeitlin_certificate_in, parse_zeitlin_spec, zeitlin_certificate_document, zeitlin_spec_from_value,
     zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
 };
+
+#[cfg(feature = "fluid")]
+pub use zeitlin_fields::{zeitlin_fields, ZeitlinFields, ZeitlinFieldsError, ZeitlinMode, ZEITLIN_FIELDS_MAX_N};
 
 #[cfg(feature = "fluid")]
 pub use zeitlin_simulation::{

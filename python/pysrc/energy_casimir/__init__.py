@@ -50,6 +50,7 @@ __all__ = [
     "sweep",
     "to_xarray",
     "validate",
+    "zeitlin_fields",
     "__version__",
 ]
 
@@ -766,6 +767,31 @@ def simulate_zeitlin(
             progress=p.callback,
         )
     return _arrays(json.loads(out))
+
+
+def zeitlin_fields(spec: SpecLike, *, base_dir: Optional[Union[str, "os.PathLike[str]"]] = None) -> Dict[str, Any]:
+    """A Zeitlin spec's fields as quflow's ``omega`` vectors (real
+    spherical-harmonic coefficients at index ``l^2 + l + m``, length
+    ``N^2``), ready for :func:`energy_casimir.quflow.write`.
+
+    Returns ``{"N", "state", "noise": [...], "mode"}``: the equilibrium as
+    the engine reads it (a profile quantised, harmonics or a ``.npy`` matrix
+    as given), each noise field's stream matrix, and for a state zonal in
+    some frame the perturbation its certificate is about, in the spec's own
+    frame: ``mode["kind"]`` is ``"unstable_eigenvector"`` (the
+    fastest-growing eigenvector of a linearly unstable state: the linearised
+    drift maps ``real`` to ``rate real + frequency imaginary``) or
+    ``"fastest_growing_start"`` (a stable state's start whose ``E|dW|_P^2``
+    grows at ``Sigma^2``, ``rate``); ``block`` is its azimuthal wavenumber
+    in the zonal frame. ``mode`` is None otherwise. N at most 256.
+
+    >>> import energy_casimir as ec
+    >>> f = ec.zeitlin_fields("fixtures/zeitlin/jet-n64.json")
+    >>> f["N"], f["state"].shape, f["mode"]["kind"], round(f["mode"]["rate"], 6)
+    (64, (4096,), 'unstable_eigenvector', 0.140955)
+    """
+    text, base = _read_input(spec, "zeitlin_fields", base_dir)
+    return _arrays(json.loads(_core.zeitlin_fields_text(text, _base(base))))
 
 
 def _range_text(name: str, r: Any) -> str:
