@@ -360,7 +360,7 @@ fn simulate_fluid_text(
 /// `verify simulate` runs it): the report as JSON text, with `notes`.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
-#[pyo3(signature = (text, base=None, block=None, paths=None, dt=0.01, t_end=None, outputs=200, seed=1, force=false, progress=None))]
+#[pyo3(signature = (text, base=None, block=None, paths=None, dt=0.01, t_end=None, outputs=200, seed=1, force=false, progress=None, delta=None))]
 fn simulate_zeitlin_text(
     py: Python<'_>,
     text: String,
@@ -373,6 +373,7 @@ fn simulate_zeitlin_text(
     seed: u64,
     force: bool,
     progress: Option<Bound<'_, PyAny>>,
+    delta: Option<f64>,
 ) -> PyResult<String> {
     let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
         spec::AnySpec::Zeitlin(s) => s,
@@ -392,6 +393,7 @@ fn simulate_zeitlin_text(
         seed,
         force,
         threads: rayon::current_num_threads().min(cores) as f64,
+        delta,
     };
     let mut notes = vec![];
     let state = Progress::new();

@@ -40,6 +40,11 @@ def test_the_report_is_the_clis_and_stays_under_the_bound(tmp_path):
     assert r["initial_rate"] == pytest.approx(cert.sigma2, rel=1e-8)  # the block with the largest lambda_max
     assert (r["exact"] <= r["certified_bound"] * (1 + 1e-6)).all()
     assert (np.abs(r["monte_carlo_mean"] - r["exact"]) <= 4 * r["monte_carlo_std_error"] + 1e-3 * r["exact"]).all()
+    # The nonlinear model beside the linear exact moment, Casimirs to rounding.
+    nl = r["nonlinear"]
+    assert nl["paths"] == 40 and nl["delta"] == 1e-6
+    assert (np.abs(nl["mean"] - r["exact"]) <= 4 * nl["std_error"] + 1e-3 * r["exact"]).all()
+    assert nl["casimir_drift"] < 1e-12
     # The CLI writes the same arrays.
     spec_file = tmp_path / "z8.json"
     spec_file.write_text(json.dumps(SPEC))
@@ -48,9 +53,11 @@ def test_the_report_is_the_clis_and_stays_under_the_bound(tmp_path):
     cli = json.loads(next(tmp_path.glob("z8-m*.json")).read_text())
     for key in ("times", "times_qtime", "monte_carlo_mean", "monte_carlo_std_error", "exact", "certified_bound", "block_bound"):
         assert np.array_equal(np.asarray(cli[key]), r[key]), key
+    assert np.array_equal(np.asarray(cli["nonlinear"]["mean"]), nl["mean"])
     ds = ec.to_xarray(r)
     assert dict(ds.sizes) == {"t": len(r["times"])}
     assert np.array_equal(ds["qtime"].values, r["times_qtime"])
+    assert np.array_equal(ds["nonlinear_mean"].values, nl["mean"]) and ds.attrs["nonlinear_paths"] == 40
 
 
 def test_what_cannot_be_simulated_is_refused():

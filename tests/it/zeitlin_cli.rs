@@ -326,6 +326,26 @@ fn simulate_runs_a_block_beside_the_certified_bound() {
             exact[i]
         );
     }
+    // The nonlinear model (a tenth of the paths, on the same increments)
+    // beside the linear exact moment, with its Casimirs kept to rounding.
+    let nonlinear = &report["nonlinear"];
+    assert_eq!(nonlinear["paths"], 40);
+    assert_eq!(nonlinear["delta"], 1e-6);
+    let nl: Vec<f64> = nonlinear["mean"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let nl_se: Vec<f64> = nonlinear["std_error"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert_eq!(nl.len(), times.len());
+    assert!((nl[0] - 1.0).abs() < 1e-9, "{}", nl[0]);
+    for i in 0..times.len() {
+        assert!(
+            (nl[i] - exact[i]).abs() <= 4.0 * nl_se[i] + 1e-3 * exact[i],
+            "t {}: {} +- {} vs {}",
+            times[i],
+            nl[i],
+            nl_se[i],
+            exact[i]
+        );
+    }
+    assert!(nonlinear["casimir_drift"].as_f64().unwrap() < 1e-12);
     let stem = format!("t-m{m}");
     for ext in [".csv", ".npz", "-growth.svg", "-growth.png"] {
         assert!(out_dir.join(format!("{stem}{ext}")).exists(), "{stem}{ext}");
@@ -367,7 +387,8 @@ fn simulate_runs_a_block_beside_the_certified_bound() {
         (vec!["--shard", "0/2"], "--shard/--merge"),
         (vec!["--observable", "x"], "--observable"),
         (vec!["--ny", "8"], "--ny"),
-        (vec!["--delta", "0.001"], "--delta/--epsilon"),
+        (vec!["--epsilon", "0.1"], "--epsilon"),
+        (vec!["--delta", "2"], "--delta: the nonlinear start's |dW_0|_P^2 must be in (0, 1]"),
         (vec!["--mode", "8"], "--mode: need 1 <= block <= N - 1 = 7, got 8"),
         (vec!["--dt", "0"], "--dt: must be positive"),
         (vec!["--paths", "1"], "--paths: need 2 to"),

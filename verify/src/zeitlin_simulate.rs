@@ -32,8 +32,8 @@ fn refuse_other_flags(args: &SimulateArgs) -> Result<(), Failure> {
     if args.scheme != "lie" {
         return refuse("--scheme", "the block is simulated by Strang splitting of its exact drift and noise flows");
     }
-    if args.delta.is_some() || args.epsilon.is_some() {
-        return refuse("--delta/--epsilon", "the SDE is linear, so only the ratio E|z_t|_P^2 / |z_0|_P^2 is reported");
+    if args.epsilon.is_some() {
+        return refuse("--epsilon", "no threshold is drawn: the report is E|dW_t|_P^2 / |dW_0|_P^2");
     }
     if args.ny.is_some() {
         return refuse("--ny", "the grid is the spec's N");
@@ -42,6 +42,7 @@ fn refuse_other_flags(args: &SimulateArgs) -> Result<(), Failure> {
 }
 
 fn failure(shown: &str, e: ZeitlinSimulationError) -> Failure {
+    // (the library's field names are the flags', but for the block)
     match e {
         ZeitlinSimulationError::Invalid { field, message } => {
             let flag = match field {
@@ -85,6 +86,7 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         seed: args.seed,
         force: args.force,
         threads: (rayon::current_num_threads() as f64).min(cores),
+        delta: args.delta,
     };
     let bar = crate::progress_bar(1, "{msg} [{bar:30}] {percent:>3}% ({elapsed})");
     let mut noted = vec![];
@@ -131,10 +133,19 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
     let exact = report["exact"].as_array().map(|_| floats(&report["exact"]));
     let bound = floats(&report["certified_bound"]);
     let block_bound = floats(&report["block_bound"]);
-    let mut csv = String::from("t,qtime,monte_carlo_mean,monte_carlo_std_error,exact,certified_bound,block_bound\n");
+    let nonlinear = report["nonlinear"].as_object().map(|_| floats(&report["nonlinear"]["mean"]));
+    let nonlinear_se = report["nonlinear"].as_object().map(|_| floats(&report["nonlinear"]["std_error"]));
+    let mut csv = String::from(
+        "t,qtime,monte_carlo_mean,monte_carlo_std_error,exact,certified_bound,block_bound,nonlinear_mean,nonlinear_std_error\n",
+    );
     for (i, t) in times.iter().enumerate() {
         let e = exact.as_ref().map_or(String::new(), |e| e[i].to_string());
-        csv.push_str(&format!("{t},{},{},{},{e},{},{}\n", qtimes[i], mean[i], se[i], bound[i], block_bound[i]));
+        let nl = nonlinear.as_ref().map_or(String::new(), |v| v[i].to_string());
+        let nls = nonlinear_se.as_ref().map_or(String::new(), |v| v[i].to_string());
+        csv.push_str(&format!(
+            "{t},{},{},{},{e},{},{},{nl},{nls}\n",
+            qtimes[i], mean[i], se[i], bound[i], block_bound[i]
+        ));
     }
     let csv_path = dir.join(format!("{stem}.csv"));
     write_atomic(&csv_path, csv.as_bytes()).map_err(|e| write_failure(&csv_path, &e))?;
@@ -146,6 +157,10 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         curves.push(("exact second moment".to_string(), e.clone(), 0, false));
     }
     curves.push(("Monte Carlo mean".into(), mean.clone(), 2, false));
+    if let Some(v) = &nonlinear {
+        let delta = report["nonlinear"]["delta"].as_f64().unwrap_or(0.0);
+        curves.push((format!("nonlinear model, delta = {}", num(delta)), v.clone(), 4, false));
+    }
     curves.push((format!("block's exp(lambda_max t), lambda_max = {}", num(lambda)), block_bound.clone(), 3, true));
     let name = excerpt(&spec.name);
     write_growth(
@@ -193,6 +208,18 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         exact.as_ref().map_or("skipped".into(), |e| num(e[last])),
         num(bound[last])
     );
+    if let Some(v) = &nonlinear {
+        eprintln!(
+            "  nonlinear model ({} paths, delta = {}): {} ± {} at t = {}; Casimir drift {}, momentum drift {}",
+            report["nonlinear"]["paths"],
+            num(report["nonlinear"]["delta"].as_f64().unwrap_or(0.0)),
+            num(v[last]),
+            num(nonlinear_se.as_ref().map_or(f64::NAN, |s| s[last])),
+            num(times[last]),
+            num(report["nonlinear"]["casimir_drift"].as_f64().unwrap_or(f64::NAN)),
+            num(report["nonlinear"]["momentum_drift"].as_f64().unwrap_or(f64::NAN))
+        );
+    }
     if let (Some(r), Some(a)) = (
         report["summary"]["exact_over_certified_bound_max"].as_f64(),
         report["summary"]["monte_carlo_agrees_with_exact"].as_u64(),

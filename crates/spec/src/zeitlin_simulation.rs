@@ -10,8 +10,11 @@
 //! direction whose `E|z|_P^2` grows fastest, and a Monte Carlo and the
 //! scheme's exact second moment give `E|z_t|_P^2 / |z_0|_P^2` beside the
 //! certificate's proved `exp(sigma2_upper t)` and the block's own
-//! `exp(lambda_max t)`. Times are the model's `t` (quflow's), and the report
-//! gives them per `qtime = t / hbar` too.
+//! `exp(lambda_max t)`. Beside them, a smaller ensemble of the nonlinear
+//! stochastic Zeitlin model (the isospectral midpoint scheme,
+//! [`zeitlin::isospectral`]) from `W_e + sqrt(delta) X` on the same Brownian
+//! increments, with its Casimir drift. Times are the model's `t`
+//! (quflow's), and the report gives them per `qtime = t / hbar` too.
 
 use crate::zeitlin::{analyse_zeitlin_with, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec};
 use nalgebra::Complex;
@@ -66,7 +69,18 @@ pub struct ZeitlinSimulationOptions {
     pub force: bool,
     /// The threads that work (for the estimate).
     pub threads: f64,
+    /// The nonlinear ensemble's initial size `|dW_0|_P^2` (default
+    /// [`ZEITLIN_NONLINEAR_DEFAULT_DELTA`]).
+    pub delta: Option<f64>,
 }
+
+/// The nonlinear ensemble's initial size `|dW_0|_P^2` when none is asked for.
+pub const ZEITLIN_NONLINEAR_DEFAULT_DELTA: f64 = 1e-6;
+/// The nonlinear ensemble runs one path in this many of the linear one's
+/// (at least 2): an isospectral midpoint step costs `O(N^3)`.
+pub const ZEITLIN_NONLINEAR_PATH_SHARE: usize = 10;
+/// The nonlinear ensemble is run up to this `N` (beyond, skipped with a note).
+pub const ZEITLIN_NONLINEAR_MAX_N: usize = 64;
 
 /// Why a Zeitlin simulation was not run.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -169,6 +183,7 @@ fn zonal_problem(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome) -> Result<Zonal, 
 /// let spec = spec::zeitlin_spec_from_value(serde_json::from_str(text).unwrap()).unwrap();
 /// let options = spec::ZeitlinSimulationOptions {
 ///     block: None, paths: Some(200), dt: 0.01, t_end: Some(2.0), outputs: 4, seed: 1, force: false, threads: 1.0,
+///     delta: None,
 /// };
 /// let r = spec::simulate_zeitlin(&spec, &options, &outcome::Progress::new(), &mut |_| {}).unwrap();
 /// assert_eq!(r["kind"], "zeitlin-simulation");
@@ -176,6 +191,8 @@ fn zonal_problem(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome) -> Result<Zonal, 
 /// let exact = r["exact"].as_array().unwrap();
 /// let bound = r["certified_bound"].as_array().unwrap();
 /// assert!(exact.iter().zip(bound).all(|(e, b)| e.as_f64().unwrap() <= b.as_f64().unwrap() * (1.0 + 1e-6)));
+/// // the nonlinear model, isospectral: its Casimirs move by rounding only
+/// assert!(r["nonlinear"]["casimir_drift"].as_f64().unwrap() < 1e-12);
 /// ```
 pub fn simulate_zeitlin(
     spec: &ZeitlinSpec,
@@ -282,11 +299,43 @@ pub fn simulate_zeitlin(
     if !run_exact {
         notes(format!("the exact second moment is skipped: about {exact_seconds:.0} s (forcing runs it)"));
     }
-    progress.plan(paths as u64 + if run_exact { steps as u64 } else { 0 });
+    let delta = options.delta.unwrap_or(ZEITLIN_NONLINEAR_DEFAULT_DELTA);
+    if !(delta.is_finite() && delta > 0.0 && delta <= 1.0) {
+        return Err(invalid("delta", format!("the nonlinear start's |dW_0|_P^2 must be in (0, 1], got {delta}")));
+    }
+    let nonlinear_paths = (paths / ZEITLIN_NONLINEAR_PATH_SHARE).max(2);
+    // An isospectral midpoint step: about 7 iterations of two complex
+    // products and a stream solve (about 32 N^3 flops each), plus the norm
+    // over the blocks.
+    let nonlinear_seconds =
+        nonlinear_paths as f64 * steps as f64 * 250.0 * (n as f64).powi(3) / FLOPS_PER_SECOND / threads;
+    let run_nonlinear =
+        n <= ZEITLIN_NONLINEAR_MAX_N && (nonlinear_seconds <= ZEITLIN_SIMULATION_SECONDS || options.force);
+    if !run_nonlinear {
+        notes(if n > ZEITLIN_NONLINEAR_MAX_N {
+            format!("the nonlinear ensemble is skipped: N = {n} is above {ZEITLIN_NONLINEAR_MAX_N}")
+        } else {
+            format!("the nonlinear ensemble is skipped: about {nonlinear_seconds:.0} s (forcing runs it)")
+        });
+    }
+    progress.plan(
+        paths as u64
+            + if run_exact { steps as u64 } else { 0 }
+            + if run_nonlinear { nonlinear_paths as u64 } else { 0 },
+    );
     let mc = sde.monte_carlo(&z0, dt, steps, outputs, paths, options.seed, progress).map_err(from_block)?;
     let exact =
         if run_exact { Some(sde.exact_moment(&z0, dt, steps, outputs, progress).map_err(from_block)?) } else { None };
-    if mc.mean.iter().chain(&mc.std_error).chain(exact.iter().flatten()).any(|x| !x.is_finite()) {
+    let nonlinear = if run_nonlinear {
+        let start = Start { omega: &omega, noise: &noise, choice: &choice, m, z0: &z0, delta };
+        Some(nonlinear_ensemble(&start, dt, steps, outputs, nonlinear_paths, options.seed, progress)?)
+    } else {
+        None
+    };
+    let nonlinear_values =
+        nonlinear.iter().flat_map(|e| e.mean.iter().chain(&e.std_error).chain([&e.casimir_drift, &e.momentum_drift]));
+    if mc.mean.iter().chain(&mc.std_error).chain(exact.iter().flatten()).chain(nonlinear_values).any(|x| !x.is_finite())
+    {
         return Err(ZeitlinSimulationError::Unrepresentable(
             "the run left the doubles (a value became infinite or NaN): lower dt or t_end".into(),
         ));
@@ -332,6 +381,16 @@ pub fn simulate_zeitlin(
         "exact": exact,
         "certified_bound": certified_bound,
         "block_bound": block_bound,
+        "nonlinear": nonlinear.as_ref().map(|e| json!({
+            "paths": e.paths,
+            "delta": delta,
+            "mean": e.mean,
+            "std_error": e.std_error,
+            "casimir_drift": e.casimir_drift,
+            "momentum_drift": e.momentum_drift,
+            "iterations_max": e.iterations_max,
+            "meaning": "the nonlinear stochastic Zeitlin model (the isospectral midpoint scheme) from W_e + sqrt(delta) X, X the block's fastest start (|X|_P^2 = 1), on the same Brownian increments as the linear paths of the same index: E|W_t - W_e|_P^2 / delta over the off-diagonal blocks (the diagonal block, which the linearisation leaves constant, is not measured); casimir_drift the largest relative change of tr W^2 and tr W^3 over every path and step",
+        })),
         "summary": {
             "exact_over_certified_bound_max": exact_over_bound,
             "monte_carlo_agrees_with_exact": agreeing,
@@ -340,4 +399,115 @@ pub fn simulate_zeitlin(
         },
         "meaning": "E|z_t|_P^2 / |z_0|_P^2 for the perturbation's entries z_j = dW[j, j + m] on diagonal `block` of the linearised SDE about the zonal state (the blocks decouple), from the direction whose E|z|_P^2 grows fastest (initial_rate = lambda_max(Q_m, P_m)); P the certificate's energy–Casimir form; certified_bound = exp(sigma2_upper t), the certificate's proved bound (exp(sigma2 t) when none was proved), block_bound = exp(block_lambda_max t); the Monte Carlo and `exact` are of the Strang splitting of the exact drift and noise flows, the exact second moment of that scheme (O(dt^2) from the SDE's)",
     }))
+}
+
+/// The nonlinear ensemble's statistics.
+struct Nonlinear {
+    paths: usize,
+    mean: Vec<f64>,
+    std_error: Vec<f64>,
+    casimir_drift: f64,
+    momentum_drift: f64,
+    iterations_max: usize,
+}
+
+/// Where the nonlinear ensemble starts: `W_e = i diag(omega)` with its
+/// noise and form, pushed by `sqrt(delta) X`, `X` on diagonal `m` with
+/// entries `z0` (`|X|_P^2 = 1`).
+struct Start<'a> {
+    omega: &'a [f64],
+    noise: &'a [Vec<f64>],
+    choice: &'a zeitlin::analysis::Choice,
+    m: usize,
+    z0: &'a [Complex<f64>],
+    delta: f64,
+}
+
+/// The nonlinear stochastic Zeitlin model from `start`, path `p` drawing
+/// from the same stream as the linear ensemble's path `p` (the same
+/// increments, in the same order: one normal per noise field per step):
+/// `E|W_t - W_e|_P^2 / delta` summed over the off-diagonal blocks with each
+/// block's form.
+fn nonlinear_ensemble(
+    start: &Start<'_>,
+    dt: f64,
+    steps: usize,
+    outputs: usize,
+    paths: usize,
+    seed: u64,
+    progress: &Progress,
+) -> Result<Nonlinear, ZeitlinSimulationError> {
+    use rayon::prelude::*;
+    use zeitlin::isospectral::{diagonal_perturbation, path_rng, zonal_state, MidpointSettings, ZeitlinModel};
+    let Start { omega, noise, choice, m, z0, delta } = *start;
+    let n = omega.len();
+    let blocks: Vec<BlockSde> =
+        (1..n).map(|b| BlockSde::new(omega, noise, choice, b)).collect::<Result<_, _>>().map_err(from_block)?;
+    let model = ZeitlinModel::new(n, noise.to_vec()).map_err(from_block)?;
+    let we = zonal_state(omega);
+    let scaled: Vec<Complex<f64>> = z0.iter().map(|z| z * delta.sqrt()).collect();
+    let w0 = &we + diagonal_perturbation(n, m, &scaled).map_err(from_block)?;
+    let every = steps.div_ceil(outputs.max(1)).max(1);
+    let norm = |w: &nalgebra::DMatrix<Complex<f64>>| -> f64 {
+        blocks
+            .iter()
+            .map(|b| {
+                let z: Vec<Complex<f64>> = (0..n - b.m()).map(|j| w[(j, j + b.m())] - we[(j, j + b.m())]).collect();
+                b.norm2(&z)
+            })
+            .sum::<f64>()
+            / delta
+    };
+    let settings = MidpointSettings::default();
+    type Run = (Vec<f64>, f64, f64, usize);
+    let runs: Vec<Result<Run, IsospectralError>> = (0..paths)
+        .into_par_iter()
+        .map(|p| {
+            if progress.is_cancelled() {
+                return Err(IsospectralError::Cancelled);
+            }
+            let mut rng = path_rng(seed, p as u64);
+            let mut series = Vec::with_capacity(outputs + 2);
+            let summary = model.run(&w0, dt, steps, &mut rng, &settings, |s, _, w| {
+                if s % every == 0 || s == steps {
+                    series.push(norm(w));
+                }
+            })?;
+            progress.step(1);
+            Ok((series, summary.casimir_drift, summary.momentum_drift, summary.iterations_max))
+        })
+        .collect();
+    let mut sum: Vec<f64> = vec![];
+    let mut square: Vec<f64> = vec![];
+    let (mut casimir, mut momentum, mut iterations) = (0.0f64, 0.0f64, 0usize);
+    for run in runs {
+        let (series, c, mo, it) = run.map_err(from_block)?;
+        if sum.is_empty() {
+            sum = vec![0.0; series.len()];
+            square = vec![0.0; series.len()];
+        }
+        for (k, x) in series.iter().enumerate() {
+            sum[k] += x;
+            square[k] += x * x;
+        }
+        // (a NaN drift stays NaN: f64::max would drop it)
+        casimir = if c.is_nan() || casimir.is_nan() { f64::NAN } else { casimir.max(c) };
+        momentum = if mo.is_nan() || momentum.is_nan() { f64::NAN } else { momentum.max(mo) };
+        iterations = iterations.max(it);
+    }
+    let count = paths as f64;
+    let mean: Vec<f64> = sum.iter().map(|s| s / count).collect();
+    let std_error = mean
+        .iter()
+        .zip(&square)
+        .map(|(m, q)| ((q / count - m * m).max(0.0) * count / (count - 1.0).max(1.0) / count).sqrt())
+        .collect();
+    Ok(Nonlinear {
+        paths,
+        mean,
+        std_error,
+        casimir_drift: casimir,
+        momentum_drift: momentum,
+        iterations_max: iterations,
+    })
 }

@@ -102,7 +102,13 @@ def _zeitlin(xr: Any, r: Mapping[str, Any]) -> Any:
     }
     if r.get("exact") is not None:
         data["exact"] = _var("t", r["exact"], "exact E|z_t|_P^2 / |z_0|_P^2 of the split scheme")
+    nonlinear = r.get("nonlinear")
+    if nonlinear:
+        data["nonlinear_mean"] = _var("t", nonlinear["mean"], "nonlinear model: Monte Carlo E|W_t - W_e|_P^2 / delta")
+        data["nonlinear_std_error"] = _var("t", nonlinear["std_error"], "standard error of the nonlinear mean")
     attrs = _attrs(r)
+    if nonlinear:
+        attrs.update(_attrs({f"nonlinear_{k}": v for k, v in nonlinear.items()}))
     attrs.update(_attrs({f"summary_{k}": v for k, v in (r.get("summary") or {}).items()}))
     return xr.Dataset(
         data,
