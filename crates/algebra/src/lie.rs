@@ -365,12 +365,6 @@ impl LieAlgebra {
         LieAlgebra::from_structure_constants(name, &coordinates, &rows)
     }
 
-    /// Rename the algebra.
-    pub fn with_name(mut self, name: &str) -> Self {
-        self.name = name.to_string();
-        self
-    }
-
     /// Rename the coordinates (same length, valid, distinct names).
     pub fn with_coordinates<S: AsRef<str>>(self, coordinates: &[S]) -> Result<Self, AlgebraError> {
         if coordinates.len() != self.dim() {

@@ -237,11 +237,6 @@ impl Matrix {
         }
     }
 
-    /// Largest absolute value of an entry, as a double.
-    pub fn max_abs_f64(&self) -> f64 {
-        self.data.iter().map(|a| rational_to_f64(a).abs()).fold(0.0, f64::max)
-    }
-
     /// The nearest double of each entry, row-major.
     pub fn to_f64_vec(&self) -> Vec<f64> {
         self.data.iter().map(rational_to_f64).collect()
@@ -250,11 +245,6 @@ impl Matrix {
     /// As an nalgebra matrix of doubles.
     pub fn to_dmatrix(&self) -> nalgebra::DMatrix<f64> {
         nalgebra::DMatrix::from_fn(self.rows, self.cols, |i, j| rational_to_f64(&self[(i, j)]))
-    }
-
-    /// Entries as strings (`"p/q"`), row by row, for certificates.
-    pub fn to_string_rows(&self) -> Vec<Vec<String>> {
-        (0..self.rows).map(|i| (0..self.cols).map(|j| self[(i, j)].to_string()).collect()).collect()
     }
 
     /// Reduced row echelon form; returns the pivot columns.

@@ -421,33 +421,6 @@ impl Poly {
             .sum()
     }
 
-    /// The homogeneous component of degree `d`.
-    pub fn homogeneous_part(&self, d: u32) -> Poly {
-        Poly {
-            nvars: self.nvars,
-            terms: self.terms.iter().filter(|(m, _)| m.iter().map(|&e| e as u32).sum::<u32>() == d).cloned().collect(),
-        }
-    }
-
-    /// Substitute `x_i -> sum_j map[i][j] y_j` (a linear change of variables
-    /// into `map[i].len()` new variables).
-    pub fn linear_substitution(&self, map: &[Vec<Rational>]) -> Poly {
-        assert_eq!(map.len(), self.nvars);
-        let new_n = map.first().map_or(0, |r| r.len());
-        let images: Vec<Poly> = map.iter().map(|row| Poly::linear(row)).collect();
-        let mut out = Poly::zero(new_n);
-        for (m, c) in &self.terms {
-            let mut t = Poly::constant(new_n, c.clone());
-            for (i, &e) in m.iter().enumerate() {
-                if e > 0 {
-                    t = t.mul(&images[i].pow(e as u32));
-                }
-            }
-            out = out.add(&t);
-        }
-        out
-    }
-
     /// Human-readable form using the given variable names, e.g.
     /// `1/2*Pi1^2 + 1/4*Pi2^2`.
     pub fn to_string_with(&self, names: &[String]) -> String {

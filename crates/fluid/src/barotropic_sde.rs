@@ -217,22 +217,6 @@ impl BarotropicSde {
         crate::simulate::taylor_step_count(op_norm * dt)
     }
 
-    /// About how many floating-point operations [`Self::exact_moments`]
-    /// takes for `(t_end, samples)`: a Taylor step of norm 4 sums at most
-    /// about 40 terms (`4^m / m!` falls below `1e-17` at `m = 40`), each
-    /// `(1 + 3J)` complex products of `n x n` matrices (8 `n^3` flops), and
-    /// every sample an eigenvalue problem and two products (about `30 n^3`).
-    /// For a caller to decide whether to run it (`verify simulate`).
-    pub fn exact_moments_flops(&self, t_end: f64, samples: usize) -> f64 {
-        if !(t_end.is_finite() && t_end > 0.0) || samples == 0 {
-            return 0.0;
-        }
-        match self.exact_taylor_steps(t_end, samples) {
-            Some(steps) => steps as f64 * self.taylor_step_flops() + samples as f64 * self.per_sample_flops(),
-            None => f64::INFINITY,
-        }
-    }
-
     /// The flops of each sample's eigenvalue problem and products in that
     /// estimate.
     pub(crate) fn per_sample_flops(&self) -> f64 {

@@ -343,21 +343,6 @@ impl ModeSde {
         taylor_step_count(op_norm * dt)
     }
 
-    /// About how many floating-point operations [`Self::exact_mean_energy`]
-    /// takes for `(t_end, samples)`: 12 terms per Taylor step, each two
-    /// complex products of `n x n` matrices (8 `n^3` flops each). A step of
-    /// norm 4 could need up to 40 terms (`4^m / m!` falls below `1e-17` at
-    /// `m = 40`), but the norm bound is loose: 12 made the estimate of
-    /// `verify simulate` 1.7 times the measured time at ny = 128 and 256
-    /// (7.7 s and 64 s, `channel-sin-walls` to `t = 10`). For a caller to
-    /// decide whether to run it.
-    pub fn exact_mean_energy_flops(&self, t_end: f64, samples: usize) -> f64 {
-        match self.exact_taylor_steps(t_end, samples) {
-            Some(steps) => steps as f64 * self.taylor_step_flops(),
-            None => f64::INFINITY,
-        }
-    }
-
     /// The Taylor steps [`Self::exact_mean_energy`] takes in all (0 when it
     /// has nothing to do); `None` when they would be too many.
     pub(crate) fn exact_taylor_steps(&self, t_end: f64, samples: usize) -> Option<usize> {

@@ -56,10 +56,6 @@ impl StoppingTime {
         let t = (l / s) * (1.0 - 8.0 * f64::EPSILON);
         Some(if t.is_finite() { t } else { f64::MAX })
     }
-    /// The bound `(delta/eps) e^{Sigma^2 t}` on `P(|dmu_t|_P^2 > eps)`.
-    pub fn probability_bound(&self, t: f64) -> f64 {
-        (self.delta / self.epsilon) * (self.sigma2 * t).exp()
-    }
 }
 
 /// `ln(eps/delta)` for `eps > delta > 0`, accurate to a few ulps: no

@@ -141,11 +141,6 @@ impl LargeSystem {
         self.casimirs.iter().chain(&self.first_integrals).collect()
     }
 
-    /// How many of [`Self::conserved`] are Casimirs.
-    pub fn num_casimirs(&self) -> usize {
-        self.casimirs.len()
-    }
-
     /// The equilibrium.
     pub fn equilibrium(&self) -> &[Rational] {
         &self.equilibrium

@@ -74,11 +74,6 @@ impl<W: Write + Seek> NpzWriter<W> {
         self.add(name, shape, data)
     }
 
-    /// Add the `u64` array `name`.
-    pub fn add_u64(&mut self, name: &str, shape: &[u64], data: &[u64]) -> io::Result<()> {
-        self.add(name, shape, data)
-    }
-
     /// Write the ZIP central directory and return the writer.
     pub fn finish(self) -> io::Result<W> {
         self.zip.finish().map_err(io::Error::other)
