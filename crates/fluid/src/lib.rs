@@ -23,20 +23,18 @@
 //! ```
 #![warn(missing_docs)]
 
+/// The verified numerics this crate was the home of, now the `numerics`
+/// crate's (re-exported so that `fluid::banded` and the rest keep working).
+pub use numerics::{banded, dense, interval, lanczos, minimise};
 pub use outcome::{Sign, Verdict, VerificationLevel};
 
 pub mod analysis;
-pub mod banded;
 pub mod barotropic;
 pub mod barotropic_sde;
 pub mod choice;
 pub mod constants;
-pub mod dense;
 pub mod expr;
 pub mod grid;
-pub mod interval;
-pub mod lanczos;
-pub mod minimise;
 pub mod modes;
 pub mod profile;
 pub mod simulate;

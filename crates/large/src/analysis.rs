@@ -17,7 +17,7 @@
 //!    `A~ = A + 1/2 sum B_i^2`, in `O(nnz n)`;
 //! 5. in the frame `[Z W]` (`W` orthonormal on the range of `G`) the
 //!    Casimir Hessian by the Schur completion
-//!    ([`fluid::dense::FramePencil::complete`]) when the noise keeps every
+//!    ([`numerics::dense::FramePencil::complete`]) when the noise keeps every
 //!    conserved quantity (then `Q` does not depend on it and the infimum over
 //!    it is `lambda_max` restricted to `ker G^T`); otherwise the reference
 //!    choice `K = (K0)_+ + m I`, unoptimised;
@@ -30,8 +30,8 @@ use crate::system::LargeSystem;
 use crate::verified::{Choice, VerifiedPencil};
 use crate::LargeError;
 use exact::Rational;
-use fluid::dense::{largest_generalized, product, symmetric_eigen, symmetric_eigenvalues, FramePencil};
 use nalgebra::{DMatrix, DVector};
+use numerics::dense::{largest_generalized, product, symmetric_eigen, symmetric_eigenvalues, FramePencil};
 use outcome::{Progress, Verdict, VerificationLevel};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -459,7 +459,8 @@ fn analyse_normalised(
             );
             return Ok(());
         }
-        let values = fluid::dense::real_eigenvalues(&a.dense(n)).ok_or_else(|| numerical("the drift's eigenvalues"))?;
+        let values =
+            numerics::dense::real_eigenvalues(&a.dense(n)).ok_or_else(|| numerical("the drift's eigenvalues"))?;
         let rate = values.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
         let radius = values.iter().map(|z| z.norm()).fold(0.0f64, f64::max);
         if rate > settings.instability_tolerance * radius.max(f64::MIN_POSITIVE) {
@@ -652,7 +653,7 @@ fn analyse_normalised(
         };
         let value = |t: &[f64]| {
             let (p, q) = pencil_at(t);
-            fluid::dense::top_generalized(&p, &q).ok().map(|(l, _)| l)
+            numerics::dense::top_generalized(&p, &q).ok().map(|(l, _)| l)
         };
         let start = t.clone();
         let mut best = (start.clone(), value(&start).unwrap_or(f64::INFINITY));
@@ -671,7 +672,7 @@ fn analyse_normalised(
                 } else {
                     let (p, q) = pencil_at(&c);
                     let quad = |m: &DMatrix<f64>, v: &DVector<f64>| (v.transpose() * m * v)[(0, 0)];
-                    match fluid::dense::top_generalized(&p, &q) {
+                    match numerics::dense::top_generalized(&p, &q) {
                         Ok((l, v)) => {
                             if l < best.1 {
                                 best = (c.clone(), l);
@@ -731,7 +732,7 @@ fn analyse_normalised(
         let p_full = &sp + product(&product(&w, &k), &w.transpose());
         let q_full = generator_form(&p_full, &a_tilde, &noise);
         let s2 = largest_generalized(&p_full, &q_full).ok_or_else(|| numerical("the generalized eigenproblem"))?;
-        (k, s2, None, fluid::dense::condition_number(&p_full))
+        (k, s2, None, numerics::dense::condition_number(&p_full))
     } else {
         let c = frame
             .complete(level, settings.condition_limit)

@@ -16,7 +16,7 @@
 //!   conserved quantities the noise keeps;
 //! * [`analysis`]: the energy–Casimir method in floating point (faer):
 //!   multipliers by least squares, the Finsler test on `ker G^T`, the
-//!   Casimir Hessian by the Schur completion ([`fluid::dense::FramePencil`]),
+//!   Casimir Hessian by the Schur completion ([`numerics::dense::FramePencil`]),
 //!   `Q` from sparse drift and noise operators, `Sigma^2` by a dense
 //!   generalized eigenproblem, and the drift's spectrum when no form is
 //!   definite. Level `numerical` until the final check:

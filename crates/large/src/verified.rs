@@ -91,7 +91,7 @@ fn norm_up<I: Iterator<Item = f64> + Clone>(values: I) -> f64 {
     }
     // 2^-e with 2^e <= m < 2^(e+1) for normal m; subnormal m gets 2^1022
     let e = ((m.to_bits() >> 52) & 0x7ff) as i32 - 1023;
-    let scale = fluid::banded::pow2(-e.max(-1022));
+    let scale = numerics::banded::pow2(-e.max(-1022));
     let (mut sum, mut count) = (0.0f64, 0usize);
     for x in values {
         let y = x * scale;
@@ -99,7 +99,7 @@ fn norm_up<I: Iterator<Item = f64> + Clone>(values: I) -> f64 {
         count += 1;
     }
     let count = count as f64;
-    let scaled = sum.sqrt() * (1.0 + 4.0 * (count + 4.0) * U) + count.sqrt() * fluid::banded::pow2(-500);
+    let scaled = sum.sqrt() * (1.0 + 4.0 * (count + 4.0) * U) + count.sqrt() * numerics::banded::pow2(-500);
     // dividing by a power of two is exact unless the result leaves the
     // normal range (then it rounds by less than MIN_POSITIVE)
     scaled / scale + f64::MIN_POSITIVE
@@ -312,12 +312,12 @@ impl VerifiedPencil {
                     vs[(a, i)] = choice.v[(a, i)] / s;
                 }
             }
-            let mut kp = fluid::dense::product(&vs, &fluid::dense::product(choice.k, &vs.transpose()));
+            let mut kp = numerics::dense::product(&vs, &numerics::dense::product(choice.k, &vs.transpose()));
             mirror(&mut kp);
             if kp.iter().any(|x| !x.is_finite()) {
                 return Err("the Casimir Hessian is not finite in the gradients' coordinates".into());
             }
-            let t = fluid::dense::product(&g, &fluid::dense::product(&kp, &g.transpose()));
+            let t = numerics::dense::product(&g, &numerics::dense::product(&kp, &g.transpose()));
             // ||D K' D||_F: each entry two products (relative error 2u)
             let k_hat =
                 norm_up((0..r).flat_map(|a| (0..r).map(move |b| (a, b))).map(|(a, b)| d[a] * kp[(a, b)] * d[b]))

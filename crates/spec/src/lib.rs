@@ -100,6 +100,7 @@ pub use zeitlin_fields::{zeitlin_fields, ZeitlinFields, ZeitlinFieldsError, Zeit
 #[cfg(feature = "fluid")]
 pub use zeitlin_simulation::{
     simulate_zeitlin, ZeitlinSimulationError, ZeitlinSimulationOptions, ZEITLIN_EXACT_SECONDS,
+    ZEITLIN_NONLINEAR_DEFAULT_DELTA, ZEITLIN_NONLINEAR_MAX_N, ZEITLIN_NONLINEAR_PATH_SHARE,
     ZEITLIN_SIMULATION_DEFAULT_PATHS, ZEITLIN_SIMULATION_DEFAULT_SECONDS, ZEITLIN_SIMULATION_MAX_N,
     ZEITLIN_SIMULATION_NO_GROWTH_T_END, ZEITLIN_SIMULATION_SECONDS,
 };

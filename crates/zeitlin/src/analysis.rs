@@ -24,8 +24,8 @@
 //! Casimir–momentum form alone definite) `Q = 0` and `Sigma^2 = 0`.
 
 use crate::laplacian::{block, solve_zonal, Tridiagonal, TridiagonalFactor};
-use fluid::banded::{pow2, Bounded, SymBanded};
-use fluid::minimise::{golden_section_until, golden_section_with_ends};
+use numerics::banded::{pow2, Bounded, SymBanded};
+use numerics::minimise::{golden_section_until, golden_section_with_ends};
 use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use rayon::prelude::*;
 
@@ -1022,7 +1022,7 @@ fn minus_laplacian_is_definite(t: &Tridiagonal) -> bool {
 /// and `Delta`: each entry's rounding is bounded (three products of three
 /// factors and a sum of four terms: `gamma_5` of the terms' magnitudes; a
 /// product whose partial product underflows before its last factor proves
-/// nothing), and the verified inertia test of `fluid::banded::Bounded`
+/// nothing), and the verified inertia test of `numerics::banded::Bounded`
 /// decides. False when unsure. A test of the matrix as computed, with no
 /// radius, would not prove the stated claim: it passes a 2 x 2 case that
 /// exact arithmetic refutes (the test below).
@@ -1037,7 +1037,8 @@ fn congruent_form_is_definite(t: &Tridiagonal, c: &[f64], eps: f64) -> bool {
             let first = -eps * t.get(i, j); // eps is 0 or ±1: exact
             let (mut v, mut scale) = (first, first.abs());
             for k in j.saturating_sub(1)..=(i + 1).min(n - 1) {
-                let Some(p) = fluid::banded::product_without_early_underflow(&[t.get(i, k), c[k], t.get(k, j)]) else {
+                let Some(p) = numerics::banded::product_without_early_underflow(&[t.get(i, k), c[k], t.get(k, j)])
+                else {
                     return false;
                 };
                 v += p;

@@ -194,7 +194,7 @@ fn normalised(m: &DMatrix<C>, n: usize, what: &str) -> Result<(DMatrix<C>, f64),
     if top == 0.0 {
         return Ok((m.clone(), 1.0));
     }
-    let scale = fluid::banded::pow2(top.log2().round() as i32);
+    let scale = numerics::banded::pow2(top.log2().round() as i32);
     let x = m.map(|z| z / scale);
     let hermitian_part = (&x + x.adjoint()).norm() / 2.0;
     if hermitian_part > 1e-12 * x.norm() {
@@ -809,7 +809,7 @@ pub fn dense_analysis(
     let q = &q1 * eps;
     let cas = n - 1;
     let block = |m: &DMatrix<f64>, r0: usize, c0: usize, nr: usize, nc: usize| m.view((r0, c0), (nr, nc)).into_owned();
-    let frame = fluid::dense::FramePencil {
+    let frame = numerics::dense::FramePencil {
         pz: block(&p, 0, 0, off, off),
         pzw: block(&p, 0, off, off, cas),
         pw: block(&p, off, off, cas, cas),

@@ -9,7 +9,7 @@
 /// golden-section steps; returns the better interior point and its value.
 ///
 /// ```
-/// let (x, fx) = fluid::minimise::golden_section(|x| (x - 0.3) * (x - 0.3) + 1.0, 0.0, 1.0, 60);
+/// let (x, fx) = numerics::minimise::golden_section(|x| (x - 0.3) * (x - 0.3) + 1.0, 0.0, 1.0, 60);
 /// assert!((x - 0.3).abs() < 1e-7 && (fx - 1.0).abs() < 1e-14);
 /// ```
 pub fn golden_section(f: impl Fn(f64) -> f64, a: f64, b: f64, steps: usize) -> (f64, f64) {
@@ -22,7 +22,7 @@ pub fn golden_section(f: impl Fn(f64) -> f64, a: f64, b: f64, steps: usize) -> (
 ///
 /// ```
 /// // the first evaluated point below 0.5 ends the search
-/// let (x, fx) = fluid::minimise::golden_section_until(|x| (x - 0.3) * (x - 0.3), 0.0, 1.0, 60, |_, fx| fx < 0.5);
+/// let (x, fx) = numerics::minimise::golden_section_until(|x| (x - 0.3) * (x - 0.3), 0.0, 1.0, 60, |_, fx| fx < 0.5);
 /// assert!(fx < 0.5 && (x - 0.3).abs() < 0.71);
 /// ```
 pub fn golden_section_until(
@@ -78,7 +78,7 @@ pub fn golden_section_until(
 /// not attained) then cost four evaluations instead of `steps + 2`.
 ///
 /// ```
-/// use fluid::minimise::golden_section_with_ends;
+/// use numerics::minimise::golden_section_with_ends;
 /// // decreasing on [0, 1]: the minimum is the end, found without the golden steps
 /// let calls = std::cell::Cell::new(0);
 /// let (x, fx) = golden_section_with_ends(|x| { calls.set(calls.get() + 1); 1.0 / (1.0 + x) }, 0.0, 1.0, 60, 1e-6);

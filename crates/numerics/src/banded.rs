@@ -80,7 +80,7 @@ pub fn gamma(m: usize) -> f64 {
 /// to 100%, which the later factors would carry into a normal-sized entry.
 ///
 /// ```
-/// use fluid::banded::product_without_early_underflow as product;
+/// use numerics::banded::product_without_early_underflow as product;
 /// assert_eq!(product(&[3.0, 0.5, 2.0]), Some(3.0));
 /// // 2^-600 * 2^-600 is below the normal range before the last factor
 /// let tiny = 2f64.powi(-600);
@@ -237,7 +237,7 @@ impl Drop for SymBanded {
 /// stored inputs.
 ///
 /// ```
-/// use fluid::banded::Bounded;
+/// use numerics::banded::Bounded;
 /// // [[1/3, 1], [1, -2/3]] (1/3 and 2/3 rounded once each): inertia (1, 1)
 /// let mut a = Bounded::new(2, 1);
 /// a.set(0, 0, 1.0 / 3.0, 1);
@@ -463,7 +463,7 @@ impl SymBanded {
     /// run at ny = 1024 (`perf`, docs/fluids.md §5).
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// // A = tridiag(-1, 2, -1) of size 3, w = (1, 2, 3): A diag(w) A by hand
     /// let mut a = SymBanded::zeros(3, 1);
     /// for i in 0..3 { a.add(i, i, 2.0); }
@@ -569,7 +569,7 @@ impl SymBanded {
     /// normal number, as in the dense test.
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// let mut a = SymBanded::zeros(3, 1); // tridiag(-1, 2, -1): eigenvalues 2 - sqrt 2, 2, 2 + sqrt 2
     /// for i in 0..3 { a.add(i, i, 2.0); }
     /// for i in 1..3 { a.add(i, i - 1, -1.0); }
@@ -633,7 +633,7 @@ impl SymBanded {
     /// of `|A|` and are raised once from the first factor's bounds if needed.
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// let mut a = SymBanded::zeros(2, 1); // diag(1, 1e-6)
     /// a.add(0, 0, 1.0);
     /// a.add(1, 1, 1e-6);
@@ -795,7 +795,7 @@ impl SymBanded {
     /// accurate relative to the diagonally scaled condition number).
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// let mut a = SymBanded::zeros(2, 1); // diag(1e6, 1e-6), off-diagonal 1e-3
     /// a.add(0, 0, 1e6); a.add(1, 1, 1e-6); a.add(1, 0, 1e-3);
     /// let mut err = SymBanded::zeros(2, 1);
@@ -816,7 +816,7 @@ impl SymBanded {
     /// [`SymBanded::verified_inertia_within_rows`].
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// let mut a = SymBanded::zeros(2, 1); // diag(4, 1/4)
     /// a.add(0, 0, 4.0); a.add(1, 1, 0.25);
     /// let mut err = SymBanded::zeros(2, 1);
@@ -908,7 +908,7 @@ impl SymBanded {
     /// definite `A`, `L |D| L^T` is `A` itself.
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// // tridiag(1, 0.5, 1) of size 3: eigenvalues 0.5 - sqrt 2, 0.5, 0.5 + sqrt 2
     /// let mut a = SymBanded::zeros(3, 1);
     /// for i in 0..3 { a.add(i, i, 0.5); }
@@ -941,7 +941,7 @@ impl SymBanded {
     /// one shift by the largest row sum for all of them.
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// // diag(1, -1e-6): a uniform radius of 1e-5 proves nothing, but
     /// // row radii (1e-5, 1e-7) prove the inertia (1, 1)
     /// let mut a = SymBanded::zeros(2, 1);
@@ -1085,7 +1085,7 @@ impl SymBanded {
     /// search. `None` at a zero or non-finite pivot.
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// // tridiag(1, 0.5, 1): eigenvalues 0.5 - sqrt 2 < 0 < 0.5 < 0.5 + sqrt 2
     /// let mut a = SymBanded::zeros(3, 1);
     /// for i in 0..3 { a.add(i, i, 0.5); }
@@ -1113,7 +1113,7 @@ impl SymBanded {
     /// allocate two matrices a step. Unproved, like [`SymBanded::cholesky`].
     ///
     /// ```
-    /// use fluid::banded::SymBanded;
+    /// use numerics::banded::SymBanded;
     /// // tridiag(-1, 2, -1) - l I: definite for l < 2 - sqrt 2 = 0.5858
     /// let mut a = SymBanded::zeros(3, 1);
     /// let mut id = SymBanded::zeros(3, 1);
@@ -1171,7 +1171,7 @@ impl SymBanded {
 /// `y` in a second; this costs twice the memory and is built once.
 ///
 /// ```
-/// use fluid::banded::SymBanded;
+/// use numerics::banded::SymBanded;
 /// // tridiag(-1, 2, -1) of size 4 times (1, 2, 3, 4) = (0, 0, 0, 5)
 /// let mut a = SymBanded::zeros(4, 1);
 /// for i in 0..4 { a.add(i, i, 2.0); }

@@ -29,7 +29,7 @@ fn from_faer(m: faer::MatRef<'_, f64>) -> DMatrix<f64> {
 ///
 /// ```
 /// let a = nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 3.0, 4.0]);
-/// assert_eq!(fluid::dense::product(&a, &a), &a * &a);
+/// assert_eq!(numerics::dense::product(&a, &a), &a * &a);
 /// ```
 pub fn product(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
     assert_eq!(a.ncols(), b.nrows(), "dimension mismatch in product");
@@ -49,10 +49,10 @@ pub fn product(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
 ///
 /// ```
 /// let m = nalgebra::DMatrix::from_row_slice(1, 2, &[3e-300, -1e-310]);
-/// let s = fluid::dense::unit_scale(&m).unwrap();
+/// let s = numerics::dense::unit_scale(&m).unwrap();
 /// assert!((3e-300 * s >= 1.0) && (3e-300 * s < 2.0));
 /// assert_eq!(s.log2().fract(), 0.0);
-/// assert!(fluid::dense::unit_scale(&(m * f64::NAN)).is_none());
+/// assert!(numerics::dense::unit_scale(&(m * f64::NAN)).is_none());
 /// ```
 pub fn unit_scale(m: &DMatrix<f64>) -> Option<f64> {
     let mut largest = 0.0f64;
@@ -90,9 +90,9 @@ pub fn unit_scale(m: &DMatrix<f64>) -> Option<f64> {
 /// ```
 /// // [[0, -2], [2, 0]] times 1e-300: eigenvalues ±2e-300 i
 /// let k = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, -2e-300, 2e-300, 0.0]);
-/// let ev = fluid::dense::real_eigenvalues(&k).unwrap();
+/// let ev = numerics::dense::real_eigenvalues(&k).unwrap();
 /// assert!(ev.iter().all(|z| z.re.abs() < 1e-315 && (z.im.abs() / 2e-300 - 1.0).abs() < 1e-15));
-/// assert!(fluid::dense::real_eigenvalues(&(k * f64::NAN)).is_none());
+/// assert!(numerics::dense::real_eigenvalues(&(k * f64::NAN)).is_none());
 /// ```
 pub fn real_eigenvalues(k: &DMatrix<f64>) -> Option<Vec<nalgebra::Complex<f64>>> {
     let n = k.nrows();
@@ -115,7 +115,7 @@ pub fn real_eigenvalues(k: &DMatrix<f64>) -> Option<Vec<nalgebra::Complex<f64>>>
 ///
 /// ```
 /// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
-/// let ev = fluid::dense::symmetric_eigenvalues(&m).unwrap();
+/// let ev = numerics::dense::symmetric_eigenvalues(&m).unwrap();
 /// assert!((ev[0] - 1.0).abs() < 1e-15 && (ev[1] - 3.0).abs() < 1e-15);
 /// ```
 pub fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
@@ -136,7 +136,7 @@ pub fn symmetric_eigenvalues(m: &DMatrix<f64>) -> Option<Vec<f64>> {
 ///
 /// ```
 /// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
-/// let (values, v) = fluid::dense::symmetric_eigen(&m).unwrap();
+/// let (values, v) = numerics::dense::symmetric_eigen(&m).unwrap();
 /// let d = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(values));
 /// assert!((&v * d * v.transpose() - m).norm() < 1e-14);
 /// ```
@@ -180,7 +180,7 @@ fn cholesky_solve(l: &faer::Mat<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
 /// // P = [[2, 1], [1, 2]], Q = [[1, 0], [0, 0]]: det(Q - l P) = 3 l^2 - 2 l, l = 2/3
 /// let p = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
 /// let q = nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.0]);
-/// assert!((fluid::dense::largest_generalized(&p, &q).unwrap() - 2.0 / 3.0).abs() < 1e-15);
+/// assert!((numerics::dense::largest_generalized(&p, &q).unwrap() - 2.0 / 3.0).abs() < 1e-15);
 /// ```
 pub fn largest_generalized(p: &DMatrix<f64>, q: &DMatrix<f64>) -> Option<f64> {
     use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
@@ -202,7 +202,7 @@ pub fn largest_generalized(p: &DMatrix<f64>, q: &DMatrix<f64>) -> Option<f64> {
 ///
 /// ```
 /// let m = nalgebra::DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, 1.0]);
-/// assert!((fluid::dense::condition_number(&m) - 4.0).abs() < 1e-14);
+/// assert!((numerics::dense::condition_number(&m) - 4.0).abs() < 1e-14);
 /// ```
 pub fn condition_number(m: &DMatrix<f64>) -> f64 {
     match symmetric_eigenvalues(m) {
@@ -291,7 +291,7 @@ impl FramePencil {
     ///
     /// ```
     /// use nalgebra::DMatrix;
-    /// use fluid::dense::FramePencil;
+    /// use numerics::dense::FramePencil;
     /// // One tangent and one conserved direction; Q is only along the tangent:
     /// // the infimum is Qz/Pz = 0.5, approached as K grows.
     /// let m = |x: f64| DMatrix::from_element(1, 1, x);
@@ -369,9 +369,9 @@ impl FramePencil {
 /// use nalgebra::DMatrix;
 /// let p = DMatrix::from_row_slice(2, 2, &[2.0, 0.0, 0.0, 1.0]);
 /// let q = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 3.0]);
-/// let (l, v) = fluid::dense::top_generalized(&p, &q).unwrap();
+/// let (l, v) = numerics::dense::top_generalized(&p, &q).unwrap();
 /// assert!((l - 3.0).abs() < 1e-14 && (v[1].abs() - 1.0).abs() < 1e-14);
-/// let u = fluid::dense::top_generalized(&(-p), &q).unwrap_err();
+/// let u = numerics::dense::top_generalized(&(-p), &q).unwrap_err();
 /// assert!((u.norm() - 1.0).abs() < 1e-14);
 /// ```
 pub fn top_generalized(

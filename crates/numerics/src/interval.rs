@@ -17,7 +17,7 @@
 //! These identities are exact unless the result is near the underflow
 //! threshold, where the bounds are simply widened by one ulp both ways. So
 //! exact results stay exact (an interval `[0, 0]` stays `[0, 0]`), which is
-//! what lets [`crate::expr`] *prove* that `U'' = 0` for an affine profile.
+//! what lets the fluid crate's expressions *prove* that `U'' = 0` for an affine profile.
 //! `exp`, `sin`, `cos`, `sinh`, `cosh` and `tanh` come from the platform's
 //! libm, whose error is below one ulp for `exp`, `sin`, `cos` on the
 //! platforms Rust supports (glibc documents at most 1 ulp) and at most 3

@@ -58,7 +58,7 @@ impl Ritz {
 /// floor it (`NaN.max(0.0)` is `0`).
 ///
 /// ```
-/// use fluid::lanczos::largest_eigenvalue;
+/// use numerics::lanczos::largest_eigenvalue;
 /// // T = diag(1..=100): largest eigenvalue 100
 /// let r = largest_eigenvalue(100, |x, y| for i in 0..100 { y[i] = (i + 1) as f64 * x[i] }, 1e-12, 200);
 /// assert!((r.value - 100.0).abs() < 1e-9);
@@ -125,7 +125,7 @@ pub fn largest_eigenvalue(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]), t
 /// A numerical breakdown gives a value of NaN, as in [`largest_eigenvalue`].
 ///
 /// ```
-/// use fluid::lanczos::largest_generalized_eigenvalue;
+/// use numerics::lanczos::largest_generalized_eigenvalue;
 /// // Q = diag(1..=50), V = diag(2): eigenvalues i/2, largest 25
 /// let r = largest_generalized_eigenvalue(
 ///     50,
