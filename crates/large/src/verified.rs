@@ -48,16 +48,12 @@ use crate::system::LargeSystem;
 use exact::Rational;
 use nalgebra::DMatrix;
 use num_traits::Zero;
+// Higham's gamma_k = k u / (1 - k u), shared with the banded checks.
+use numerics::banded::gamma;
 use std::collections::BTreeMap;
 
 /// Unit roundoff.
 const U: f64 = f64::EPSILON / 2.0;
-
-/// Higham's `gamma_k = k u / (1 - k u)`.
-fn gamma(k: usize) -> f64 {
-    let k = k as f64;
-    k * U / (1.0 - k * U)
-}
 
 /// A sparse rational matrix, `(row, column) -> value`.
 type Exact = BTreeMap<(usize, usize), Rational>;
