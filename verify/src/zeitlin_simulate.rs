@@ -42,7 +42,8 @@ fn refuse_other_flags(args: &SimulateArgs) -> Result<(), Failure> {
 }
 
 fn failure(shown: &str, e: ZeitlinSimulationError) -> Failure {
-    // (the library's field names are the flags', but for the block)
+    // The library names its options; the flags differ for the block
+    // (`--mode`), the two-field `t_end/dt` and the spec's own `N`.
     match e {
         ZeitlinSimulationError::Invalid { field, message } => {
             let flag = match field {
@@ -89,23 +90,22 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
         delta: args.delta,
     };
     let bar = crate::progress_bar(1, "{msg} [{bar:30}] {percent:>3}% ({elapsed})");
-    let mut noted = vec![];
     let state = outcome::Progress::new();
     let started = std::time::Instant::now();
+    // Notes are collected and printed after the run (they are decided
+    // before it starts, while the bar would overwrite them).
+    let simulate = || {
+        let mut notes = vec![];
+        spec::simulate_zeitlin(&spec, &options, &state, &mut |n| notes.push(n)).map(|r| (r, notes))
+    };
     let report = match &bar {
         Some(bar) => {
             bar.set_message(excerpt(&shown));
-            let run = crate::run_showing_progress(bar, &state, || {
-                let mut notes = vec![];
-                spec::simulate_zeitlin(&spec, &options, &state, &mut |n| notes.push(n)).map(|r| (r, notes))
-            });
+            let run = crate::run_showing_progress(bar, &state, simulate);
             bar.finish_and_clear();
             run
         }
-        None => {
-            let mut notes = vec![];
-            spec::simulate_zeitlin(&spec, &options, &state, &mut |n| notes.push(n)).map(|r| (r, notes))
-        }
+        None => simulate(),
     };
     let (report, notes) = report.map_err(|e| failure(&shown, e))?;
     for n in notes {
@@ -114,7 +114,6 @@ pub fn run(args: &SimulateArgs, text: &str) -> Result<(), Failure> {
             n.replace("forcing runs it", "--force runs it").replace("ask for t_end ", "pass --t-end ")
         );
         eprintln!("{line}");
-        noted.push(line);
     }
     let seconds = started.elapsed().as_secs_f64();
     let m = report["block"].as_u64().unwrap_or(0);
