@@ -115,16 +115,18 @@ fn certify_text(
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<String> {
     let has_base = base.is_some();
-    let spec =
-        py.detach(move || spec::parse_any_spec_in(&text, base.as_deref())).map_err(|e| spec_error(py, &e, has_base))?;
+    let spec = py
+        .detach(move || spec::parse(&text, &spec::Options::relative_to(base.as_deref())))
+        .map_err(|e| spec_error(py, &e, has_base))?;
     let state = Progress::new();
     if matches!(spec, spec::AnySpec::Lie(_)) && progress.is_none() {
         // Finite-dimensional systems certify in micro- to milliseconds:
         // on this thread, without the cost of another.
         return Ok(py.detach(|| spec::to_pretty_json(&spec.certify())));
     }
-    let out =
-        interruptible(py, progress.as_ref(), &state, || spec.certify_with(&state).map(|v| spec::to_pretty_json(&v)))?;
+    let out = interruptible(py, progress.as_ref(), &state, || {
+        spec::certify(&spec, &spec::Options::default().with_progress(&state)).map(|c| c.to_pretty_json())
+    })?;
     // `Err(Cancelled)` only follows an interrupt, which `interruptible`
     // has raised already.
     out.map_err(|e| pyo3::exceptions::PyKeyboardInterrupt::new_err(e.to_string()))
@@ -143,8 +145,9 @@ fn check_text(
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<(String, String, Option<String>, Option<f64>)> {
     let state = Progress::new();
-    let out =
-        interruptible(py, progress.as_ref(), &state, || spec::check_certificate_with(&text, base.as_deref(), &state))?;
+    let out = interruptible(py, progress.as_ref(), &state, || {
+        spec::check_json(&text, &spec::Options::relative_to(base.as_deref()).with_progress(&state))
+    })?;
     match out {
         Ok(r) => Ok((r.name, r.verdict.as_str().to_string(), r.level.map(|l| l.as_str().to_string()), r.sigma2)),
         Err(e) => Err(check_error(py, &e, base.is_some())),
@@ -157,7 +160,7 @@ fn check_text(
 #[pyo3(signature = (text, base=None))]
 fn validate_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<()> {
     let has_base = base.is_some();
-    let out = py.detach(move || spec::parse_any_spec_in(&text, base.as_deref()).map(|_| ()));
+    let out = py.detach(move || spec::parse(&text, &spec::Options::relative_to(base.as_deref())).map(|_| ()));
     out.map_err(|e| spec_error(py, &e, has_base))
 }
 
@@ -214,7 +217,9 @@ fn simulate_text(
     let scheme = simulate::Scheme::from_name(scheme)
         .ok_or_else(|| PyValueError::new_err(format!("scheme: {scheme:?} is not 'lie' or 'heun'")))?;
     let spec =
-        match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
+        match spec::parse(&text, &spec::Options::relative_to(base.as_deref()))
+            .map_err(|e| spec_error(py, &e, base.is_some()))?
+        {
             spec::AnySpec::Lie(s) => s,
             spec::AnySpec::Fluid(_) => {
                 return Err(PyValueError::new_err(
@@ -225,7 +230,7 @@ fn simulate_text(
                 "simulate runs finite-dimensional specs (Zeitlin and large specs are certified, not simulated here)",
             )),
         };
-    let cert = py.detach(|| spec::certify(&spec));
+    let cert = py.detach(|| spec::certify_lie(&spec));
     let coords = spec.system.algebra().coordinates();
     let observable = match &observable {
         Some(name) => Some(coords.iter().position(|c| c == name).ok_or_else(|| {
@@ -322,7 +327,9 @@ fn simulate_fluid_text(
     force: bool,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<String> {
-    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
+    let spec = match spec::parse(&text, &spec::Options::relative_to(base.as_deref()))
+        .map_err(|e| spec_error(py, &e, base.is_some()))?
+    {
         spec::AnySpec::Fluid(s) => s,
         _ => return Err(PyValueError::new_err("simulate_fluid runs fluid specs; use simulate for the others")),
     };
@@ -375,7 +382,9 @@ fn simulate_zeitlin_text(
     progress: Option<Bound<'_, PyAny>>,
     delta: Option<f64>,
 ) -> PyResult<String> {
-    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
+    let spec = match spec::parse(&text, &spec::Options::relative_to(base.as_deref()))
+        .map_err(|e| spec_error(py, &e, base.is_some()))?
+    {
         spec::AnySpec::Zeitlin(s) => s,
         _ => {
             return Err(PyValueError::new_err(
@@ -415,7 +424,9 @@ fn simulate_zeitlin_text(
 #[pyfunction]
 #[pyo3(signature = (text, base=None))]
 fn zeitlin_fields_text(py: Python<'_>, text: String, base: Option<PathBuf>) -> PyResult<String> {
-    let spec = match spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))? {
+    let spec = match spec::parse(&text, &spec::Options::relative_to(base.as_deref()))
+        .map_err(|e| spec_error(py, &e, base.is_some()))?
+    {
         spec::AnySpec::Zeitlin(s) => s,
         _ => return Err(PyValueError::new_err("zeitlin_fields takes Zeitlin specs")),
     };
@@ -619,7 +630,8 @@ fn sweep_text(
     shard: Option<String>,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<(Vec<String>, SweepColumns)> {
-    let spec = spec::parse_any_spec_in(&text, base.as_deref()).map_err(|e| spec_error(py, &e, base.is_some()))?;
+    let spec = spec::parse(&text, &spec::Options::relative_to(base.as_deref()))
+        .map_err(|e| spec_error(py, &e, base.is_some()))?;
     let ranges: Vec<spec::ParamRange> = if params.is_empty() {
         spec.sweep().ranges.clone()
     } else {

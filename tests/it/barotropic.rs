@@ -154,10 +154,10 @@ fn the_verified_check_proves_a_bound_just_above_sigma2_and_not_just_below() {
     assert_eq!(mode.verify(s * (1.0 - 1e-6)), (true, false));
     // the dense verified test of the generator crate agrees on K and on bound K - Q
     let kd = mode.form().to_dense();
-    assert!(generator::verified_positive_definite(&kd));
+    assert!(numerics::definite::verified_positive_definite(&kd));
     let qd = mode.generator().to_dense();
-    assert!(generator::verified_positive_definite(&(&kd * (s * (1.0 + 1e-6)) - &qd)));
-    assert!(!generator::verified_positive_definite(&(&kd * (s * (1.0 - 1e-6)) - &qd)));
+    assert!(numerics::definite::verified_positive_definite(&(&kd * (s * (1.0 + 1e-6)) - &qd)));
+    assert!(!numerics::definite::verified_positive_definite(&(&kd * (s * (1.0 - 1e-6)) - &qd)));
 }
 
 #[test]

@@ -96,7 +96,7 @@ fn a_rigid_body_box_across_i2_equal_i1_is_partly_stable_and_consistent_with_poin
                 ("I3".into(), exact::parse_number(&centre[1]).unwrap()),
             ])
             .unwrap();
-        let c = spec::certify(&point).json;
+        let c = spec::certify_lie(&point).json;
         assert_eq!(c["verdict"], "stable");
         let bound = q(sub["sigma2_upper"].as_str().unwrap());
         assert!(c["sigma2"].as_f64().unwrap() <= bound, "{c} above {bound}");
@@ -307,10 +307,10 @@ fn a_box_verdict_is_never_stated_for_the_whole_box_from_one_witness() {
     assert!(proved > 0);
     // check names nothing for the spec's own point, which is stable
     assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Inconclusive);
-    let own = spec::certify(&spec::spec_from_value(fixture("rigid-body-major-axis.json")).unwrap());
+    let own = spec::certify_lie(&spec::spec_from_value(fixture("rigid-body-major-axis.json")).unwrap());
     let mut at_own = v.clone();
     at_own.as_object_mut().unwrap().remove("box");
-    assert_eq!(spec::certify(&spec::spec_from_value(at_own).unwrap()).analysis.verdict, own.analysis.verdict);
+    assert_eq!(spec::certify_lie(&spec::spec_from_value(at_own).unwrap()).analysis.verdict, own.analysis.verdict);
     // forged: the whole box called not an equilibrium; an undecided
     // sub-box (it holds I2 = 2) called proved; the reason replaced
     let mut forged = cert.clone();
@@ -339,7 +339,7 @@ fn a_box_verdict_is_never_stated_for_the_whole_box_from_one_witness() {
     assert_eq!(cert["excluded_fraction"], 1.0);
     assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::NotAnEquilibrium);
     v.as_object_mut().unwrap().remove("box");
-    assert_eq!(spec::certify(&spec::spec_from_value(v).unwrap()).analysis.verdict, spec::Verdict::NotAnEquilibrium);
+    assert_eq!(spec::certify_lie(&spec::spec_from_value(v).unwrap()).analysis.verdict, spec::Verdict::NotAnEquilibrium);
 
     // Noise (sigma, I2 - 2, 0) keeps (1, 0, 0) only at I2 = 2.
     let mut v = fixture("rigid-body-major-axis.json");
@@ -394,7 +394,7 @@ fn what_check_reports_under_the_spec_name_holds_for_the_spec_itself() {
         let report = spec::check_certificate_value(cert).unwrap();
         let mut own = cert["spec"].clone();
         own.as_object_mut().unwrap().remove("box");
-        let point = spec::certify(&spec::spec_from_value(own).unwrap());
+        let point = spec::certify_lie(&spec::spec_from_value(own).unwrap());
         seen.insert(format!("{:?}", report.verdict));
         if report.verdict == spec::Verdict::Inconclusive {
             continue;

@@ -12,7 +12,7 @@ use num_traits::Zero;
 use proptest::prelude::*;
 
 fn certify(text: &str) -> spec::Certificate {
-    spec::certify(&spec::parse_spec(text).expect("valid spec"))
+    spec::certify_lie(&spec::parse_spec(text).expect("valid spec"))
 }
 
 /// sigma^2 (max(|a2|,|a3|)/min(|a2|,|a3|) - 1), a_i = 1/I_i - 1/I1, exactly.

@@ -29,7 +29,7 @@ fn a_system_in_a_basis_of_its_own_certifies_and_checks_from_rust() {
     let spec = spec::spec_of_system("rescaled-rigid-body", &system, &settings, Some(stopping)).unwrap();
     // Not the builtin so3 any more: written by its structure constants.
     assert!(spec.raw["algebra"]["structure_constants"].is_array(), "{}", spec.raw["algebra"]);
-    let cert = spec::certify(&spec);
+    let cert = spec::certify_lie(&spec);
     assert_eq!(cert.verdict(), spec::Verdict::Stable);
     assert_eq!(cert.level(), spec::VerificationLevel::Exact);
     assert_eq!(cert.sigma2_exact().unwrap(), q("27/100"));

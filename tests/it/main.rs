@@ -19,6 +19,7 @@ mod cli;
 mod closed_forms;
 mod degenerate;
 mod docs;
+mod envelope;
 mod fluid;
 mod fluid_cli;
 mod fluid_scale;

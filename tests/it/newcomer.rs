@@ -343,13 +343,15 @@ fn the_summary_names_the_compatible_noise() {
 #[test]
 fn a_missing_npy_names_the_folder_it_was_read_from() {
     let text = common::fixture("zeitlin/quflow-tilted-n16.json");
-    let Err(err) = spec::parse_any_spec_in(&text, None) else { panic!("no .npy in the current folder") };
+    let Err(err) = spec::parse(&text, &spec::Options::relative_to(None)) else {
+        panic!("no .npy in the current folder")
+    };
     assert_eq!(err.path, "$.zeitlin.equilibrium.npy", "{err}");
     assert!(err.message.contains("the current folder: the spec came as text"), "{err}");
     let elsewhere = fresh_dir("npy");
-    let Err(err) = spec::parse_any_spec_in(&text, Some(&elsewhere)) else { panic!("no .npy there") };
+    let Err(err) = spec::parse(&text, &spec::Options::relative_to(Some(&elsewhere))) else { panic!("no .npy there") };
     assert!(err.message.contains("the spec's folder") && err.message.contains("verify-newcomer"), "{err}");
     // the right folder reads it
-    assert!(spec::parse_any_spec_in(&text, Some(&fixture_path("zeitlin"))).is_ok());
+    assert!(spec::parse(&text, &spec::Options::default().with_base_dir(&fixture_path("zeitlin"))).is_ok());
     std::fs::remove_dir_all(&elsewhere).unwrap();
 }

@@ -3,7 +3,7 @@
 //! Python package call: counting changes no result, the counts only grow
 //! and end at the total, and a cancelled run returns no certificate.
 
-use outcome::{Cancelled, Progress};
+use outcome::Progress;
 use spec::{AnySpec, CheckError};
 use std::path::Path;
 use std::time::Duration;
@@ -13,7 +13,7 @@ const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 fn load(rel: &str) -> AnySpec {
     let path = Path::new(ROOT).join(rel);
     let text = std::fs::read_to_string(&path).unwrap();
-    spec::parse_any_spec_in(&text, path.parent()).unwrap()
+    spec::parse(&text, &spec::Options::relative_to(path.parent())).unwrap()
 }
 
 /// One spec of each long pipeline: an incompressible fluid, the
@@ -41,7 +41,10 @@ fn counting_changes_nothing_and_ends_at_the_total() {
         let progress = Progress::new();
         let mut seen = vec![];
         let counted = std::thread::scope(|s| {
-            let worker = s.spawn(|| spec.certify_with(&progress));
+            let worker = s.spawn(|| {
+                spec::certify(&spec, &spec::Options::default().with_progress(&progress))
+                    .map(spec::AnyCertificate::into_json)
+            });
             while !worker.is_finished() {
                 seen.push(progress.snapshot());
                 std::thread::sleep(Duration::from_micros(200));
@@ -68,11 +71,20 @@ fn cancelled_before_the_start_gives_no_certificate() {
         let cert = spec::to_pretty_json(&spec.certify());
         let progress = Progress::new();
         progress.cancel();
-        assert_eq!(spec.certify_with(&progress), Err(Cancelled), "{rel}");
+        assert_eq!(
+            spec::certify(&spec, &spec::Options::default().with_progress(&progress))
+                .map(spec::AnyCertificate::into_json),
+            Err(spec::CertifyError::Cancelled),
+            "{rel}"
+        );
         let base = Path::new(ROOT).join(rel);
-        assert_eq!(spec::check_certificate_with(&cert, base.parent(), &progress), Err(CheckError::Cancelled), "{rel}");
+        assert_eq!(
+            spec::check_json(&cert, &spec::Options::relative_to(base.parent()).with_progress(&progress)),
+            Err(CheckError::Cancelled),
+            "{rel}"
+        );
         // Not cancelled: the same check passes.
-        assert!(spec::check_certificate_with(&cert, base.parent(), &Progress::new()).is_ok(), "{rel}");
+        assert!(spec::check_json(&cert, &spec::Options::relative_to(base.parent())).is_ok(), "{rel}");
     }
 }
 
@@ -87,7 +99,10 @@ fn cancelled_part_way_gives_no_certificate() {
     for spec in [spec::parse_any_spec(zeitlin).unwrap(), load("bench/cubic-walls.json")] {
         let progress = Progress::new();
         let (out, at_cancel) = std::thread::scope(|s| {
-            let worker = s.spawn(|| spec.certify_with(&progress));
+            let worker = s.spawn(|| {
+                spec::certify(&spec, &spec::Options::default().with_progress(&progress))
+                    .map(spec::AnyCertificate::into_json)
+            });
             while progress.snapshot().0 == 0 && !worker.is_finished() {
                 std::thread::sleep(Duration::from_micros(100));
             }
@@ -96,6 +111,6 @@ fn cancelled_part_way_gives_no_certificate() {
             (worker.join().unwrap(), at_cancel)
         });
         assert!(at_cancel.0 < at_cancel.1, "the run was under way: {at_cancel:?}");
-        assert_eq!(out, Err(Cancelled));
+        assert_eq!(out, Err(spec::CertifyError::Cancelled));
     }
 }

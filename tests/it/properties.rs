@@ -246,7 +246,7 @@ fn regression_abelian_algebra_empty_restricted_hessian() {
         ", 0".repeat(19),
         ", 0".repeat(18)
     );
-    let cert = spec::certify(&spec::parse_spec(&spec).unwrap());
+    let cert = spec::certify_lie(&spec::parse_spec(&spec).unwrap());
     // Every point is an equilibrium, the noise is trivial (ad* = 0), so the
     // norm is conserved: stable with Sigma^2 = 0.
     assert_eq!(cert.json["verdict"], "stable");
@@ -259,8 +259,8 @@ fn regression_abelian_algebra_empty_restricted_hessian() {
 /// matrix with its smallest eigenvalue made -1e-10 (relative) must fail.
 #[test]
 fn verified_positive_definiteness_pairs() {
-    use generator::verified_positive_definite;
     use nalgebra::DMatrix;
+    use numerics::definite::verified_positive_definite;
     let build = |d: &[f64], seed: u64| -> DMatrix<f64> {
         let n = d.len();
         let mut q = DMatrix::<f64>::identity(n, n);

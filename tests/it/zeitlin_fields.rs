@@ -8,7 +8,7 @@ use crate::common;
 use nalgebra::{Complex, DMatrix};
 use serde_json::{json, Value};
 use zeitlin::analysis::hbar;
-use zeitlin::isospectral::StreamSolver;
+use zeitlin::laplacian::StreamSolver;
 use zeitlin::sphere::from_harmonics;
 
 type C = Complex<f64>;

@@ -293,7 +293,7 @@ fn both(omega: [Rational; 3]) -> (serde_json::Value, ZeitlinAnalysis, ZeitlinAna
         "noise": [sigma],
     });
     let parsed = spec::parse_spec(&spec.to_string()).expect("the su(3) spec parses");
-    let cert = spec::certify(&parsed).json;
+    let cert = spec::certify_lie(&parsed).json;
     // The Zeitlin engine on the same state, in its own units (hbar = 1/sqrt 2 at N = 3).
     let hbar = 2.0 / 8f64.sqrt();
     let problem = ZeitlinProblem {

@@ -21,7 +21,7 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use serde_json::Value;
-use spec::{check_certificate_in, parse_any_spec_in, CheckError};
+use spec::CheckError;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -148,11 +148,16 @@ pub(crate) fn certify_showing_progress(
     label: &str,
     multi: Option<&indicatif::MultiProgress>,
 ) -> Value {
+    let plain = || match spec::certify(spec, &spec::Options::default()) {
+        Ok(c) => c.into_json(),
+        // (nothing cancels here; an internal error is the engine's bug, and says so)
+        Err(e) => panic!("{e}"),
+    };
     if matches!(spec, spec::AnySpec::Lie(_)) {
-        return spec.certify();
+        return plain();
     }
     let Some(bar) = progress_bar(1, "{msg} [{bar:30}] {percent:>3}% ({elapsed})") else {
-        return spec.certify();
+        return plain();
     };
     let bar = match multi {
         Some(m) => m.add(bar),
@@ -160,10 +165,11 @@ pub(crate) fn certify_showing_progress(
     };
     bar.set_message(messages::excerpt(label));
     let state = outcome::Progress::new();
-    // (nothing cancels here: `certify_with` returns a certificate)
-    let out = run_showing_progress(&bar, &state, || spec.certify_with(&state));
+    // (nothing cancels here: `certify` returns a certificate)
+    let out =
+        run_showing_progress(&bar, &state, || spec::certify(spec, &spec::Options::default().with_progress(&state)));
     bar.finish_and_clear();
-    out.unwrap_or_else(|_| spec.certify())
+    out.map(spec::AnyCertificate::into_json).unwrap_or_else(|_| plain())
 }
 
 /// Run `work` on a scoped thread (with the main thread's 8 MiB of stack)
@@ -202,7 +208,7 @@ fn certify_command(spec_path: &Path, output: Option<&Path>) -> Result<(), Failur
         paths::check_output_file(path, "-o")?;
     }
     let text = read(spec_path)?;
-    let spec = parse_any_spec_in(&text, spec_path.parent())
+    let spec = spec::parse(&text, &spec::Options::relative_to(spec_path.parent()))
         .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
     let cert = certify_showing_progress(&spec, &spec_path.display().to_string(), None);
     emit(&cert, output)
@@ -393,7 +399,7 @@ fn compatible_noise_line(cert: &Value) -> Option<String> {
 /// no `spec` field that the spec parser accepts.
 fn is_a_spec(text: &str, base: Option<&Path>) -> bool {
     serde_json::from_str::<Value>(text).is_ok_and(|v| v.get("spec").is_none() && v.is_object())
-        && parse_any_spec_in(text, base).is_ok()
+        && spec::parse(text, &spec::Options::relative_to(base)).is_ok()
 }
 
 fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
@@ -421,7 +427,7 @@ fn check_command(paths: &[PathBuf]) -> Result<(), Failure> {
             ));
             continue;
         }
-        match check_certificate_in(&text, path.parent()) {
+        match spec::check_json(&text, &spec::Options::relative_to(path.parent())) {
             Ok(report) => {
                 // Display prints every digit of 3e300 or 3e-300: exponent form there
                 let s2 = report

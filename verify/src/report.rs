@@ -313,7 +313,7 @@ pub fn run(args: &ReportArgs) -> Result<(), Failure> {
                 path.display()
             )));
         }
-        let check = spec::check_certificate_in(&text, path.parent());
+        let check = spec::check_json(&text, &spec::Options::relative_to(path.parent()));
         if check.is_err() {
             failed += 1;
         }

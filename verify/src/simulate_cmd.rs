@@ -206,7 +206,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let spec = spec::parse_spec(&text).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let scheme = Scheme::from_name(&args.scheme)
         .ok_or_else(|| bad(format!("--scheme: '{}' is not 'lie' or 'heun'", excerpt(&args.scheme))))?;
-    let cert = spec::certify(&spec);
+    let cert = spec::certify_lie(&spec);
     let system = &spec.system;
     let coords = system.algebra().coordinates();
     let observable = match &args.observable {

@@ -5,7 +5,7 @@ use crate::messages::{excerpt, quoting};
 use crate::paths::{check_output_file, ensure_output_dir, is_stdout, shown};
 use crate::{read, Failure};
 use clap::Args;
-use spec::{parse_any_spec_in, ParamRange};
+use spec::ParamRange;
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -78,8 +78,8 @@ pub(crate) struct PlannedSweep {
 /// Read the spec and build the plan, the evaluator and the sweep's id.
 pub(crate) fn planned(args: &PlanArgs) -> Result<PlannedSweep, Failure> {
     let text = read(&args.spec)?;
-    let spec =
-        parse_any_spec_in(&text, args.spec.parent()).map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
+    let spec = spec::parse(&text, &spec::Options::relative_to(args.spec.parent()))
+        .map_err(|e| bad(format!("{}: {e}", args.spec.display())))?;
     let ranges: Vec<ParamRange> = if args.params.is_empty() {
         spec.sweep().ranges.clone()
     } else {

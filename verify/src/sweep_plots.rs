@@ -17,7 +17,7 @@ use crate::{read, Failure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde_json::Value;
-use spec::{parse_any_spec_in, Annotation, AnySpec};
+use spec::{Annotation, AnySpec};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -179,7 +179,7 @@ pub fn plot_files(
     shade: Option<Shade>,
     box_certificate: Option<&Path>,
 ) -> Result<Vec<PathBuf>, Failure> {
-    let spec = parse_any_spec_in(&read(spec_path)?, spec_path.parent())
+    let spec = spec::parse(&read(spec_path)?, &spec::Options::relative_to(spec_path.parent()))
         .map_err(|e| Failure::BadInput(format!("{}: {e}", spec_path.display())))?;
     let known = spec.parameter_names();
     let tag = sweep::spec_tag(&spec);

@@ -4,7 +4,7 @@ use crate::messages::{cut_message, excerpt};
 use crate::paths::write_atomic;
 use crate::Failure;
 use serde_json::Value;
-use spec::{check_certificate_in, parse_any_spec_in, CheckError};
+use spec::CheckError;
 use std::path::{Path, PathBuf};
 
 /// A number (or the string "infinity") in a compact form.
@@ -67,7 +67,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
             b.set_message(crate::messages::excerpt(&path.display().to_string()));
         }
         let text = std::fs::read_to_string(path)?;
-        let spec = match parse_any_spec_in(&text, path.parent()) {
+        let spec = match spec::parse(&text, &spec::Options::relative_to(path.parent())) {
             Ok(s) => s,
             Err(e) => {
                 bad += 1;
@@ -87,7 +87,7 @@ pub fn fixtures_table(dir: &Path, write: bool) -> anyhow::Result<Result<(), Fail
         }
         let status = match std::fs::read_to_string(&cpath) {
             Err(_) => "missing".to_string(),
-            Ok(t) => match check_certificate_in(&t, cpath.parent()) {
+            Ok(t) => match spec::check_json(&t, &spec::Options::relative_to(cpath.parent())) {
                 Ok(_) => "checked".to_string(),
                 Err(CheckError::Failed { path, message }) => {
                     failed += 1;

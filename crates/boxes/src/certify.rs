@@ -6,6 +6,7 @@ use crate::frac::{common_denominator, times_denominator, Frac};
 use crate::symbolic::{matrix_at, specialise, value_at, BoxChoice, BoxSystem, BoxSystemError, Forms, Symbolic};
 use exact::{Matrix, Poly, Rational};
 use num_traits::Zero;
+pub use outcome::BoxVerdict;
 use outcome::{Sign, Verdict};
 
 /// Bounds on the work and the margin of the growth bound.
@@ -95,81 +96,6 @@ pub struct Leaf {
     pub outcome: LeafOutcome,
 }
 
-/// The whole box's verdict.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoxVerdict {
-    /// Every sub-box is proved stable.
-    Stable,
-    /// Some sub-boxes are proved stable, the others linearly unstable or
-    /// undecided.
-    PartlyStable,
-    /// Every sub-box is proved linearly unstable.
-    LinearlyUnstable,
-    /// No sub-box is proved stable; some are proved linearly unstable.
-    PartlyUnstable,
-    /// Nothing is proved on any sub-box.
-    Undecided,
-    /// `mu_e` is proved not an equilibrium on every sub-box: for no
-    /// parameter in the box.
-    NotAnEquilibrium,
-    /// Some sub-boxes are proved not to hold an equilibrium, the others
-    /// are undecided (they contain the parameters where `mu_e` may be one).
-    PartlyNotAnEquilibrium,
-    /// `mu_e` is an equilibrium for every parameter and the noise is
-    /// proved to move it on every sub-box.
-    NoiseIncompatible,
-    /// Some sub-boxes are proved noise-incompatible, the others undecided.
-    PartlyNoiseIncompatible,
-}
-
-impl BoxVerdict {
-    /// The certificate's name for it.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            BoxVerdict::Stable => "stable",
-            BoxVerdict::PartlyStable => "partly_stable",
-            BoxVerdict::LinearlyUnstable => "linearly_unstable",
-            BoxVerdict::PartlyUnstable => "partly_unstable",
-            BoxVerdict::Undecided => "undecided",
-            BoxVerdict::NotAnEquilibrium => "not_an_equilibrium",
-            BoxVerdict::PartlyNotAnEquilibrium => "partly_not_an_equilibrium",
-            BoxVerdict::NoiseIncompatible => "noise_incompatible",
-            BoxVerdict::PartlyNoiseIncompatible => "partly_noise_incompatible",
-        }
-    }
-
-    /// Every verdict, for parsing and tests.
-    pub const ALL: [BoxVerdict; 9] = [
-        BoxVerdict::Stable,
-        BoxVerdict::PartlyStable,
-        BoxVerdict::LinearlyUnstable,
-        BoxVerdict::PartlyUnstable,
-        BoxVerdict::Undecided,
-        BoxVerdict::NotAnEquilibrium,
-        BoxVerdict::PartlyNotAnEquilibrium,
-        BoxVerdict::NoiseIncompatible,
-        BoxVerdict::PartlyNoiseIncompatible,
-    ];
-
-    /// The verdict named `name` in a certificate.
-    pub fn parse(name: &str) -> Option<BoxVerdict> {
-        BoxVerdict::ALL.into_iter().find(|v| v.as_str() == name)
-    }
-
-    /// What the verdict claims of the spec's own parameter point (which
-    /// lies in the box): the pointwise verdict it implies, or `None` when
-    /// it implies none (only part of the box is proved).
-    pub fn at_every_point(self) -> Option<Verdict> {
-        match self {
-            BoxVerdict::Stable => Some(Verdict::Stable),
-            BoxVerdict::LinearlyUnstable => Some(Verdict::LinearlyUnstable),
-            BoxVerdict::NotAnEquilibrium => Some(Verdict::NotAnEquilibrium),
-            BoxVerdict::NoiseIncompatible => Some(Verdict::NoiseIncompatible),
-            _ => None,
-        }
-    }
-}
-
 /// The result of [`certify_box`].
 #[derive(Clone, Debug)]
 pub struct BoxReport {
@@ -224,14 +150,15 @@ impl LeafOutcome {
         matches!(self, LeafOutcome::NotAnEquilibrium { .. } | LeafOutcome::NoiseIncompatible { .. })
     }
 
-    /// The certificate's name for the sub-box's verdict.
-    pub fn verdict_name(&self) -> &'static str {
+    /// What is proved on the sub-box, as a box verdict (never a `partly_`
+    /// one).
+    pub fn verdict(&self) -> BoxVerdict {
         match self {
-            LeafOutcome::Stable { .. } => "stable",
-            LeafOutcome::LinearlyUnstable { .. } => "linearly_unstable",
-            LeafOutcome::NotAnEquilibrium { .. } => "not_an_equilibrium",
-            LeafOutcome::NoiseIncompatible { .. } => "noise_incompatible",
-            LeafOutcome::Undecided { .. } => "undecided",
+            LeafOutcome::Stable { .. } => BoxVerdict::Stable,
+            LeafOutcome::LinearlyUnstable { .. } => BoxVerdict::LinearlyUnstable,
+            LeafOutcome::NotAnEquilibrium { .. } => BoxVerdict::NotAnEquilibrium,
+            LeafOutcome::NoiseIncompatible { .. } => BoxVerdict::NoiseIncompatible,
+            LeafOutcome::Undecided { .. } => BoxVerdict::Undecided,
         }
     }
 }

@@ -53,6 +53,7 @@ use crate::banded::{BandedCholesky, SymBanded};
 use crate::grid::{element_nodes, gll, gll_derivative, ELEMENT_DEGREE};
 use crate::lanczos::{largest_generalized_eigenvalue, Ritz};
 use nalgebra::{Complex, DMatrix};
+use numerics::definite::{positive_definite, Symmetric};
 
 /// The largest eigenvalue of `(op, K)` by Lanczos, with the banded Cholesky
 /// factor of `K` for the solves.
@@ -283,12 +284,12 @@ impl<'g> BarotropicMode<'g> {
             return (false, false);
         }
         let kf = self.form();
-        if !kf.verified_positive_definite_within(0.0) {
+        if !positive_definite(Symmetric::Banded(&kf), 0.0).proved {
             return (false, false);
         }
         let q = self.generator();
         let (g, radius) = kf.scaled_minus(bound, &q);
-        (true, g.verified_positive_definite_within(radius))
+        (true, positive_definite(Symmetric::Banded(&g), radius).proved)
     }
 
     /// The real noise operator `R_j` with `B_j = -i R_j` in the unknowns

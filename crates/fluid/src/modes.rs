@@ -33,6 +33,7 @@ use crate::banded::{BandedCholesky, BandedRows};
 use crate::grid::YGrid;
 use crate::lanczos::{conjugate_gradients, largest_generalized_eigenvalue, Ritz};
 use nalgebra::DMatrix;
+use numerics::definite::{positive_definite, Symmetric};
 use outcome::Sign;
 
 /// Up to this many unknowns per mode (walls, ny = 1024) a mode whose bound
@@ -312,8 +313,8 @@ impl<'g> Mode<'g> {
     }
 
     /// The dense check at this grid: `V ≻ 0` and `sigma2_bar V - Q ≻ 0`,
-    /// each by the rigorous floating-point Cholesky test of the generator
-    /// crate, for `V` and `Q` as computed. Forming `sigma2_bar V - Q` in
+    /// each by the rigorous floating-point dense Cholesky test of
+    /// `numerics::definite`, for `V` and `Q` as computed. Forming `sigma2_bar V - Q` in
     /// floating point rounds each entry by at most
     /// `2.01 u (|sigma2_bar V_ab| + |Q_ab|)` (`u = 2^-53`: one rounding for the
     /// product, one for the difference), and symmetrising it (a no-op for
@@ -321,7 +322,7 @@ impl<'g> Mode<'g> {
     /// same) by at most as much again
     /// plus `u` of the result, so the second test is run with `3.02 u` times
     /// the Frobenius norm of `|sigma2_bar V| + |Q|` as a radius
-    /// ([`generator::verified_positive_definite_within`]): the claim holds
+    /// ([`numerics::definite::positive_definite`]): the claim holds
     /// for the exact `sigma2_bar V - Q`, not only for its rounding.
     /// Returns `(form_definite, inequality)`.
     pub fn verify_dense(&self, form: &Form, coef: &Coefficients, sigma2_bar: f64) -> (bool, bool) {
@@ -331,7 +332,7 @@ impl<'g> Mode<'g> {
         let kmat = self.grid.energy_matrix(self.k);
         let v = self.form_from_energy(&kmat, form);
         let v = symmetrise(v);
-        let definite = generator::verified_positive_definite(&v);
+        let definite = positive_definite(Symmetric::Dense(&v), 0.0).proved;
         if form.energy == 0.0 {
             // V diagonal, Q = 0: the inequality 0 <= sigma2_bar V holds for sigma2_bar >= 0.
             return (definite, definite);
@@ -357,7 +358,7 @@ impl<'g> Mode<'g> {
         let u = f64::EPSILON / 2.0;
         let radius = 3.02 * u * bound2.sqrt() * (1.0 + 4.0 * (n as f64 + 2.0) * u) + 2.0 * n as f64 * 5e-324;
         let g = symmetrise(g);
-        (true, generator::verified_positive_definite_within(&g, radius))
+        (true, positive_definite(Symmetric::Dense(&g), radius).proved)
     }
 }
 

@@ -95,6 +95,7 @@
 use crate::banded::Bounded;
 use crate::grid::YGrid;
 use crate::modes::{Coefficients, Form};
+use numerics::definite::{positive_definite, Symmetric};
 
 /// The matrix the check factors for `noise_fields` non-constant noise
 /// fields on a grid of `n` unknowns whose stiffness has bandwidth `p`:
@@ -160,7 +161,7 @@ pub fn verify_walls(grid: &YGrid, k: f64, form: &Form, coef: &Coefficients, bar:
     }
     // Haynsworth's count needs the stored L ≻ 0 (module docs): proved, not
     // assumed (a banded Cholesky of bandwidth p, cheap beside the rest).
-    if !l.verified_positive_definite_within(0.0) {
+    if !positive_definite(Symmetric::Banded(&l), 0.0).proved {
         return (false, false);
     }
 
@@ -266,7 +267,7 @@ fn below_bar(
     // t: a power of two near the larger of max S2 and rho (exact, so 4t is
     // too): the two squares are then of the size of their difference.
     let s2max = s2.iter().fold(0.0f64, |a, x| a.max(*x));
-    let t = crate::banded::pow2(s2max.max(rho).log2().round() as i32);
+    let t = numerics::scaling::nearest_power_of_two(s2max.max(rho));
     // The lifted unknowns per node: with noise y+, y-, y1..yJ; without, y0.
     // omega is eliminated exactly first (its block D is diagonal), so the
     // matrix factored is the Schur complement S = lower - U D^-1 U^T
@@ -595,7 +596,7 @@ mod tests {
         let mode = Mode::new(&g, 1.5);
         let lam = dense_lambda(&mode, &form, &coef);
         for e in [400, 480, 500, 505, 508, 510, 511, 515] {
-            let f = crate::banded::pow2(-e);
+            let f = numerics::scaling::pow2(-e);
             let small = Coefficients {
                 eta: coef.eta.iter().map(|x| x.iter().map(|v| v * f).collect()).collect(),
                 ..coef.clone()

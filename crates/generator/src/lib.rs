@@ -54,7 +54,6 @@ mod pencil;
 mod pipeline;
 mod spectral;
 mod stopping;
-mod verified;
 
 pub use bound::{family_lower_bound, InfimumWitness};
 pub use certify::{certify_sigma2, sigma2_bound_holds, sigma2_gap, ExactSigma2};
@@ -68,4 +67,3 @@ pub use optimise::{optimise_choice, OptimiseSettings, Optimum};
 pub use pipeline::{analyse, Analysis, OptimumSummary, Settings, StableEvidence, Verdict};
 pub use spectral::{exact_spectrum_test, SpectralProof};
 pub use stopping::StoppingTime;
-pub use verified::{verified_positive_definite, verified_positive_definite_within};

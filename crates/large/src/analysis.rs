@@ -32,6 +32,7 @@ use crate::LargeError;
 use exact::Rational;
 use nalgebra::{DMatrix, DVector};
 use numerics::dense::{largest_generalized, product, symmetric_eigen, symmetric_eigenvalues, FramePencil};
+use numerics::scaling::Rescaling;
 use outcome::{Progress, Verdict, VerificationLevel};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -111,9 +112,9 @@ pub struct LargeAnalysis {
     /// The verified check's matrices, to prove other bounds (a stated
     /// `sigma2_upper` when a certificate is checked).
     pub pencil: Option<Arc<VerifiedPencil>>,
-    /// `Sigma^2` of the system as given is the pencil's times this (the
-    /// exact power-of-two rescaling of the noise).
-    pub pencil_scale: f64,
+    /// `Sigma^2` of the system as given is the pencil's times `4^e`, with
+    /// `2^e` the exact power-of-two rescaling of the noise.
+    pub pencil_rescaling: Rescaling,
     /// Its infimum over the Casimir Hessian (when `Q` does not depend on it).
     pub infimum: Option<f64>,
     /// `cond(sP)`.
@@ -134,7 +135,8 @@ impl LargeAnalysis {
     /// there is no verified check.
     pub fn proves_upper(&self, bar: f64) -> bool {
         match &self.pencil {
-            Some(p) if self.pencil_scale > 0.0 => p.proves(bar / self.pencil_scale),
+            // (rounded down in the pencil's units: proving less proves bar)
+            Some(p) => p.proves(self.pencil_rescaling.square_down(bar)),
             _ => false,
         }
     }
@@ -273,36 +275,38 @@ fn analyse_scaled(
     let scale = exact::power_of_two(-exponent);
     let scaled = system.with_noise(system.noise().iter().map(|f| f.iter().map(|x| x * &scale).collect()).collect());
     let mut a = analyse_normalised(&scaled, settings, progress)?;
-    // Residuals are exact and scale-free in their verdict; Sigma^2 scales by 2^(2 exponent).
-    let back = |x: f64| x * 2f64.powi((2 * exponent).clamp(-2000, 2000) as i32);
+    // Residuals are exact and scale-free in their verdict; Sigma^2 scales
+    // by 4^exponent (beyond 2^±1000 no double holds the result).
+    let rescaling = (exponent.unsigned_abs() <= 1000).then(|| Rescaling::new(exponent as i32));
     if let Some(s) = a.sigma2 {
-        let s2 = if exponent.abs() > 1000 { f64::NAN } else { back(s) };
-        if !s2.is_finite() || (s > 0.0 && s2 < f64::MIN_POSITIVE) {
-            a.verdict = Verdict::Inconclusive;
-            a.reason =
-                "a definite form was found, but Sigma^2 lies outside the range of double precision: rescale the noise"
+        match rescaling.filter(|r| r.out_of_range(s).is_none()) {
+            None => {
+                a.verdict = Verdict::Inconclusive;
+                a.reason = "a definite form was found, but Sigma^2 lies outside the range of double precision: rescale the noise"
                     .into();
-            a.sigma2 = None;
-            a.infimum = None;
-            a.sigma2_upper = None;
-            a.pencil = None;
-            a.level = VerificationLevel::Numerical;
-        } else {
-            a.sigma2 = Some(s2);
-            a.infimum = a.infimum.map(back);
-            a.pencil_scale = back(1.0);
-            if let Some(upper) = a.sigma2_upper {
-                let scaled = back(upper);
-                // 2^(2e) is exact unless the result leaves the normal range
-                if scaled.is_finite() && scaled >= f64::MIN_POSITIVE && a.pencil_scale >= f64::MIN_POSITIVE {
-                    a.sigma2_upper = Some(scaled);
-                } else {
-                    a.sigma2_upper = None;
-                    a.level = VerificationLevel::Numerical;
-                    a.verification = Some(
-                        "the verified bound lies outside the normal double range after rescaling the noise".into(),
-                    );
-                    a.pencil = None;
+                a.sigma2 = None;
+                a.infimum = None;
+                a.sigma2_upper = None;
+                a.pencil = None;
+                a.level = VerificationLevel::Numerical;
+            }
+            Some(r) => {
+                a.sigma2 = Some(r.square(s));
+                a.infimum = a.infimum.map(|x| r.square(x));
+                a.pencil_rescaling = r;
+                if let Some(upper) = a.sigma2_upper {
+                    match r.square_bound(upper) {
+                        Some(u) => a.sigma2_upper = Some(u),
+                        None => {
+                            a.sigma2_upper = None;
+                            a.level = VerificationLevel::Numerical;
+                            a.verification = Some(
+                                "the verified bound lies outside the normal double range after rescaling the noise"
+                                    .into(),
+                            );
+                            a.pencil = None;
+                        }
+                    }
                 }
             }
         }
@@ -336,7 +340,7 @@ fn analyse_normalised(
         exact_multipliers: None,
         verification: None,
         pencil: None,
-        pencil_scale: 1.0,
+        pencil_rescaling: Rescaling::identity(),
         infimum: None,
         condition_number: None,
         drift_residual: 0.0,

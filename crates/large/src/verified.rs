@@ -1,6 +1,6 @@
 //! The `verified_float` final check of the large pipeline: `P ≻ 0` and
 //! `bar P - Q(P) ≻ 0` proved by the rigorous floating-point Cholesky test
-//! ([`generator::verified_positive_definite_within`]) for the **exact**
+//! ([`numerics::definite::positive_definite`]) for the **exact**
 //! second variation of an exactly conserved functional, with every
 //! rounding between the exact data and the tested matrices bounded.
 //!
@@ -48,6 +48,7 @@ use crate::system::LargeSystem;
 use exact::Rational;
 use nalgebra::DMatrix;
 use num_traits::Zero;
+use numerics::definite::{positive_definite, Symmetric};
 // Higham's gamma_k = k u / (1 - k u), shared with the banded checks.
 use numerics::banded::gamma;
 use std::collections::BTreeMap;
@@ -85,9 +86,9 @@ fn norm_up<I: Iterator<Item = f64> + Clone>(values: I) -> f64 {
     if !m.is_finite() {
         return f64::INFINITY;
     }
-    // 2^-e with 2^e <= m < 2^(e+1) for normal m; subnormal m gets 2^1022
-    let e = ((m.to_bits() >> 52) & 0x7ff) as i32 - 1023;
-    let scale = numerics::banded::pow2(-e.max(-1022));
+    // 2^-e with 2^e <= m < 2^(e+1) (m / 2^e in [1, 2), up to the clamp of
+    // `exponent_of` at 2^±1000)
+    let scale = numerics::scaling::pow2(1 - numerics::scaling::exponent_of(m));
     let (mut sum, mut count) = (0.0f64, 0usize);
     for x in values {
         let y = x * scale;
@@ -95,7 +96,7 @@ fn norm_up<I: Iterator<Item = f64> + Clone>(values: I) -> f64 {
         count += 1;
     }
     let count = count as f64;
-    let scaled = sum.sqrt() * (1.0 + 4.0 * (count + 4.0) * U) + count.sqrt() * numerics::banded::pow2(-500);
+    let scaled = sum.sqrt() * (1.0 + 4.0 * (count + 4.0) * U) + count.sqrt() * numerics::scaling::pow2(-500);
     // dividing by a power of two is exact unless the result leaves the
     // normal range (then it rounds by less than MIN_POSITIVE)
     scaled / scale + f64::MIN_POSITIVE
@@ -432,7 +433,7 @@ impl VerifiedPencil {
         if q.iter().any(|x| !x.is_finite()) || !q_error.is_finite() {
             return Err("Q is not finite in double precision".into());
         }
-        let p_definite = generator::verified_positive_definite_within(&p, p_radius);
+        let p_definite = positive_definite(Symmetric::Dense(&p), p_radius).proved;
         Ok(VerifiedPencil { p, p_radius, p_norm, q, q_gain, q_error: q_error * (1.0 + 1e-6), multipliers, p_definite })
     }
 
@@ -457,7 +458,7 @@ impl VerifiedPencil {
             + 2.0 * U * (bar * self.p_norm + x_norm)
             + (4 * self.p.nrows()) as f64 * f64::MIN_POSITIVE)
             * (1.0 + 1e-6);
-        radius.is_finite() && generator::verified_positive_definite_within(&x, radius)
+        radius.is_finite() && positive_definite(Symmetric::Dense(&x), radius).proved
     }
 }
 

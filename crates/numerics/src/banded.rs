@@ -103,10 +103,7 @@ pub fn product_without_early_underflow(factors: &[f64]) -> Option<f64> {
     Some(p * last)
 }
 
-/// `2^e` for `-1022 <= e <= 1023` (clamped), exactly.
-pub fn pow2(e: i32) -> f64 {
-    f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
-}
+pub use crate::scaling::pow2;
 
 /// Band buffers kept for reuse within a thread.
 ///

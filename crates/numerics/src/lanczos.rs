@@ -348,8 +348,8 @@ fn top_ritz(alpha: &[f64], beta: &[f64], b: f64) -> (Vec<f64>, f64, f64, f64) {
     // eigenvector does not change.
     let top = alpha.iter().chain(beta).fold(0.0f64, |m, x| m.max(x.abs()));
     if top > 0.0 && !(2f64.powi(-200)..=2f64.powi(200)).contains(&top) {
-        let e = top.log2().round() as i32;
-        let (down, up) = (crate::banded::pow2(-e), crate::banded::pow2(e));
+        let r = crate::scaling::Rescaling::nearest(top);
+        let (down, up) = (r.down(), r.up());
         let a: Vec<f64> = alpha.iter().map(|x| x * down).collect();
         let c: Vec<f64> = beta.iter().map(|x| x * down).collect();
         let (v, theta, residual, scale) = top_ritz(&a, &c, b);

@@ -10,8 +10,10 @@
 //!   rounding of each pivot, a positive computed pivot that exceeds its
 //!   error bound proves the exact pivot positive, so the matrix *as stored*
 //!   (the doubles given) is positive definite, or has the counted inertia
-//!   (Sylvester, Haynsworth for Schur complements). The power-of-two
-//!   rescaling (`pow2`) keeps every product in range without rounding.
+//!   (Sylvester, Haynsworth for Schur complements).
+//! * [`definite`]: verified positive definiteness, dense or banded, behind
+//!   one entry point ([`definite::positive_definite`]) that says which test
+//!   ran and states exactly what it proves.
 //! * [`dense`]: dense symmetric and real eigenproblems by faer, generalized
 //!   pencils `(Q, P)`, condition numbers, and the completion of a Casimir
 //!   Hessian by a Schur complement (`FramePencil`): floating point, the
@@ -21,6 +23,9 @@
 //! * [`interval`]: closed intervals of doubles with outward rounding and
 //!   Taylor jets: rigorous enclosures of an expression's range over an
 //!   interval.
+//! * [`scaling`]: power-of-two rescaling: data brought to unit size
+//!   without rounding, and `Sigma^2` (of degree two in the noise) scaled
+//!   back so that a bound stays a bound.
 //! * [`minimise`]: golden-section search on a closure (the fluid Galilean
 //!   shift, the Zeitlin momentum coefficient).
 //!
@@ -38,7 +43,9 @@
 #![warn(missing_docs)]
 
 pub mod banded;
+pub mod definite;
 pub mod dense;
 pub mod interval;
 pub mod lanczos;
 pub mod minimise;
+pub mod scaling;

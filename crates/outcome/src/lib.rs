@@ -1,7 +1,8 @@
 //! The outcome vocabulary shared by every pipeline (finite-dimensional,
 //! fluid, sweeps): what was concluded ([`Verdict`]), how firmly
 //! ([`VerificationLevel`]), and the sign of a definite conserved form
-//! ([`Sign`]).
+//! ([`Sign`]); for a box of parameters, [`BoxVerdict`]; and what a
+//! certificate is about ([`CertificateKind`]).
 //!
 //! [`Progress`] carries the progress of a long analysis and a request to
 //! stop it (module [`progress`]).
@@ -222,6 +223,92 @@ impl Sign {
     }
 }
 
+/// The verdict of a certificate about a whole box of parameters: the
+/// pointwise verdicts, proved on every sub-box of a bisection or on part of
+/// them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxVerdict {
+    /// Every sub-box is proved stable.
+    Stable,
+    /// Some sub-boxes are proved stable, the others linearly unstable or
+    /// undecided.
+    PartlyStable,
+    /// Every sub-box is proved linearly unstable.
+    LinearlyUnstable,
+    /// No sub-box is proved stable; some are proved linearly unstable.
+    PartlyUnstable,
+    /// Nothing is proved on any sub-box.
+    Undecided,
+    /// `mu_e` is proved not an equilibrium on every sub-box: for no
+    /// parameter in the box.
+    NotAnEquilibrium,
+    /// Some sub-boxes are proved not to hold an equilibrium, the others
+    /// are undecided (they contain the parameters where `mu_e` may be one).
+    PartlyNotAnEquilibrium,
+    /// `mu_e` is an equilibrium for every parameter and the noise is
+    /// proved to move it on every sub-box.
+    NoiseIncompatible,
+    /// Some sub-boxes are proved noise-incompatible, the others undecided.
+    PartlyNoiseIncompatible,
+}
+
+named!(BoxVerdict, "box verdict", [
+    Stable => "stable",
+    PartlyStable => "partly_stable",
+    LinearlyUnstable => "linearly_unstable",
+    PartlyUnstable => "partly_unstable",
+    Undecided => "undecided",
+    NotAnEquilibrium => "not_an_equilibrium",
+    PartlyNotAnEquilibrium => "partly_not_an_equilibrium",
+    NoiseIncompatible => "noise_incompatible",
+    PartlyNoiseIncompatible => "partly_noise_incompatible",
+]);
+
+impl BoxVerdict {
+    /// What the verdict claims of the spec's own parameter point (which
+    /// lies in the box): the pointwise verdict it implies, or `None` when
+    /// it implies none (only part of the box is proved).
+    pub fn at_every_point(self) -> Option<Verdict> {
+        match self {
+            BoxVerdict::Stable => Some(Verdict::Stable),
+            BoxVerdict::LinearlyUnstable => Some(Verdict::LinearlyUnstable),
+            BoxVerdict::NotAnEquilibrium => Some(Verdict::NotAnEquilibrium),
+            BoxVerdict::NoiseIncompatible => Some(Verdict::NoiseIncompatible),
+            _ => None,
+        }
+    }
+}
+
+/// What a certificate is about, and so which pipeline wrote it and which
+/// checker re-derives it. Box, fluid, Zeitlin and large certificates write
+/// it as their `kind` field; a finite-dimensional certificate at one
+/// parameter point has no `kind` field (its format predates the field) and
+/// reads as [`CertificateKind::LiePoisson`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CertificateKind {
+    /// A finite-dimensional Lie–Poisson system at one parameter point,
+    /// certified in exact arithmetic (up to 64 coordinates).
+    LiePoisson,
+    /// A finite-dimensional system over a box of parameters.
+    Box,
+    /// A shear flow of 2D Euler (incompressible or compressible).
+    Fluid,
+    /// The stochastic Zeitlin model on the sphere.
+    Zeitlin,
+    /// A finite-dimensional system above 64 coordinates (sparse floating point).
+    Large,
+}
+
+named!(CertificateKind, "certificate kind", [
+    LiePoisson => "lie_poisson",
+    Box => "box",
+    Fluid => "fluid",
+    Zeitlin => "zeitlin",
+    Large => "large",
+]);
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -245,6 +332,8 @@ mod tests {
         check(Verdict::ALL);
         check(VerificationLevel::ALL);
         check(Sign::ALL);
+        check(BoxVerdict::ALL);
+        check(CertificateKind::ALL);
         let e = "stabel".parse::<Verdict>().unwrap_err();
         assert!(e.to_string().contains("stable, linearly_unstable"), "{e}");
         assert!(serde_json::from_str::<VerificationLevel>("\"none\"").is_err());

@@ -23,6 +23,7 @@ use ::boxes::symbolic::value_at;
 use ::boxes::{BoxChoice, BoxReport, BoxSettings, BoxVerdict, Leaf, LeafOutcome, ParamBox};
 use exact::{Matrix, Rational};
 use num_traits::{One, Zero};
+use outcome::CertificateKind;
 use outcome::{Sign, Verdict};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -151,13 +152,13 @@ pub struct BoxCertificateDocument {
     /// The spec's name.
     pub name: String,
     /// `box`.
-    pub kind: String,
+    pub kind: CertificateKind,
     /// `stable` (every sub-box), `linearly_unstable` (every sub-box),
     /// `partly_stable` (some stable), `partly_unstable` (none stable, some
     /// unstable), `undecided`, `not_an_equilibrium` or `noise_incompatible`
     /// (every sub-box), `partly_not_an_equilibrium` or
     /// `partly_noise_incompatible` (some sub-boxes, the others undecided).
-    pub verdict: String,
+    pub verdict: BoxVerdict,
     /// Why, in a sentence.
     pub reason: String,
     /// The statement proved, generated from the data.
@@ -216,8 +217,9 @@ pub struct SubBoxRecord {
     /// Bisections from the box.
     pub depth: u64,
     /// `stable`, `linearly_unstable`, `not_an_equilibrium`,
-    /// `noise_incompatible` or `undecided`.
-    pub verdict: String,
+    /// `noise_incompatible` or `undecided` (what is proved on this
+    /// sub-box; never a `partly_` verdict).
+    pub verdict: BoxVerdict,
     /// Why undecided, or what proves the sub-box's verdict (not stable).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
@@ -262,7 +264,7 @@ fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
         lo: exact_vec(&leaf.range.lo),
         hi: exact_vec(&leaf.range.hi),
         depth: leaf.depth as u64,
-        verdict: String::new(),
+        verdict: leaf.outcome.verdict(),
         reason: None,
         anchor_verdict: None,
         sign: None,
@@ -275,7 +277,6 @@ fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
     };
     match &leaf.outcome {
         LeafOutcome::Stable { choice, sigma2_upper, sampled, .. } => {
-            r.verdict = "stable".into();
             r.sign = Some(choice.sign as i64);
             r.multipliers = Some(exact_vec(&choice.multipliers));
             r.free = Some(choice.free.iter().map(|&j| j as u64).collect());
@@ -287,11 +288,9 @@ fn leaf_record(leaf: &Leaf) -> SubBoxRecord {
         LeafOutcome::LinearlyUnstable { criterion }
         | LeafOutcome::NotAnEquilibrium { criterion }
         | LeafOutcome::NoiseIncompatible { criterion } => {
-            r.verdict = leaf.outcome.verdict_name().into();
             r.reason = Some(criterion.clone());
         }
         LeafOutcome::Undecided { reason, anchor } => {
-            r.verdict = "undecided".into();
             r.reason = Some(reason.clone());
             r.anchor_verdict = *anchor;
         }
@@ -378,8 +377,8 @@ fn document(spec: &Spec, section: &BoxSection, report: &BoxReport, excluded: boo
         certificate_version: CERTIFICATE_VERSION,
         engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
         name: spec.name.clone(),
-        kind: "box".into(),
-        verdict: report.verdict.as_str().into(),
+        kind: CertificateKind::Box,
+        verdict: report.verdict,
         reason: report.reason.clone(),
         theorem,
         parameters: section.names.clone(),
@@ -460,7 +459,7 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     if doc.name != spec.name {
         return Err(fail("$.name", "is not the embedded spec's name".into()));
     }
-    if doc.kind != "box" {
+    if doc.kind != CertificateKind::Box {
         return Err(fail("$.kind", "expected \"box\"".into()));
     }
     let Some(section) = &spec.parameter_box else {
@@ -476,8 +475,8 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             certificate_version: CERTIFICATE_VERSION,
             engine: doc.engine.clone(),
             name: spec.name.clone(),
-            kind: "box".into(),
-            verdict: "undecided".into(),
+            kind: CertificateKind::Box,
+            verdict: BoxVerdict::Undecided,
             reason: reason.clone(),
             theorem: crate::theorem::box_theorem(&crate::theorem::BoxParts {
                 name: &spec.name,
@@ -629,7 +628,7 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             }
             "not_an_equilibrium" | "noise_incompatible" => {
                 let outcome = ::boxes::prove_excluded(&sym, &b)
-                    .filter(|o| o.verdict_name() == r.verdict)
+                    .filter(|o| o.verdict() == r.verdict)
                     .ok_or_else(|| fail(&format!("{path}.verdict"), format!("'{}' is not proved on this sub-box", r.verdict)))?;
                 let (LeafOutcome::NotAnEquilibrium { criterion } | LeafOutcome::NoiseIncompatible { criterion }) =
                     &outcome
@@ -750,10 +749,10 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
         ));
     }
     let (verdict, reason) = ::boxes::verdict_of(&counts);
-    if doc.verdict != verdict.as_str() {
+    if doc.verdict != verdict {
         return Err(fail(
             "$.verdict",
-            format!("the sub-boxes prove '{}', not '{}'", verdict.as_str(), exact::cut(&doc.verdict, 40)),
+            format!("the sub-boxes prove '{}', not '{}'", verdict.as_str(), doc.verdict.as_str()),
         ));
     }
     if doc.reason != reason {

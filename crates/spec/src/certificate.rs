@@ -144,7 +144,7 @@ pub fn spec_digest(spec: &Value) -> String {
 }
 
 /// Run the pipeline on a parsed spec and build the certificate.
-pub fn certify(spec: &Spec) -> Certificate {
+pub fn certify_lie(spec: &Spec) -> Certificate {
     let analysis = analyse(&spec.system, &spec.settings.pipeline);
     let document = certificate_document(spec, &analysis);
     let json = serde_json::to_value(&document).unwrap_or_default();

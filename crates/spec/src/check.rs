@@ -15,7 +15,7 @@
 //! trusted, so changing the verdict, `Sigma^2`, a matrix entry, the Casimir
 //! choice or the spec makes the check fail and names the field.
 
-use crate::certificate::certify;
+use crate::certificate::certify_lie;
 use crate::json::{as_object, required, SpecError};
 use crate::parse::spec_from_value;
 use crate::record::CertificateDocument;
@@ -74,27 +74,10 @@ pub struct CheckReport {
     pub sigma2: Option<f64>,
 }
 
-/// Check a certificate given as JSON text.
+/// Check a certificate given as JSON text ([`crate::check_json`] with the
+/// default [`crate::Options`]).
 pub fn check_certificate(text: &str) -> Result<CheckReport, CheckError> {
-    check_certificate_in(text, None)
-}
-
-/// [`check_certificate`] for a certificate in the folder `base`: the files
-/// its spec names (a Zeitlin field's `.npy`) are relative to it.
-pub fn check_certificate_in(text: &str, base: Option<&std::path::Path>) -> Result<CheckReport, CheckError> {
-    check_certificate_with(text, base, &outcome::Progress::new())
-}
-
-/// [`check_certificate_in`], reporting the re-derivation's progress (see
-/// [`crate::AnySpec::certify_with`]) and stopping with
-/// [`CheckError::Cancelled`] soon after [`outcome::Progress::cancel`].
-pub fn check_certificate_with(
-    text: &str,
-    base: Option<&std::path::Path>,
-    progress: &outcome::Progress,
-) -> Result<CheckReport, CheckError> {
-    let value: Value = crate::json::parse_json(text).map_err(CheckError::BadInput)?;
-    check_value_with(&value, base, progress)
+    crate::check_json(text, &crate::Options::default())
 }
 
 /// Check a typed certificate (one built in Rust or read with
@@ -102,7 +85,7 @@ pub fn check_certificate_with(
 ///
 /// ```
 /// let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
-/// let mut doc = spec::certify(&spec::parse_spec(&text).unwrap()).document;
+/// let mut doc = spec::certify_lie(&spec::parse_spec(&text).unwrap()).document;
 /// assert_eq!(spec::check_document(&doc).unwrap().verdict, spec::Verdict::Stable);
 /// doc.sigma2_exact = Some("1/4".into()); // below the true 27/100
 /// assert!(spec::check_document(&doc).is_err());
@@ -114,15 +97,10 @@ pub fn check_document(doc: &CertificateDocument) -> Result<CheckReport, CheckErr
 
 /// Check a certificate given as a JSON value.
 pub fn check_certificate_value(cert: &Value) -> Result<CheckReport, CheckError> {
-    check_certificate_value_in(cert, None)
+    check_value_with(cert, None, &outcome::Progress::new())
 }
 
-/// [`check_certificate_value`] with the spec's files relative to `base`.
-pub fn check_certificate_value_in(cert: &Value, base: Option<&std::path::Path>) -> Result<CheckReport, CheckError> {
-    check_value_with(cert, base, &outcome::Progress::new())
-}
-
-fn check_value_with(
+pub(crate) fn check_value_with(
     cert: &Value,
     base: Option<&std::path::Path>,
     progress: &outcome::Progress,
@@ -187,7 +165,7 @@ fn check_lie_certificate(cert: &Value, map: &serde_json::Map<String, Value>) -> 
     let level = crate::claims::verify_claims(&spec, cert)
         .map_err(|f| fail(&f.path, format!("claim does not hold: {}", f.message)))?;
     // 2. Everything else, by re-deriving the certificate and comparing.
-    let rederived = certify(&spec);
+    let rederived = certify_lie(&spec);
     let mut expected = rederived.json.clone();
     let mut found = cert.clone();
     // Representation-dependent numbers are verified, not compared.

@@ -25,7 +25,7 @@
 //! };
 //! let spec = spec::Spec::from_document(&doc).unwrap();
 //! // Major axis I1 = 3 > I2 = 2 > I3 = 1, noise about it: stable.
-//! assert_eq!(spec::certify(&spec).analysis.verdict, spec::Verdict::Stable);
+//! assert_eq!(spec::certify_lie(&spec).analysis.verdict, spec::Verdict::Stable);
 //! ```
 
 use crate::json::SpecError;

@@ -539,7 +539,10 @@ pub fn certify_fluid_spec(spec: &FluidSpec) -> FluidCertificate {
 
 /// [`certify_fluid_spec`] with progress; `Err` when it was cancelled (no
 /// certificate is built from a cancelled run).
-pub fn certify_fluid_with(spec: &FluidSpec, progress: &Progress) -> std::result::Result<FluidCertificate, Cancelled> {
+pub(crate) fn certify_fluid_with(
+    spec: &FluidSpec,
+    progress: &Progress,
+) -> std::result::Result<FluidCertificate, Cancelled> {
     let analysis = analyse_with(&spec.problem, &spec.settings, progress);
     progress.check()?;
     Ok(fluid_certificate(spec, analysis))
@@ -599,7 +602,7 @@ fn empty_document(spec: &FluidSpec) -> FluidCertificateDocument {
         certificate_version: CERTIFICATE_VERSION,
         engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
         name: spec.name.clone(),
-        kind: "fluid".into(),
+        kind: outcome::CertificateKind::Fluid,
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         level: LevelOrNone(None),

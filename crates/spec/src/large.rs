@@ -220,7 +220,7 @@ pub fn large_certificate_document(
         certificate_version: CERTIFICATE_VERSION,
         engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
         name: spec.name.clone(),
-        kind: "large".into(),
+        kind: outcome::CertificateKind::Large,
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         level: LevelOrNone(None),
@@ -358,7 +358,7 @@ pub fn certify_large(spec: &LargeSpec) -> Value {
 
 /// [`certify_large`] with progress; `Err` when it was cancelled (no
 /// certificate is built from a cancelled run).
-pub fn certify_large_with(spec: &LargeSpec, progress: &Progress) -> std::result::Result<Value, Cancelled> {
+pub(crate) fn certify_large_with(spec: &LargeSpec, progress: &Progress) -> std::result::Result<Value, Cancelled> {
     let analysis = analyse_large_with(&spec.system, &spec.settings, progress);
     progress.check()?;
     Ok(serde_json::to_value(large_certificate_document(spec, &analysis)).unwrap_or_default())

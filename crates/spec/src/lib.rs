@@ -1,15 +1,41 @@
 //! The engine's public contract: spec in, certificate out (docs/architecture.md §4).
 //!
+//! Three functions serve every kind of spec (finite-dimensional, box,
+//! large, fluid, Zeitlin), each taking [`Options`] (progress and
+//! cancellation, the folder a spec's files are relative to):
+//!
+//! * [`parse`] reads any spec; every error is a [`SpecError`] naming the
+//!   JSON path (`$.noise[0][1]`) and what is wrong;
+//! * [`certify`] runs the matching pipeline and returns an
+//!   [`AnyCertificate`]: one [`Header`] for every kind (format version,
+//!   engine, [`CertificateKind`], name, [`AnyVerdict`], level, the spec's
+//!   SHA-256, settings) and the certificate JSON;
+//! * [`check`] re-derives every claim from the embedded spec and compares;
+//!   any altered number fails with the path of the field ([`check_json`]
+//!   for a certificate read from a file).
+//!
+//! ```
+//! use spec::{certify, check, parse, Options, Verdict};
+//! let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
+//! let cert = certify(&parse(&text, &Options::default()).unwrap(), &Options::default()).unwrap();
+//! assert_eq!(check(&cert, &Options::default()).unwrap().verdict, Verdict::Stable);
+//! // Tampering with Sigma^2 is caught.
+//! let mut bad = cert.json().clone();
+//! bad["sigma2"] = serde_json::json!(0.09);
+//! assert!(spec::check_json(&bad.to_string(), &Options::default()).is_err());
+//! ```
+//!
+//! Underneath, per kind:
+//!
 //! * [`parse_spec`] reads the JSON spec (algebra, parameters, Hamiltonian,
 //!   Casimirs, first integrals, equilibrium, noise, stopping, settings) into a
 //!   validated [`casimir::System`]. Every error is a [`SpecError`] naming the
 //!   JSON path (`$.noise[0][1]`) and what is wrong.
-//! * [`certify`] runs the pipeline and builds the certificate JSON: verdict,
-//!   `sigma2`, level, the Casimir choice, exact `P` and `Q` (rational strings),
+//! * [`certify_lie`] runs the finite-dimensional pipeline and builds the
+//!   certificate JSON and its typed [`Certificate`]: verdict, `sigma2`,
+//!   level, the Casimir choice, exact `P` and `Q` (rational strings),
 //!   residuals, the stopping time, the settings, the engine version and the
 //!   spec itself.
-//! * [`check_certificate`] re-derives everything from the embedded spec and
-//!   compares; any altered number fails with the path of the field.
 //! * [`document`] and [`record`]: the contract as serde-derived types
 //!   (specs, fluid specs, settings, certificates, fluid certificates). Every
 //!   spec is read into a document first (unknown fields, missing fields and
@@ -19,19 +45,6 @@
 //! * From Rust without JSON: [`certify_system`] certifies a
 //!   [`casimir::System`] built in code, and [`Certificate::check`] re-checks
 //!   the result (a heavy top in twelve lines in the docs of [`certify_system`]).
-//!
-//! ```
-//! let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
-//! let spec = spec::parse_spec(&text).unwrap();
-//! let cert = spec::certify(&spec);
-//! assert_eq!(cert.json["verdict"], "stable");
-//! let report = spec::check_certificate(&cert.json.to_string()).unwrap();
-//! assert_eq!(report.verdict, spec::Verdict::Stable);
-//! // Tampering with Sigma^2 is caught.
-//! let mut bad = cert.json.clone();
-//! bad["sigma2"] = serde_json::json!(0.09);
-//! assert!(spec::check_certificate(&bad.to_string()).is_err());
-//! ```
 //!
 //! The fluid contract (shear flows, [`AnySpec::Fluid`]) is behind the
 //! default feature `fluid`; without it the crate does not build the fluid
@@ -44,6 +57,7 @@ mod certificate;
 mod check;
 mod claims;
 pub mod document;
+mod envelope;
 #[cfg(feature = "fluid")]
 mod fluid;
 #[cfg(feature = "fluid")]
@@ -66,18 +80,17 @@ mod zeitlin_fields;
 mod zeitlin_simulation;
 
 pub use certificate::{
-    certificate_json, certify, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
+    certificate_json, certify_lie, spec_digest, verification_level, Certificate, CERTIFICATE_VERSION, ENGINE_VERSION,
 };
-pub use check::{
-    check_certificate, check_certificate_in, check_certificate_value, check_certificate_value_in,
-    check_certificate_with, check_document, CheckError, CheckReport, FLOAT_TOLERANCE,
-};
+pub use check::{check_certificate, check_certificate_value, check_document, CheckError, CheckReport, FLOAT_TOLERANCE};
 pub use claims::{verify_claims, ClaimFailure};
+pub use envelope::{certify, check, check_json, parse, AnyCertificate, AnyVerdict, CertifyError, Header, Options};
 #[cfg(feature = "fluid")]
 pub use fluid::{
-    certify_fluid, certify_fluid_spec, certify_fluid_with, check_fluid_certificate, fluid_certificate_json,
-    fluid_spec_from_value, parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
+    certify_fluid, certify_fluid_spec, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value,
+    parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
+pub use outcome::{BoxVerdict, CertificateKind};
 
 #[cfg(feature = "fluid")]
 pub use fluid_simulation::{
@@ -89,9 +102,9 @@ pub use fluid_simulation::{
 
 #[cfg(feature = "fluid")]
 pub use zeitlin::{
-    analyse_zeitlin, analyse_zeitlin_with, certify_zeitlin, certify_zeitlin_with, check_zeitlin_certificate,
-    check_zeitlin_certificate_in, parse_zeitlin_spec, zeitlin_certificate_document, zeitlin_spec_from_value,
-    zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
+    analyse_zeitlin, certify_zeitlin, check_zeitlin_certificate, parse_zeitlin_spec, zeitlin_certificate_document,
+    zeitlin_spec_from_value, zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N,
+    N_RANGE, ZEITLIN_TOLERANCE,
 };
 
 #[cfg(feature = "fluid")]
@@ -107,8 +120,8 @@ pub use zeitlin_simulation::{
 
 #[cfg(feature = "fluid")]
 pub use large::{
-    certify_large, certify_large_with, check_large_certificate, is_large_spec, large_certificate_document,
-    large_spec_from_value, LargeSpec, LARGE_MAX_DIMENSION, LARGE_TOLERANCE,
+    certify_large, check_large_certificate, is_large_spec, large_certificate_document, large_spec_from_value,
+    LargeSpec, LARGE_MAX_DIMENSION, LARGE_TOLERANCE,
 };
 
 /// Whether a spec value is a Zeitlin spec (has a `zeitlin` object at the top).
@@ -241,7 +254,7 @@ impl AnySpec {
     pub fn certify(&self) -> serde_json::Value {
         match self {
             AnySpec::Lie(s) if s.parameter_box.is_some() => box_cert::certify_box_spec(s),
-            AnySpec::Lie(s) => certify(s).json,
+            AnySpec::Lie(s) => certify_lie(s).json,
             #[cfg(feature = "fluid")]
             AnySpec::Fluid(s) => certify_fluid(s),
             #[cfg(feature = "fluid")]
@@ -252,25 +265,9 @@ impl AnySpec {
     }
 
     /// [`AnySpec::certify`], reporting progress and stopping soon after
-    /// [`outcome::Progress::cancel`] (then `Err`, and no certificate). The
-    /// fluid, Zeitlin and large pipelines count their steps (x-mode solves,
-    /// block operations, stages); a finite-dimensional system, certified
-    /// in micro- to milliseconds, is one step.
-    ///
-    /// ```
-    /// let text = r#"{"name": "rayleigh", "fluid": {"model": "incompressible", "x_period": "2*pi",
-    ///   "y_interval": [-1, 1], "boundary": "walls", "shear_flow": "-cos(y)",
-    ///   "noise": ["0.3*sin(y)"], "ny": 32, "x_modes": 2}}"#;
-    /// let spec = spec::parse_any_spec(text).unwrap();
-    /// let progress = outcome::Progress::new();
-    /// let cert = spec.certify_with(&progress).unwrap();
-    /// assert_eq!(cert["verdict"], "stable");
-    /// let (done, total) = progress.snapshot();
-    /// assert!(done > 1 && done == total);
-    /// progress.cancel();
-    /// assert!(spec.certify_with(&progress).is_err());
-    /// ```
-    pub fn certify_with(
+    /// [`outcome::Progress::cancel`] (then `Err`, and no certificate): the
+    /// body of [`crate::certify`].
+    pub(crate) fn certify_with(
         &self,
         progress: &outcome::Progress,
     ) -> std::result::Result<serde_json::Value, outcome::Cancelled> {
@@ -278,16 +275,16 @@ impl AnySpec {
             AnySpec::Lie(s) => {
                 progress.plan(1);
                 progress.check()?;
-                let json = if s.parameter_box.is_some() { box_cert::certify_box_spec(s) } else { certify(s).json };
+                let json = if s.parameter_box.is_some() { box_cert::certify_box_spec(s) } else { certify_lie(s).json };
                 progress.settle();
                 Ok(json)
             }
             #[cfg(feature = "fluid")]
-            AnySpec::Fluid(s) => Ok(certify_fluid_with(s, progress)?.json),
+            AnySpec::Fluid(s) => Ok(fluid::certify_fluid_with(s, progress)?.json),
             #[cfg(feature = "fluid")]
-            AnySpec::Zeitlin(s) => certify_zeitlin_with(s, progress),
+            AnySpec::Zeitlin(s) => zeitlin::certify_zeitlin_with(s, progress),
             #[cfg(feature = "fluid")]
-            AnySpec::Large(s) => certify_large_with(s, progress),
+            AnySpec::Large(s) => large::certify_large_with(s, progress),
         }
     }
 }
@@ -307,7 +304,7 @@ pub fn parse_any_spec(text: &str) -> Result<AnySpec, SpecError> {
 /// [`parse_any_spec`] for a spec in the folder `base`: the files it names
 /// (a Zeitlin field's `.npy`) are relative to it (to the current folder
 /// when `None`).
-pub fn parse_any_spec_in(text: &str, base: Option<&std::path::Path>) -> Result<AnySpec, SpecError> {
+pub(crate) fn parse_any_spec_in(text: &str, base: Option<&std::path::Path>) -> Result<AnySpec, SpecError> {
     // Only a Zeitlin spec reads files (and needs the folder).
     #[cfg(not(feature = "fluid"))]
     let _ = base;

@@ -6,7 +6,7 @@
 //!
 //! [`certify_system`] shows a heavy top certified in twelve lines.
 
-use crate::certificate::{certify, verification_level, Certificate};
+use crate::certificate::{certify_lie, verification_level, Certificate};
 use crate::check::{check_certificate_value, CheckError, CheckReport};
 use crate::json::{Result, SpecError};
 use crate::parse::{spec_from_value, Spec, Stopping};
@@ -85,7 +85,7 @@ pub fn spec_of_system(
     Ok(spec)
 }
 
-/// Certify a system built in code: [`spec_of_system`] then [`certify`].
+/// Certify a system built in code: [`spec_of_system`] then [`crate::certify_lie`].
 ///
 /// The sleeping heavy top, `I = (1, 2, 3)`, `mgl = 1`, `p = 4`, noise
 /// `(3/10) e3`, in twelve lines:
@@ -112,7 +112,7 @@ pub fn certify_system(
     settings: &EngineSettings,
     stopping: Option<Stopping>,
 ) -> Result<Certificate> {
-    Ok(certify(&spec_of_system(name, system, settings, stopping)?))
+    Ok(certify_lie(&spec_of_system(name, system, settings, stopping)?))
 }
 
 impl Certificate {

@@ -18,6 +18,7 @@
 //! ```
 
 use crate::document::SettingsDoc;
+use outcome::CertificateKind;
 use outcome::{Verdict, VerificationLevel};
 use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
 use serde::de::{self, Deserializer};
@@ -458,7 +459,7 @@ pub struct FluidCertificateDocument {
     /// The spec's name.
     pub name: String,
     /// `fluid`.
-    pub kind: String,
+    pub kind: CertificateKind,
     /// The verdict.
     pub verdict: Verdict,
     /// Why, in a sentence.
@@ -807,7 +808,7 @@ pub struct ZeitlinCertificateDocument {
     /// The spec's name.
     pub name: String,
     /// `zeitlin`.
-    pub kind: String,
+    pub kind: CertificateKind,
     /// The verdict.
     pub verdict: Verdict,
     /// Why, in a sentence.
@@ -1084,7 +1085,7 @@ pub struct LargeCertificateDocument {
     /// The spec's name.
     pub name: String,
     /// `large`.
-    pub kind: String,
+    pub kind: CertificateKind,
     /// The verdict.
     pub verdict: Verdict,
     /// Why, in a sentence.

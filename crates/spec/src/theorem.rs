@@ -17,7 +17,7 @@
 //!
 //! ```
 //! let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
-//! let cert = spec::certify(&spec::parse_spec(&text).unwrap()).json;
+//! let cert = spec::certify_lie(&spec::parse_spec(&text).unwrap()).json;
 //! let statement = cert["theorem"]["statement"].as_str().unwrap();
 //! assert!(statement.starts_with("Proved (exact): for the linearised Stratonovich SDE"));
 //! assert!(statement.contains("E|dmu_t|_P^2 <= |dmu_0|_P^2 exp(Sigma^2 t)"));

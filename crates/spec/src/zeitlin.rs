@@ -480,7 +480,7 @@ pub fn analyse_zeitlin(spec: &ZeitlinSpec) -> ZeitlinOutcome {
 
 /// [`analyse_zeitlin`] with progress and cancellation (a cancelled run's
 /// outcome holds [`ZeitlinError::Cancelled`]).
-pub fn analyse_zeitlin_with(spec: &ZeitlinSpec, progress: &Progress) -> ZeitlinOutcome {
+pub(crate) fn analyse_zeitlin_with(spec: &ZeitlinSpec, progress: &Progress) -> ZeitlinOutcome {
     match &spec.input {
         ZeitlinInput::Zonal(p) => ZeitlinOutcome::Zonal(analyse_with(p, &spec.settings.zonal, progress)),
         ZeitlinInput::General(p) => {
@@ -496,7 +496,7 @@ pub fn certify_zeitlin(spec: &ZeitlinSpec) -> Value {
 
 /// [`certify_zeitlin`] with progress; `Err` when it was cancelled (no
 /// certificate is built from a cancelled run).
-pub fn certify_zeitlin_with(spec: &ZeitlinSpec, progress: &Progress) -> std::result::Result<Value, Cancelled> {
+pub(crate) fn certify_zeitlin_with(spec: &ZeitlinSpec, progress: &Progress) -> std::result::Result<Value, Cancelled> {
     let analysis = analyse_zeitlin_with(spec, progress);
     progress.check()?;
     Ok(zeitlin_certificate_value(spec, &analysis))
@@ -555,7 +555,7 @@ pub fn zeitlin_certificate_document(spec: &ZeitlinSpec, outcome: &ZeitlinOutcome
         certificate_version: CERTIFICATE_VERSION,
         engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
         name: spec.name.clone(),
-        kind: "zeitlin".into(),
+        kind: outcome::CertificateKind::Zeitlin,
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         level: LevelOrNone(None),
@@ -885,7 +885,10 @@ pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckRepor
 
 /// [`check_zeitlin_certificate`] with `.npy` paths relative to `base` (the
 /// certificate's folder).
-pub fn check_zeitlin_certificate_in(cert: &Value, base: Option<&Path>) -> std::result::Result<CheckReport, CheckError> {
+pub(crate) fn check_zeitlin_certificate_in(
+    cert: &Value,
+    base: Option<&Path>,
+) -> std::result::Result<CheckReport, CheckError> {
     check_zeitlin_certificate_with(cert, base, &Progress::new())
 }
 

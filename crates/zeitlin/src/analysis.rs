@@ -24,8 +24,10 @@
 //! Casimir–momentum form alone definite) `Q = 0` and `Sigma^2 = 0`.
 
 use crate::laplacian::{block, solve_zonal, Tridiagonal, TridiagonalFactor};
-use numerics::banded::{pow2, Bounded, SymBanded};
+use numerics::banded::{Bounded, SymBanded};
+use numerics::definite::{positive_definite, Symmetric};
 use numerics::minimise::{golden_section_until, golden_section_with_ends};
+use numerics::scaling::{nearest_power_of_two, Rescaling};
 use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use rayon::prelude::*;
 
@@ -353,7 +355,7 @@ impl Block {
             return None;
         }
         let s2max = s2.iter().fold(0.0f64, |a, x| a.max(*x));
-        let t = if s2max > 0.0 { pow2(s2max.log2().round() as i32) } else { 1.0 };
+        let t = nearest_power_of_two(s2max);
         // (g_k, whether U_k is S2 + t, S2 - t, I or E_i)
         let mut g = vec![s * eps];
         if k > 0 {
@@ -574,50 +576,47 @@ pub fn analyse_with(
     // xi -> k xi scales Sigma^2 by k^2. Solve it with both scaled to unit
     // size (values near 1e308 would overflow in the solves), then scale back.
     let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-    let s_omega = max_abs(&problem.omega);
-    let s_xi = problem.noise.iter().map(|x| max_abs(x)).fold(0.0f64, f64::max);
     // Powers of two, so that the scaling is exact and a bound proved for the
     // scaled problem is one for the problem as given.
-    let unit = |s: f64| if s > 0.0 { pow2(s.log2().round() as i32) } else { 1.0 };
-    let (s_omega, s_xi) = (unit(s_omega), unit(s_xi));
+    let r_omega = Rescaling::nearest(max_abs(&problem.omega));
+    let r_xi = Rescaling::nearest(problem.noise.iter().map(|x| max_abs(x)).fold(0.0f64, f64::max));
     let scaled = ZeitlinProblem {
         n: problem.n,
-        omega: problem.omega.iter().map(|x| x / s_omega).collect(),
-        noise: problem.noise.iter().map(|xi| xi.iter().map(|x| x / s_xi).collect()).collect(),
+        omega: problem.omega.iter().map(|x| x * r_omega.down()).collect(),
+        noise: problem.noise.iter().map(|xi| xi.iter().map(|x| x * r_xi.down()).collect()).collect(),
     };
     // (unless an entry fell below the normal range: then it was rounded)
     let exact = |v: &[f64], w: &[f64], f: f64| v.iter().zip(w).all(|(x, y)| y * f == *x);
-    let exact_scaling = exact(&problem.omega, &scaled.omega, s_omega)
-        && problem.noise.iter().zip(&scaled.noise).all(|(x, y)| exact(x, y, s_xi));
+    let exact_scaling = exact(&problem.omega, &scaled.omega, r_omega.up())
+        && problem.noise.iter().zip(&scaled.noise).all(|(x, y)| exact(x, y, r_xi.up()));
     let mut a = analyse_normalised(&scaled, settings, progress)?;
     // A cancelled search ends early with meaningless values: never a result.
     progress.check()?;
     progress.settle();
-    let k2 = s_xi * s_xi;
     for b in &mut a.blocks {
-        b.lambda_max *= k2;
+        b.lambda_max = r_xi.square(b.lambda_max);
     }
     if let Some(c) = a.choice.as_mut() {
-        c.momentum *= s_omega;
+        c.momentum *= r_omega.up();
     }
-    a.growth_rate = a.growth_rate.map(|r| r * s_omega);
+    a.growth_rate = a.growth_rate.map(|r| r * r_omega.up());
     if let (Verdict::LinearlyUnstable, Some(rate)) = (a.verdict, a.growth_rate) {
         // The reason was written in the normalised units.
         a.reason = unstable_reason(rate);
     }
     // The stated bound is the proved one raised by 1e-8 (rounded up): a
     // certificate's value edited within the check's tolerance (1e-9) is
-    // still at least the proved bound, so still true.
+    // still at least the proved bound, so still true. A bound that left
+    // the normal range is not stated.
     a.sigma2_upper = a
         .sigma2_upper
-        .map(|u| if u == 0.0 { 0.0 } else { (u * k2 * (1.0 + 1e-8)).next_up() })
+        .map(|u| if u == 0.0 { 0.0 } else { r_xi.square(u * (1.0 + 1e-8)).next_up() })
         .filter(|u| exact_scaling && u.is_finite() && (*u == 0.0 || *u >= f64::MIN_POSITIVE));
     if a.level == VerificationLevel::VerifiedFloat && a.sigma2_upper.is_none() {
         a.level = VerificationLevel::Numerical;
     }
     if let Some(s) = a.sigma2 {
-        let s = s * k2;
-        if !s.is_finite() || (s > 0.0 && s < f64::MIN_POSITIVE) {
+        if r_xi.out_of_range(s).is_some() {
             a.verdict = Verdict::Inconclusive;
             a.reason =
                 "a definite form was found, but Sigma^2 lies outside the range of double precision: rescale the noise"
@@ -626,7 +625,7 @@ pub fn analyse_with(
             a.sigma2_upper = None;
             a.level = VerificationLevel::Numerical;
         } else {
-            a.sigma2 = Some(s);
+            a.sigma2 = Some(r_xi.square(s));
         }
     }
     Ok(a)
@@ -1013,7 +1012,7 @@ fn minus_laplacian_is_definite(t: &Tridiagonal) -> bool {
             minus.add(j, j - 1, -t.off[j - 1]);
         }
     }
-    minus.verified_positive_definite_within(0.0)
+    positive_definite(Symmetric::Banded(&minus), 0.0).proved
 }
 
 /// Whether `P = -eps Delta^-1 + D_c` (`eps` 0 or ±1) is positive

@@ -32,7 +32,7 @@
 //! ([`dense_analysis`]).
 
 use crate::analysis::{analyse_with, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
-use crate::isospectral::StreamSolver;
+use crate::laplacian::StreamSolver;
 use crate::matrix_free::{matrix_free_analysis, MatrixFreeAnalysis, MatrixFreeSettings};
 use crate::sphere::{quflow_axis, rotation_to_axis};
 use nalgebra::{Complex, DMatrix};
@@ -194,7 +194,7 @@ fn normalised(m: &DMatrix<C>, n: usize, what: &str) -> Result<(DMatrix<C>, f64),
     if top == 0.0 {
         return Ok((m.clone(), 1.0));
     }
-    let scale = numerics::banded::pow2(top.log2().round() as i32);
+    let scale = numerics::scaling::nearest_power_of_two(top);
     let x = m.map(|z| z / scale);
     let hermitian_part = (&x + x.adjoint()).norm() / 2.0;
     if hermitian_part > 1e-12 * x.norm() {

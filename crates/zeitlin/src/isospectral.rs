@@ -67,7 +67,7 @@
 //! ```
 
 use crate::analysis::hbar;
-use crate::laplacian::{block, solve_zonal, Tridiagonal, TridiagonalFactor};
+use crate::laplacian::{solve_zonal, StreamError, StreamSolver};
 use nalgebra::{Complex, DMatrix};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -99,131 +99,12 @@ pub enum IsospectralError {
     Cancelled,
 }
 
-/// `P = Delta_N^{-1} W` in `O(N^2)`, diagonal by diagonal.
-///
-/// ```
-/// use nalgebra::{Complex, DMatrix};
-/// use zeitlin::isospectral::StreamSolver;
-/// let s = StreamSolver::new(5).unwrap();
-/// // Any trace-free matrix, skew-Hermitian or not: Delta P = W.
-/// let w = DMatrix::from_fn(5, 5, |i, j| Complex::new((i * 5 + j) as f64 * 0.1 - 1.2, (i as f64 - j as f64).sin()));
-/// let p = s.solve(&w).unwrap();
-/// assert!((s.laplacian(&p).unwrap() - &w).norm() < 1e-12 * w.norm());
-/// assert!(p.trace().norm() < 1e-12);
-/// ```
-#[derive(Clone, Debug)]
-pub struct StreamSolver {
-    n: usize,
-    /// `block(n, m)`, `m = 0..n`.
-    blocks: Vec<Tridiagonal>,
-    /// Factors of `block(n, m)`, `m = 1..n` (index `m - 1`): negative definite.
-    factors: Vec<TridiagonalFactor>,
-}
-
-impl StreamSolver {
-    /// The solver for `N x N` matrices (`N >= 2`).
-    pub fn new(n: usize) -> Result<Self, IsospectralError> {
-        if n < 2 {
-            return Err(IsospectralError::Input(format!("N must be at least 2, got {n}")));
+impl From<StreamError> for IsospectralError {
+    fn from(e: StreamError) -> Self {
+        match e {
+            StreamError::Input(m) => IsospectralError::Input(m),
+            StreamError::Numerical(m) => IsospectralError::Numerical(m),
         }
-        let blocks: Vec<Tridiagonal> = (0..n).map(|m| block(n, m)).collect();
-        let factors = blocks[1..]
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                b.factor().ok_or_else(|| IsospectralError::Numerical(format!("the Laplacian of diagonal {}", i + 1)))
-            })
-            .collect::<Result<_, _>>()?;
-        Ok(StreamSolver { n, blocks, factors })
-    }
-
-    /// `N`.
-    pub fn n(&self) -> usize {
-        self.n
-    }
-
-    fn check(&self, w: &DMatrix<C>, what: &str) -> Result<(), IsospectralError> {
-        if w.nrows() != self.n || w.ncols() != self.n {
-            return Err(IsospectralError::Input(format!(
-                "{what} is {} x {}, the model is {n} x {n}",
-                w.nrows(),
-                w.ncols(),
-                n = self.n
-            )));
-        }
-        Ok(())
-    }
-
-    /// `Delta_N P`, applied block by block (`O(N^2)`).
-    pub fn laplacian(&self, p: &DMatrix<C>) -> Result<DMatrix<C>, IsospectralError> {
-        self.check(p, "P")?;
-        let n = self.n;
-        let mut out = DMatrix::zeros(n, n);
-        let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
-        let (mut yr, mut yi) = (vec![0.0; n], vec![0.0; n]);
-        for m in 0..n {
-            let len = n - m;
-            let t = &self.blocks[m];
-            for upper in [true, false] {
-                if m == 0 && !upper {
-                    continue;
-                }
-                let at = |j: usize| if upper { (j, j + m) } else { (j + m, j) };
-                for j in 0..len {
-                    let z = p[at(j)];
-                    (re[j], im[j]) = (z.re, z.im);
-                }
-                t.mul(&re[..len], &mut yr[..len]);
-                t.mul(&im[..len], &mut yi[..len]);
-                for j in 0..len {
-                    out[at(j)] = C::new(yr[j], yi[j]);
-                }
-            }
-        }
-        Ok(out)
-    }
-
-    /// `P` with `Delta_N P = W - (tr W / N) I` and `tr P = 0`, for any
-    /// complex `N x N` matrix (skew-Hermitian in, skew-Hermitian out,
-    /// exactly: the real and imaginary parts are solved separately by the
-    /// same real factors).
-    pub fn solve(&self, w: &DMatrix<C>) -> Result<DMatrix<C>, IsospectralError> {
-        self.check(w, "W")?;
-        let n = self.n;
-        let mut p = DMatrix::zeros(n, n);
-        let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
-        for m in 1..n {
-            let len = n - m;
-            let f = &self.factors[m - 1];
-            for upper in [true, false] {
-                let at = |j: usize| if upper { (j, j + m) } else { (j + m, j) };
-                for j in 0..len {
-                    let z = w[at(j)];
-                    (re[j], im[j]) = (z.re, z.im);
-                }
-                f.solve(&mut re[..len]);
-                f.solve(&mut im[..len]);
-                for j in 0..len {
-                    p[at(j)] = C::new(re[j], im[j]);
-                }
-            }
-        }
-        // The main diagonal: Delta_0's kernel is the identity, so the mean
-        // is removed first (rounding leaves a trace-free W with a mean of
-        // order 1e-17, which solve_zonal would push into its first row).
-        let mean = w.trace() / n as f64;
-        let parts = |f: fn(C) -> f64| -> Result<Vec<f64>, IsospectralError> {
-            let d: Vec<f64> = (0..n).map(|j| f(w[(j, j)] - mean)).collect();
-            solve_zonal(&d).ok_or_else(|| IsospectralError::Numerical("the zonal Poisson solve".into()))
-        };
-        let (dr, di) = (parts(|z| z.re)?, parts(|z| z.im)?);
-        for j in 0..n {
-            p[(j, j)] = C::new(dr[j], di[j]);
-        }
-        if p.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
-            return Err(IsospectralError::Numerical("the stream function is not finite".into()));
-        }
-        Ok(p)
     }
 }
 
@@ -332,7 +213,7 @@ impl ZeitlinModel {
 
     /// `N`.
     pub fn n(&self) -> usize {
-        self.stream.n
+        self.stream.n()
     }
 
     /// `hbar = 2/sqrt(N^2 - 1)`.

@@ -317,3 +317,146 @@ mod tests {
         assert!(pi.iter().zip(&omega).all(|(p, w)| (p + w / 2.0).abs() < 1e-12));
     }
 }
+
+type C = nalgebra::Complex<f64>;
+use nalgebra::DMatrix;
+
+/// Why a stream solve could not be done.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StreamError {
+    /// The input is malformed (the message says which).
+    #[error("{0}")]
+    Input(String),
+    /// A value became non-finite, or a factorisation failed.
+    #[error("numerical breakdown: {0}")]
+    Numerical(String),
+}
+
+/// `P = Delta_N^{-1} W` in `O(N^2)`, diagonal by diagonal.
+///
+/// ```
+/// use nalgebra::{Complex, DMatrix};
+/// use zeitlin::laplacian::StreamSolver;
+/// let s = StreamSolver::new(5).unwrap();
+/// // Any trace-free matrix, skew-Hermitian or not: Delta P = W.
+/// let w = DMatrix::from_fn(5, 5, |i, j| Complex::new((i * 5 + j) as f64 * 0.1 - 1.2, (i as f64 - j as f64).sin()));
+/// let p = s.solve(&w).unwrap();
+/// assert!((s.laplacian(&p).unwrap() - &w).norm() < 1e-12 * w.norm());
+/// assert!(p.trace().norm() < 1e-12);
+/// ```
+#[derive(Clone, Debug)]
+pub struct StreamSolver {
+    n: usize,
+    /// `block(n, m)`, `m = 0..n`.
+    blocks: Vec<Tridiagonal>,
+    /// Factors of `block(n, m)`, `m = 1..n` (index `m - 1`): negative definite.
+    pub(crate) factors: Vec<TridiagonalFactor>,
+}
+
+impl StreamSolver {
+    /// The solver for `N x N` matrices (`N >= 2`).
+    pub fn new(n: usize) -> Result<Self, StreamError> {
+        if n < 2 {
+            return Err(StreamError::Input(format!("N must be at least 2, got {n}")));
+        }
+        let blocks: Vec<Tridiagonal> = (0..n).map(|m| block(n, m)).collect();
+        let factors = blocks[1..]
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                b.factor().ok_or_else(|| StreamError::Numerical(format!("the Laplacian of diagonal {}", i + 1)))
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(StreamSolver { n, blocks, factors })
+    }
+
+    /// `N`.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    pub(crate) fn check(&self, w: &DMatrix<C>, what: &str) -> Result<(), StreamError> {
+        if w.nrows() != self.n || w.ncols() != self.n {
+            return Err(StreamError::Input(format!(
+                "{what} is {} x {}, the model is {n} x {n}",
+                w.nrows(),
+                w.ncols(),
+                n = self.n
+            )));
+        }
+        Ok(())
+    }
+
+    /// `Delta_N P`, applied block by block (`O(N^2)`).
+    pub fn laplacian(&self, p: &DMatrix<C>) -> Result<DMatrix<C>, StreamError> {
+        self.check(p, "P")?;
+        let n = self.n;
+        let mut out = DMatrix::zeros(n, n);
+        let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
+        let (mut yr, mut yi) = (vec![0.0; n], vec![0.0; n]);
+        for m in 0..n {
+            let len = n - m;
+            let t = &self.blocks[m];
+            for upper in [true, false] {
+                if m == 0 && !upper {
+                    continue;
+                }
+                let at = |j: usize| if upper { (j, j + m) } else { (j + m, j) };
+                for j in 0..len {
+                    let z = p[at(j)];
+                    (re[j], im[j]) = (z.re, z.im);
+                }
+                t.mul(&re[..len], &mut yr[..len]);
+                t.mul(&im[..len], &mut yi[..len]);
+                for j in 0..len {
+                    out[at(j)] = C::new(yr[j], yi[j]);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// `P` with `Delta_N P = W - (tr W / N) I` and `tr P = 0`, for any
+    /// complex `N x N` matrix (skew-Hermitian in, skew-Hermitian out,
+    /// exactly: the real and imaginary parts are solved separately by the
+    /// same real factors).
+    pub fn solve(&self, w: &DMatrix<C>) -> Result<DMatrix<C>, StreamError> {
+        self.check(w, "W")?;
+        let n = self.n;
+        let mut p = DMatrix::zeros(n, n);
+        let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
+        for m in 1..n {
+            let len = n - m;
+            let f = &self.factors[m - 1];
+            for upper in [true, false] {
+                let at = |j: usize| if upper { (j, j + m) } else { (j + m, j) };
+                for j in 0..len {
+                    let z = w[at(j)];
+                    (re[j], im[j]) = (z.re, z.im);
+                }
+                f.solve(&mut re[..len]);
+                f.solve(&mut im[..len]);
+                for j in 0..len {
+                    p[at(j)] = C::new(re[j], im[j]);
+                }
+            }
+        }
+        // The main diagonal: Delta_0's kernel is the identity, so the mean
+        // is removed first (rounding leaves a trace-free W with a mean of
+        // order 1e-17, which solve_zonal would push into its first row).
+        let mean = w.trace() / n as f64;
+        let parts = |f: fn(C) -> f64| -> Result<Vec<f64>, StreamError> {
+            let d: Vec<f64> = (0..n).map(|j| f(w[(j, j)] - mean)).collect();
+            solve_zonal(&d).ok_or_else(|| StreamError::Numerical("the zonal Poisson solve".into()))
+        };
+        let (dr, di) = (parts(|z| z.re)?, parts(|z| z.im)?);
+        for j in 0..n {
+            p[(j, j)] = C::new(dr[j], di[j]);
+        }
+        if p.iter().any(|z| !(z.re.is_finite() && z.im.is_finite())) {
+            return Err(StreamError::Numerical("the stream function is not finite".into()));
+        }
+        Ok(p)
+    }
+}

@@ -3,7 +3,7 @@
 //!
 //! Every operator of the dense analysis ([`crate::general::dense_analysis`])
 //! is applied to an `N x N` matrix at the cost of a few `N x N` products and
-//! one `O(N^2)` stream solve ([`StreamSolver`]):
+//! one `O(N^2)` stream solve ([`crate::laplacian::StreamSolver`]):
 //!
 //! * the drift `A X = ([P_e, X] + [Delta^-1 X, W_e]) / hbar`;
 //! * the restricted Hessian of `H + C_Phi` on the orbit's tangent space, in
@@ -56,7 +56,7 @@
 
 use crate::analysis::{hbar, ZeitlinError};
 use crate::eigen::hermitian_eigen;
-use crate::isospectral::StreamSolver;
+use crate::laplacian::StreamSolver;
 use nalgebra::{Complex, DMatrix};
 use outcome::Progress;
 use std::cell::Cell;
@@ -393,7 +393,7 @@ fn davidson(
 /// trace-free) with stream matrix `P_e`; see the module docs.
 ///
 /// ```
-/// use zeitlin::isospectral::StreamSolver;
+/// use zeitlin::laplacian::StreamSolver;
 /// use zeitlin::matrix_free::{matrix_free_analysis, MatrixFreeSettings};
 /// use zeitlin::sphere::from_harmonics;
 /// // The degree-3 Rossby–Haurwitz state of fixtures/zeitlin/rossby-haurwitz-l3-n8 at N = 8.

@@ -609,13 +609,7 @@ pub fn verified_mode_bound(
 /// rounded down if it underflows: proving a smaller bound proves the larger
 /// one (`V ≻ 0`).
 pub(super) fn normalised_bound(bound: f64, e: i32) -> f64 {
-    let f = pow2(-e);
-    let normalised = bound * f * f;
-    if normalised < f64::MIN_POSITIVE {
-        normalised.next_down().max(0.0)
-    } else {
-        normalised
-    }
+    numerics::scaling::Rescaling::new(e).square_down(bound)
 }
 
 /// The resolutions of the convergence table: `from, 2 from, ...` below `ny`, then `ny`.

@@ -14,7 +14,8 @@ pub(super) fn normalise_noise(problem: &FluidProblem, fine: &YGrid) -> (FluidPro
     (FluidProblem { profile: problem.profile.with_noise_factor(pow2(-e)), ..problem.clone() }, e)
 }
 
-pub(super) use crate::banded::pow2;
+pub(super) use numerics::scaling::pow2;
+use numerics::scaling::{exponent_of, Rescaling};
 
 /// The exponent `e` with `max |eta_k| / 2^e` in `[1/2, 1)` over the samples
 /// and the nodes (0 for no noise).
@@ -25,46 +26,23 @@ pub(super) fn noise_exponent(profile: &Profile, nodes: &[f64]) -> i32 {
         .iter()
         .flat_map(|[e, _]| ys.iter().chain(nodes).map(move |y| e.eval(*y).abs()))
         .fold(0.0f64, f64::max);
-    if !(max.is_finite() && max > 0.0) {
-        return 0;
-    }
-    // floor(log2 max) + 1, exactly from the bits for normal numbers
-    let exponent = if max >= f64::MIN_POSITIVE { ((max.to_bits() >> 52) & 0x7ff) as i32 - 1022 } else { -1022 };
-    exponent.clamp(-1000, 1000)
+    exponent_of(max)
 }
 
 /// Multiply every `Sigma^2` of an analysis of the normalised noise by
 /// `4^e` (and the noise residuals by `2^e`), and refuse what no double holds.
 pub(super) fn rescale(a: FluidAnalysis, e: i32) -> FluidAnalysis {
-    let f = pow2(e);
-    let sq = |x: f64| x * f * f;
-    // An upper bound must stay one: round a subnormal result up.
-    let sq_up = |x: f64| {
-        let y = x * f * f;
-        if x > 0.0 && y < f64::MIN_POSITIVE {
-            f64::MIN_POSITIVE
-        } else {
-            y
-        }
-    };
+    let r = Rescaling::new(e);
+    let f = r.up();
+    let sq = |x: f64| r.square(x);
+    // An upper bound must stay one (an overflow is caught by the headline's
+    // range check below: every bound is at most the headline's).
+    let sq_up = |x: f64| r.square_bound(x).unwrap_or(f64::INFINITY);
     let sq_opt = |x: Option<f64>| x.map(sq);
     let paper_bound = a.paper_bound.map(sq).filter(|b| b.is_finite());
     let headline = a.sigma2_upper.or(a.sigma2);
     if let Some(h) = headline {
-        let y = h * f * f;
-        let not_representable = if !y.is_finite() {
-            Some(format!(
-                "Sigma^2 is about 10^{:.1} with this noise, beyond the largest double (1.8e308): rescale time or the noise amplitudes",
-                h.log10() + 2.0 * e as f64 * std::f64::consts::LOG10_2
-            ))
-        } else if h > 0.0 && y < f64::MIN_POSITIVE {
-            Some(format!(
-                "Sigma^2 is about 10^{:.1} with this noise, below the smallest normal double (2.2e-308): rescale time or the noise amplitudes",
-                h.log10() + 2.0 * e as f64 * std::f64::consts::LOG10_2
-            ))
-        } else {
-            None
-        };
+        let not_representable = r.out_of_range(h);
         if let Some(reason) = not_representable {
             return FluidAnalysis {
                 paper_bound,

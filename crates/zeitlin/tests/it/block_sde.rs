@@ -9,7 +9,8 @@ use nalgebra::{Complex, DMatrix, DVector};
 use outcome::{Progress, Verdict};
 use zeitlin::analysis::{analyse, hbar, ZeitlinProblem, ZeitlinSettings};
 use zeitlin::block_sde::BlockSde;
-use zeitlin::isospectral::{zonal_state, StreamSolver};
+use zeitlin::isospectral::zonal_state;
+use zeitlin::laplacian::StreamSolver;
 use zeitlin::zonal::quantise;
 
 type C = Complex<f64>;

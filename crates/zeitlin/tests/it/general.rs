@@ -375,7 +375,7 @@ fn the_matrix_free_rate_moves_only_with_the_units() {
 /// indefinite, and no `Sigma^2` is claimed.
 #[test]
 fn the_matrix_free_analysis_does_not_call_a_definite_form_indefinite() {
-    use zeitlin::isospectral::StreamSolver;
+    use zeitlin::laplacian::StreamSolver;
     use zeitlin::matrix_free::{matrix_free_analysis, MatrixFreeSettings};
     let n = 9;
     let w = from_harmonics(n, &[(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2), (2, 1, 0.3)]).unwrap();
@@ -391,7 +391,7 @@ fn the_matrix_free_analysis_does_not_call_a_definite_form_indefinite() {
 /// verdict.
 #[test]
 fn the_matrix_free_analysis_is_reproducible_and_cancellable() {
-    use zeitlin::isospectral::StreamSolver;
+    use zeitlin::laplacian::StreamSolver;
     use zeitlin::matrix_free::{matrix_free_analysis, MatrixFreeSettings};
     let n = 72;
     let w = from_harmonics(n, &[(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2)]).unwrap();

@@ -4,7 +4,7 @@
 //! Laplacian's invariance.
 
 use nalgebra::{Complex, DMatrix};
-use zeitlin::isospectral::StreamSolver;
+use zeitlin::laplacian::StreamSolver;
 use zeitlin::sphere::{from_harmonics, rotation, rotation_to_axis, spin, to_harmonics};
 
 type C = Complex<f64>;

@@ -1,5 +1,41 @@
-//! A rigorous floating-point test of positive definiteness (the
-//! `verified_float` level, for data that is not rational).
+//! Verified positive definiteness of symmetric matrices of doubles: the
+//! tests every `verified_float` claim rests on, behind one entry point,
+//! [`positive_definite`], which picks the test by the matrix's storage and
+//! says which it ran.
+//!
+//! What a `true` proves, for either test: every symmetric `A + E` with
+//! `||E||_2 <= radius` is positive definite, where `A` is the matrix *as
+//! stored* (the doubles given), under IEEE double arithmetic with rounding
+//! to nearest (unit roundoff `u = 2^-53`), underflow included. Callers that
+//! formed `A` in floating point from the matrix a claim is about pass the
+//! rounding of that formation as `radius`. A `false` means "not proved",
+//! never "indefinite".
+//!
+//! * [`Method::DenseCholesky`] (a `nalgebra::DMatrix`): the dense test
+//!   below.
+//! * [`Method::BandedCholesky`] (a [`SymBanded`]): the banded test of
+//!   [`SymBanded::verified_positive_definite_within`], the same argument
+//!   with `gamma_{b+2}` for bandwidth `b` in place of `gamma_{n+1}`.
+//!
+//! ```
+//! use nalgebra::DMatrix;
+//! use numerics::banded::SymBanded;
+//! use numerics::definite::{positive_definite, Method, Symmetric};
+//! // tridiag(-1, 2, -1) of order 3: eigenvalues 2 - sqrt 2, 2, 2 + sqrt 2.
+//! let dense = DMatrix::from_row_slice(3, 3, &[2.0, -1.0, 0.0, -1.0, 2.0, -1.0, 0.0, -1.0, 2.0]);
+//! let mut banded = SymBanded::zeros(3, 1);
+//! for i in 0..3 { banded.add(i, i, 2.0); }
+//! for i in 1..3 { banded.add(i, i - 1, -1.0); }
+//! let d = positive_definite(Symmetric::Dense(&dense), 0.5);
+//! let b = positive_definite(Symmetric::Banded(&banded), 0.5);
+//! assert!(d.proved && b.proved);
+//! assert_eq!((d.method, b.method), (Method::DenseCholesky, Method::BandedCholesky));
+//! // 0.6 exceeds lambda_min = 0.586: neither test proves it.
+//! assert!(!positive_definite(Symmetric::Dense(&dense), 0.6).proved);
+//! assert!(!positive_definite(Symmetric::Banded(&banded), 0.6).proved);
+//! ```
+//!
+//! # The dense test
 //!
 //! Criterion, in the spirit of Rump, *Verification of positive definiteness*
 //! (BIT 46, 2006), derived here from the standard backward error of the
@@ -23,7 +59,60 @@
 //! sufficient, never necessary: `false` means "not verified", not
 //! "indefinite".
 
+use crate::banded::SymBanded;
 use nalgebra::DMatrix;
+
+/// A symmetric matrix in one of the storages the tests read.
+#[derive(Clone, Copy, Debug)]
+pub enum Symmetric<'a> {
+    /// Dense; both triangles are read and must agree.
+    Dense(&'a DMatrix<f64>),
+    /// Banded (the lower band).
+    Banded(&'a SymBanded),
+}
+
+/// The test that ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Cholesky of the whole matrix with an a-priori shift (module docs).
+    DenseCholesky,
+    /// Banded Cholesky with the shift from the band's rounding bound.
+    BandedCholesky,
+}
+
+impl Method {
+    /// A short name for reports: `dense Cholesky` or `banded Cholesky`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::DenseCholesky => "dense Cholesky",
+            Method::BandedCholesky => "banded Cholesky",
+        }
+    }
+}
+
+/// The outcome of [`positive_definite`]: whether it proved the claim, and
+/// by which test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Definiteness {
+    /// Every symmetric `A + E` with `||E||_2 <= radius` is positive
+    /// definite (module docs); `false`: not proved.
+    pub proved: bool,
+    /// The test that ran.
+    pub method: Method,
+}
+
+/// Whether every symmetric `a + E` with `||E||_2 <= radius` is proved
+/// positive definite, by the test for `a`'s storage (module docs).
+pub fn positive_definite(a: Symmetric<'_>, radius: f64) -> Definiteness {
+    match a {
+        Symmetric::Dense(m) => {
+            Definiteness { proved: verified_positive_definite_within(m, radius), method: Method::DenseCholesky }
+        }
+        Symmetric::Banded(m) => {
+            Definiteness { proved: m.verified_positive_definite_within(radius), method: Method::BandedCholesky }
+        }
+    }
+}
 
 /// The inner product of two equally long slices in sixteen interleaved
 /// partial sums (any order of summation satisfies the bound the test relies
@@ -53,7 +142,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 ///
 /// ```
 /// use nalgebra::DMatrix;
-/// use generator::verified_positive_definite;
+/// use numerics::definite::verified_positive_definite;
 /// let a = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
 /// assert!(verified_positive_definite(&a));
 /// let b = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0 - 1e-20]);
@@ -71,7 +160,7 @@ pub fn verified_positive_definite(a: &DMatrix<f64>) -> bool {
 ///
 /// ```
 /// use nalgebra::DMatrix;
-/// use generator::verified_positive_definite_within;
+/// use numerics::definite::verified_positive_definite_within;
 /// let a = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]); // eigenvalues 1 and 3
 /// assert!(verified_positive_definite_within(&a, 0.5));
 /// assert!(!verified_positive_definite_within(&a, 1.5));
