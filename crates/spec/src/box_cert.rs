@@ -437,6 +437,41 @@ fn rationals(v: &[ExactRational]) -> Vec<Rational> {
 /// limit). Nothing stored is trusted; the choices are only the proofs'
 /// inputs. Every field and how it is verified: docs/ci.md.
 pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+    let (doc, spec) = read_box_certificate(cert)?;
+    let Some(section) = &spec.parameter_box else {
+        return Err(fail("$.spec.box", "a box certificate's spec must have a box section".into()));
+    };
+    if doc.parameters != section.names {
+        return Err(fail("$.parameters", "differs from the spec's box section".into()));
+    }
+    let system = match spec.box_system(&section.names) {
+        Ok(s) => s,
+        Err(e) => return check_refused(&doc, &spec, section, format!("{NOT_SYMBOLIC}: {e}")),
+    };
+    let sym = match system.symbolic() {
+        Ok(s) => s,
+        Err(e) => return check_refused(&doc, &spec, section, format!("{REFUSED}: {e}")),
+    };
+    let order = check_partition(&doc, &section.range, section.names.len())?;
+    let leaves = LeafCheck::new(&system, &sym, section);
+    let mut tally = Tally::new();
+    for (i, r) in doc.sub_boxes.iter().enumerate() {
+        let outcome = leaves.check(r, &format!("$.sub_boxes[{i}]"), &mut tally)?;
+        tally.counts.add(&outcome);
+    }
+    let limit = check_budget(&doc, &order, &leaves, &tally)?;
+    if doc.limit.as_deref() != limit {
+        return Err(fail(
+            "$.limit",
+            format!("the sub-boxes show that {} stopped the bisection", limit.unwrap_or("no limit")),
+        ));
+    }
+    check_totals(&doc, &spec, section, leaves.excluded, tally)
+}
+
+/// The certificate's shape, version, embedded spec, digest, name and kind:
+/// the typed document and the spec it embeds.
+fn read_box_certificate(cert: &Value) -> std::result::Result<(BoxCertificateDocument, Spec), CheckError> {
     let map = crate::json::as_object(cert, "$").map_err(CheckError::BadInput)?;
     crate::check::check_engine(map)?;
     let doc: BoxCertificateDocument = crate::document::from_value(cert)
@@ -462,255 +497,344 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     if doc.kind != CertificateKind::Box {
         return Err(fail("$.kind", "expected \"box\"".into()));
     }
-    let Some(section) = &spec.parameter_box else {
-        return Err(fail("$.spec.box", "a box certificate's spec must have a box section".into()));
+    Ok((doc, spec))
+}
+
+/// A system the box refuses (certify's `undecided` with no sub-boxes, and
+/// that reason) claims nothing: the certificate must be exactly that.
+fn check_refused(
+    doc: &BoxCertificateDocument,
+    spec: &Spec,
+    section: &BoxSection,
+    reason: String,
+) -> std::result::Result<CheckReport, CheckError> {
+    let expected = BoxCertificateDocument {
+        certificate_version: CERTIFICATE_VERSION,
+        engine: doc.engine.clone(),
+        name: spec.name.clone(),
+        kind: CertificateKind::Box,
+        verdict: BoxVerdict::Undecided,
+        reason: reason.clone(),
+        theorem: crate::theorem::box_theorem(&crate::theorem::BoxParts {
+            name: &spec.name,
+            range: String::new(),
+            equilibrium: String::new(),
+            verdict: "undecided",
+            shares: [0.0; 4],
+            sup: None,
+        }),
+        parameters: section.names.clone(),
+        sup_sigma2: None,
+        sup_sigma2_exact: None,
+        sampled_max: None,
+        undecided_fraction: Float(0.0),
+        unstable_fraction: Float(0.0),
+        excluded_fraction: None,
+        limit: None,
+        sub_boxes: vec![],
+        spec_sha256: doc.spec_sha256.clone(),
+        spec: doc.spec.clone(),
     };
-    if doc.parameters != section.names {
-        return Err(fail("$.parameters", "differs from the spec's box section".into()));
-    }
-    // A system the box refuses (certify's `undecided` with no sub-boxes,
-    // and that reason) claims nothing.
-    let refused = |reason: String| -> std::result::Result<CheckReport, CheckError> {
-        let expected = BoxCertificateDocument {
-            certificate_version: CERTIFICATE_VERSION,
-            engine: doc.engine.clone(),
-            name: spec.name.clone(),
-            kind: CertificateKind::Box,
-            verdict: BoxVerdict::Undecided,
-            reason: reason.clone(),
-            theorem: crate::theorem::box_theorem(&crate::theorem::BoxParts {
-                name: &spec.name,
-                range: String::new(),
-                equilibrium: String::new(),
-                verdict: "undecided",
-                shares: [0.0; 4],
-                sup: None,
-            }),
-            parameters: section.names.clone(),
-            sup_sigma2: None,
-            sup_sigma2_exact: None,
-            sampled_max: None,
-            undecided_fraction: Float(0.0),
-            unstable_fraction: Float(0.0),
-            excluded_fraction: None,
-            limit: None,
-            sub_boxes: vec![],
-            spec_sha256: doc.spec_sha256.clone(),
-            spec: doc.spec.clone(),
-        };
-        if doc == expected {
-            Ok(CheckReport { name: spec.name.clone(), verdict: Verdict::Inconclusive, level: None, sigma2: None })
-        } else {
-            Err(fail(
-                "$",
-                format!(
-                    "the box refuses the system, so the certificate can only be undecided, with no sub-boxes and the reason '{}'",
-                    exact::cut(&reason, 200)
-                ),
-            ))
-        }
-    };
-    let system = match spec.box_system(&section.names) {
-        Ok(s) => s,
-        Err(e) => return refused(format!("{NOT_SYMBOLIC}: {e}")),
-    };
-    let sym = match system.symbolic() {
-        Ok(s) => s,
-        Err(e) => return refused(format!("{REFUSED}: {e}")),
-    };
-    let n = system.dim();
-    let np = section.names.len();
-    let range = &section.range;
-    let settings = &section.settings;
-    let order = check_partition(&doc, range, np)?;
-    // the budget of sub-boxes, scaled down for long numbers as certify does
-    let (budget_size, bits) = ::boxes::certify::sub_box_budget(&system, range, settings.max_boxes);
-    let spent_reason = ::boxes::certify::budget_reason(budget_size, settings.max_boxes, bits);
-    let excluded = !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty();
-    let unresolved = if sym.equilibrium_holds() {
-        ::boxes::certify::NOISE_UNRESOLVED
+    if *doc == expected {
+        Ok(CheckReport { name: spec.name.clone(), verdict: Verdict::Inconclusive, level: None, sigma2: None })
     } else {
-        ::boxes::certify::EQUILIBRIUM_UNRESOLVED
-    };
-    let mut sup: Option<Rational> = None;
-    let mut undecided = Rational::zero();
-    let mut unstable_volume = Rational::zero();
-    let mut excluded_volume = Rational::zero();
-    let mut counts = ::boxes::LeafCounts::default();
-    let mut budget = 0usize;
-    let mut at_depth_limit = 0usize;
-    let charpoly = std::cell::OnceCell::new();
-    let mut sampled_max: Option<(f64, Vec<Rational>)> = None;
-    for (i, r) in doc.sub_boxes.iter().enumerate() {
-        let path = format!("$.sub_boxes[{i}]");
-        let b = ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) };
-        let proved_only = |what: &str| -> std::result::Result<(), CheckError> {
-            // the choice and bound fields belong to stable sub-boxes only
-            if r.sign.is_some()
-                || r.multipliers.is_some()
-                || r.free.is_some()
-                || r.pivot_rows.is_some()
-                || r.m.is_some()
-                || r.sigma2_upper.is_some()
-                || r.sigma2_sampled.is_some()
-            {
-                return Err(fail(&path, format!("a {what} sub-box records no choice or bound")));
-            }
-            Ok(())
-        };
-        let outcome = match r.verdict.as_str() {
-            "stable" if excluded => {
-                return Err(fail(
-                    &format!("{path}.verdict"),
-                    "mu_e is not an equilibrium (or the noise moves it) for some parameters of the box, so no sub-box is stable".into(),
-                ))
-            }
-            "stable" => {
-                let choice = record_choice(r, &path)?;
-                let s = r
-                    .sigma2_upper
-                    .as_ref()
-                    .map(|x| x.0.clone())
-                    .ok_or_else(|| fail(&path, "no sigma2_upper".into()))?;
-                let forms = ::boxes::prove_leaf(&sym, &b, &choice, &s)
-                    .map_err(|e| fail(&format!("{path}.sigma2_upper"), format!("not proved: {e}")))?;
-                // The recorded multipliers are the anchor's: the free
-                // ones are used as given, the solved ones must be the
-                // solution there (nothing stated goes unchecked).
-                let anchor = b.anchor();
-                for (j, (l, stated)) in forms.multipliers.iter().zip(&choice.multipliers).enumerate() {
-                    if value_at(l, n, &anchor).as_ref() != Some(stated) {
-                        return Err(fail(
-                            &format!("{path}.multipliers[{j}]"),
-                            "is not the multiplier at the sub-box's anchor".into(),
-                        ));
-                    }
-                }
-                let (_, sampled, at) = sampled_bound(&forms, n, &b, &settings.margin)
-                    .ok_or_else(|| fail(&path, "the samples could not be re-derived".into()))?;
-                let stated = r.sigma2_sampled.map(|x| x.0).unwrap_or(f64::NAN);
-                if !close(stated, sampled) {
-                    return Err(fail(
-                        &format!("{path}.sigma2_sampled"),
-                        format!("{stated:e} differs from the re-derived {sampled:e}"),
-                    ));
-                }
-                if r.reason.is_some() || r.anchor_verdict.is_some() {
-                    return Err(fail(&path, "a stable sub-box has no reason or anchor_verdict".into()));
-                }
-                if sampled_max.as_ref().is_none_or(|m| sampled > m.0) {
-                    sampled_max = Some((sampled, at.clone()));
-                }
-                sup = Some(sup.map_or(s.clone(), |x: Rational| x.max(s.clone())));
-                LeafOutcome::Stable { choice, sigma2_upper: s, sampled, sampled_at: at }
-            }
-            "linearly_unstable" => {
-                if excluded {
-                    return Err(fail(
-                        &format!("{path}.verdict"),
-                        "mu_e is not an equilibrium (or the noise moves it) for some parameters of the box: only not_an_equilibrium, noise_incompatible or undecided sub-boxes".into(),
-                    ));
-                }
-                let criterion =
-                    ::boxes::certify::prove_unstable(&sym, charpoly.get_or_init(|| sym.characteristic_polynomial()), &b)
-                        .ok_or_else(|| {
-                            fail(&format!("{path}.verdict"), "linear instability is not proved on this sub-box".into())
-                        })?;
-                if r.reason.as_deref() != Some(criterion.as_str()) {
-                    return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
-                }
-                proved_only("linearly unstable")?;
-                if r.anchor_verdict.is_some() {
-                    return Err(fail(&format!("{path}.anchor_verdict"), "only undecided sub-boxes state one".into()));
-                }
-                unstable_volume += b.volume();
-                LeafOutcome::LinearlyUnstable { criterion }
-            }
-            "not_an_equilibrium" | "noise_incompatible" => {
-                let outcome = ::boxes::prove_excluded(&sym, &b)
-                    .filter(|o| o.verdict() == r.verdict)
-                    .ok_or_else(|| fail(&format!("{path}.verdict"), format!("'{}' is not proved on this sub-box", r.verdict)))?;
-                let (LeafOutcome::NotAnEquilibrium { criterion } | LeafOutcome::NoiseIncompatible { criterion }) =
-                    &outcome
-                else {
-                    unreachable!("prove_excluded proves only these two")
-                };
-                if r.reason.as_deref() != Some(criterion.as_str()) {
-                    return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
-                }
-                proved_only("not stable")?;
-                if r.anchor_verdict.is_some() {
-                    return Err(fail(&format!("{path}.anchor_verdict"), "only undecided sub-boxes state one".into()));
-                }
-                excluded_volume += b.volume();
-                outcome
-            }
-            "undecided" => {
-                proved_only("undecided")?;
-                let reason = r.reason.clone().unwrap_or_default();
-                let rpath = format!("{path}.reason");
-                // Each reason is a statement about how the bisection ended
-                // there, and it is checked as one.
-                match reason.as_str() {
-                    r if r == spent_reason => budget += 1,
-                    ::boxes::certify::LARGEST_DEPTH | ::boxes::certify::EQUILIBRIUM_UNRESOLVED | ::boxes::certify::NOISE_UNRESOLVED => {
-                        let expected = if excluded { unresolved } else { ::boxes::certify::LARGEST_DEPTH };
-                        if reason != expected {
-                            return Err(fail(&rpath, format!("expected '{expected}' for this system")));
-                        }
-                        if r.depth != settings.max_depth as u64 {
-                            return Err(fail(&rpath, format!("says the largest depth, but the sub-box is at depth {} of {}", r.depth, settings.max_depth)));
-                        }
-                        at_depth_limit += 1;
-                    }
-                    ::boxes::certify::UNSTABLE_CORNERS => {
-                        if excluded || !::boxes::certify::unstable_at_anchor_and_corners(&system, &b) {
-                            return Err(fail(&rpath, "the pipeline does not prove A unstable at the sub-box's anchor and every corner".into()));
-                        }
-                    }
-                    _ => return Err(fail(&rpath, "is not a reason this engine gives for an undecided sub-box".into())),
-                }
-                // the pointwise verdict stated at the anchor is the
-                // pipeline's; sub-boxes left by the budget or bisected for
-                // a failing equilibrium or noise state none
-                if excluded || reason == spent_reason {
-                    if r.anchor_verdict.is_some() {
-                        return Err(fail(
-                            &format!("{path}.anchor_verdict"),
-                            "this sub-box was not analysed at its anchor".into(),
-                        ));
-                    }
-                } else {
-                    let derived = ::boxes::certify::analyse_at(&system, &b.anchor()).map(|(_, a)| a.verdict);
-                    if r.anchor_verdict != derived {
-                        return Err(fail(
-                            &format!("{path}.anchor_verdict"),
-                            format!(
-                                "is not the pipeline's verdict at the anchor ({})",
-                                derived.map_or("none: the pipeline could not run there", |v| v.as_str())
-                            ),
-                        ));
-                    }
-                }
-                undecided += b.volume();
-                LeafOutcome::Undecided { reason, anchor: r.anchor_verdict }
-            }
-            other => {
-                return Err(fail(
-                    &format!("{path}.verdict"),
-                    format!("'{}' is not a sub-box verdict", exact::cut(other, 40)),
-                ))
-            }
-        };
-        counts.add(&outcome);
+        Err(fail(
+            "$",
+            format!(
+                "the box refuses the system, so the certificate can only be undecided, with no sub-boxes and the reason '{}'",
+                exact::cut(&reason, 200)
+            ),
+        ))
     }
-    // The bisection analyses every node of its binary tree but the sub-boxes
-    // left by the budget: 2 L - 1 nodes for L sub-boxes. Sub-boxes left by
-    // the budget mean that exactly max_boxes were analysed, and they are the
-    // last sub-boxes of the breadth-first order (no tightening follows a
-    // spent budget).
+}
+
+/// What the sub-boxes add up to, as they are checked.
+struct Tally {
+    /// The largest proved bound over the stable sub-boxes.
+    sup: Option<Rational>,
+    /// Volumes: undecided, proved unstable, proved excluded.
+    undecided: Rational,
+    unstable: Rational,
+    excluded: Rational,
+    counts: ::boxes::LeafCounts,
+    /// Sub-boxes left by the budget, and at the largest depth.
+    budget: usize,
+    at_depth_limit: usize,
+    /// The largest re-derived sample, and where.
+    sampled_max: Option<(f64, Vec<Rational>)>,
+}
+
+impl Tally {
+    fn new() -> Self {
+        Tally {
+            sup: None,
+            undecided: Rational::zero(),
+            unstable: Rational::zero(),
+            excluded: Rational::zero(),
+            counts: ::boxes::LeafCounts::default(),
+            budget: 0,
+            at_depth_limit: 0,
+            sampled_max: None,
+        }
+    }
+}
+
+/// The system and the box's settings, for re-proving one sub-box at a time.
+struct LeafCheck<'a> {
+    system: &'a ::boxes::BoxSystem,
+    sym: &'a ::boxes::symbolic::Symbolic,
+    settings: &'a BoxSettings,
+    n: usize,
+    /// The budget of sub-boxes, scaled down for long numbers as certify
+    /// does, and the reason a sub-box left by it gives.
+    budget_size: usize,
+    spent_reason: String,
+    /// `mu_e` is not an equilibrium, or the noise moves it, for some
+    /// parameter of the box; and the reason a sub-box at the largest depth
+    /// then gives.
+    excluded: bool,
+    unresolved: &'static str,
+    charpoly: std::cell::OnceCell<Vec<::boxes::frac::Frac>>,
+}
+
+impl<'a> LeafCheck<'a> {
+    fn new(system: &'a ::boxes::BoxSystem, sym: &'a ::boxes::symbolic::Symbolic, section: &'a BoxSection) -> Self {
+        let settings = &section.settings;
+        let (budget_size, bits) = ::boxes::certify::sub_box_budget(system, &section.range, settings.max_boxes);
+        LeafCheck {
+            system,
+            sym,
+            settings,
+            n: system.dim(),
+            budget_size,
+            spent_reason: ::boxes::certify::budget_reason(budget_size, settings.max_boxes, bits),
+            excluded: !sym.equilibrium_holds() || !sym.incompatible_noise().is_empty(),
+            unresolved: if sym.equilibrium_holds() {
+                ::boxes::certify::NOISE_UNRESOLVED
+            } else {
+                ::boxes::certify::EQUILIBRIUM_UNRESOLVED
+            },
+            charpoly: std::cell::OnceCell::new(),
+        }
+    }
+
+    /// Re-prove the sub-box recorded at `path` and add it to the tally.
+    fn check(&self, r: &SubBoxRecord, path: &str, tally: &mut Tally) -> std::result::Result<LeafOutcome, CheckError> {
+        let b = ParamBox { lo: rationals(&r.lo), hi: rationals(&r.hi) };
+        match r.verdict {
+            BoxVerdict::Stable if self.excluded => Err(fail(
+                &format!("{path}.verdict"),
+                "mu_e is not an equilibrium (or the noise moves it) for some parameters of the box, so no sub-box is stable".into(),
+            )),
+            BoxVerdict::Stable => self.stable(r, &b, path, tally),
+            BoxVerdict::LinearlyUnstable => {
+                let outcome = self.unstable(r, &b, path)?;
+                tally.unstable += b.volume();
+                Ok(outcome)
+            }
+            BoxVerdict::NotAnEquilibrium | BoxVerdict::NoiseIncompatible => {
+                let outcome = self.excluded(r, &b, path)?;
+                tally.excluded += b.volume();
+                Ok(outcome)
+            }
+            BoxVerdict::Undecided => {
+                let outcome = self.undecided(r, &b, path, tally)?;
+                tally.undecided += b.volume();
+                Ok(outcome)
+            }
+            other => Err(fail(
+                &format!("{path}.verdict"),
+                format!("'{}' is not a sub-box verdict", exact::cut(other.as_str(), 40)),
+            )),
+        }
+    }
+
+    /// The choice and bound fields belong to stable sub-boxes only.
+    fn proved_only(r: &SubBoxRecord, path: &str, what: &str) -> std::result::Result<(), CheckError> {
+        if r.sign.is_some()
+            || r.multipliers.is_some()
+            || r.free.is_some()
+            || r.pivot_rows.is_some()
+            || r.m.is_some()
+            || r.sigma2_upper.is_some()
+            || r.sigma2_sampled.is_some()
+        {
+            return Err(fail(path, format!("a {what} sub-box records no choice or bound")));
+        }
+        Ok(())
+    }
+
+    /// A stable sub-box: the recorded choice proves `sigma2_upper` on the
+    /// whole sub-box, its multipliers are the anchor's, and its sample is
+    /// re-derived.
+    fn stable(
+        &self,
+        r: &SubBoxRecord,
+        b: &ParamBox,
+        path: &str,
+        tally: &mut Tally,
+    ) -> std::result::Result<LeafOutcome, CheckError> {
+        let choice = record_choice(r, path)?;
+        let s = r.sigma2_upper.as_ref().map(|x| x.0.clone()).ok_or_else(|| fail(path, "no sigma2_upper".into()))?;
+        let forms = ::boxes::prove_leaf(self.sym, b, &choice, &s)
+            .map_err(|e| fail(&format!("{path}.sigma2_upper"), format!("not proved: {e}")))?;
+        // The recorded multipliers are the anchor's: the free ones are used
+        // as given, the solved ones must be the solution there (nothing
+        // stated goes unchecked).
+        let anchor = b.anchor();
+        for (j, (l, stated)) in forms.multipliers.iter().zip(&choice.multipliers).enumerate() {
+            if value_at(l, self.n, &anchor).as_ref() != Some(stated) {
+                return Err(fail(
+                    &format!("{path}.multipliers[{j}]"),
+                    "is not the multiplier at the sub-box's anchor".into(),
+                ));
+            }
+        }
+        let (_, sampled, at) = sampled_bound(&forms, self.n, b, &self.settings.margin)
+            .ok_or_else(|| fail(path, "the samples could not be re-derived".into()))?;
+        let stated = r.sigma2_sampled.map(|x| x.0).unwrap_or(f64::NAN);
+        if !close(stated, sampled) {
+            return Err(fail(
+                &format!("{path}.sigma2_sampled"),
+                format!("{stated:e} differs from the re-derived {sampled:e}"),
+            ));
+        }
+        if r.reason.is_some() || r.anchor_verdict.is_some() {
+            return Err(fail(path, "a stable sub-box has no reason or anchor_verdict".into()));
+        }
+        if tally.sampled_max.as_ref().is_none_or(|m| sampled > m.0) {
+            tally.sampled_max = Some((sampled, at.clone()));
+        }
+        tally.sup = Some(tally.sup.take().map_or(s.clone(), |x: Rational| x.max(s.clone())));
+        Ok(LeafOutcome::Stable { choice, sigma2_upper: s, sampled, sampled_at: at })
+    }
+
+    /// A linearly unstable sub-box: the recorded criterion proves it.
+    fn unstable(&self, r: &SubBoxRecord, b: &ParamBox, path: &str) -> std::result::Result<LeafOutcome, CheckError> {
+        if self.excluded {
+            return Err(fail(
+                &format!("{path}.verdict"),
+                "mu_e is not an equilibrium (or the noise moves it) for some parameters of the box: only not_an_equilibrium, noise_incompatible or undecided sub-boxes".into(),
+            ));
+        }
+        let charpoly = self.charpoly.get_or_init(|| self.sym.characteristic_polynomial());
+        let criterion = ::boxes::certify::prove_unstable(self.sym, charpoly, b).ok_or_else(|| {
+            fail(&format!("{path}.verdict"), "linear instability is not proved on this sub-box".into())
+        })?;
+        if r.reason.as_deref() != Some(criterion.as_str()) {
+            return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
+        }
+        Self::proved_only(r, path, "linearly unstable")?;
+        if r.anchor_verdict.is_some() {
+            return Err(fail(&format!("{path}.anchor_verdict"), "only undecided sub-boxes state one".into()));
+        }
+        Ok(LeafOutcome::LinearlyUnstable { criterion })
+    }
+
+    /// A sub-box where `mu_e` is proved not an equilibrium, or the noise
+    /// proved to move it, by the recorded criterion.
+    fn excluded(&self, r: &SubBoxRecord, b: &ParamBox, path: &str) -> std::result::Result<LeafOutcome, CheckError> {
+        let outcome = ::boxes::prove_excluded(self.sym, b).filter(|o| o.verdict() == r.verdict).ok_or_else(|| {
+            fail(&format!("{path}.verdict"), format!("'{}' is not proved on this sub-box", r.verdict))
+        })?;
+        let (LeafOutcome::NotAnEquilibrium { criterion } | LeafOutcome::NoiseIncompatible { criterion }) = &outcome
+        else {
+            unreachable!("prove_excluded proves only these two")
+        };
+        if r.reason.as_deref() != Some(criterion.as_str()) {
+            return Err(fail(&format!("{path}.reason"), "is not the criterion that proves it".into()));
+        }
+        Self::proved_only(r, path, "not stable")?;
+        if r.anchor_verdict.is_some() {
+            return Err(fail(&format!("{path}.anchor_verdict"), "only undecided sub-boxes state one".into()));
+        }
+        Ok(outcome)
+    }
+
+    /// An undecided sub-box: its reason is a statement about how the
+    /// bisection ended there, checked as one, and the pointwise verdict it
+    /// states at its anchor is the pipeline's.
+    fn undecided(
+        &self,
+        r: &SubBoxRecord,
+        b: &ParamBox,
+        path: &str,
+        tally: &mut Tally,
+    ) -> std::result::Result<LeafOutcome, CheckError> {
+        Self::proved_only(r, path, "undecided")?;
+        let reason = r.reason.clone().unwrap_or_default();
+        let rpath = format!("{path}.reason");
+        match reason.as_str() {
+            x if x == self.spent_reason => tally.budget += 1,
+            ::boxes::certify::LARGEST_DEPTH
+            | ::boxes::certify::EQUILIBRIUM_UNRESOLVED
+            | ::boxes::certify::NOISE_UNRESOLVED => {
+                let expected = if self.excluded { self.unresolved } else { ::boxes::certify::LARGEST_DEPTH };
+                if reason != expected {
+                    return Err(fail(&rpath, format!("expected '{expected}' for this system")));
+                }
+                if r.depth != self.settings.max_depth as u64 {
+                    return Err(fail(
+                        &rpath,
+                        format!(
+                            "says the largest depth, but the sub-box is at depth {} of {}",
+                            r.depth, self.settings.max_depth
+                        ),
+                    ));
+                }
+                tally.at_depth_limit += 1;
+            }
+            ::boxes::certify::UNSTABLE_CORNERS => {
+                if self.excluded || !::boxes::certify::unstable_at_anchor_and_corners(self.system, b) {
+                    return Err(fail(
+                        &rpath,
+                        "the pipeline does not prove A unstable at the sub-box's anchor and every corner".into(),
+                    ));
+                }
+            }
+            _ => return Err(fail(&rpath, "is not a reason this engine gives for an undecided sub-box".into())),
+        }
+        // the pointwise verdict stated at the anchor is the pipeline's;
+        // sub-boxes left by the budget or bisected for a failing
+        // equilibrium or noise state none
+        if self.excluded || reason == self.spent_reason {
+            if r.anchor_verdict.is_some() {
+                return Err(fail(
+                    &format!("{path}.anchor_verdict"),
+                    "this sub-box was not analysed at its anchor".into(),
+                ));
+            }
+        } else {
+            let derived = ::boxes::certify::analyse_at(self.system, &b.anchor()).map(|(_, a)| a.verdict);
+            if r.anchor_verdict != derived {
+                return Err(fail(
+                    &format!("{path}.anchor_verdict"),
+                    format!(
+                        "is not the pipeline's verdict at the anchor ({})",
+                        derived.map_or("none: the pipeline could not run there", |v| v.as_str())
+                    ),
+                ));
+            }
+        }
+        Ok(LeafOutcome::Undecided { reason, anchor: r.anchor_verdict })
+    }
+}
+
+/// The budget: the bisection analyses every node of its binary tree but
+/// the sub-boxes left by the budget, `2 L - 1` nodes for `L` sub-boxes.
+/// Sub-boxes left by the budget mean that exactly `max_boxes` were
+/// analysed, and they are the last sub-boxes of the breadth-first order
+/// (no tightening follows a spent budget). Returns the limit that stopped
+/// the bisection, if any.
+fn check_budget(
+    doc: &BoxCertificateDocument,
+    order: &[usize],
+    leaves: &LeafCheck<'_>,
+    tally: &Tally,
+) -> std::result::Result<Option<&'static str>, CheckError> {
+    let (budget, budget_size) = (tally.budget, leaves.budget_size);
     let nodes = (2 * doc.sub_boxes.len()).saturating_sub(1);
-    let spent = |i: usize| doc.sub_boxes[i].reason.as_deref() == Some(spent_reason.as_str());
+    let spent = |i: usize| doc.sub_boxes[i].reason.as_deref() == Some(leaves.spent_reason.as_str());
     if let Some(first) = order.iter().position(|&i| spent(i)) {
         if let Some(&i) = order[first..].iter().find(|&&i| !spent(i)) {
             return Err(fail(
@@ -735,20 +859,27 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             format!("{} sub-boxes need more than the budget of {budget_size} analysed", doc.sub_boxes.len()),
         ));
     }
-    let limit = if budget > 0 {
+    Ok(if budget > 0 {
         Some("max_boxes")
-    } else if at_depth_limit > 0 {
+    } else if tally.at_depth_limit > 0 {
         Some("max_depth")
     } else {
         None
-    };
-    if doc.limit.as_deref() != limit {
-        return Err(fail(
-            "$.limit",
-            format!("the sub-boxes show that {} stopped the bisection", limit.unwrap_or("no limit")),
-        ));
-    }
-    let (verdict, reason) = ::boxes::verdict_of(&counts);
+    })
+}
+
+/// Every number and sentence derived from the sub-boxes: the verdict and
+/// its reason, the sup (exact and rounded up), the shares (exact volumes
+/// rounded once, compared exactly), the largest sample and the theorem.
+fn check_totals(
+    doc: &BoxCertificateDocument,
+    spec: &Spec,
+    section: &BoxSection,
+    excluded: bool,
+    tally: Tally,
+) -> std::result::Result<CheckReport, CheckError> {
+    let range = &section.range;
+    let (verdict, reason) = ::boxes::verdict_of(&tally.counts);
     if doc.verdict != verdict {
         return Err(fail(
             "$.verdict",
@@ -761,6 +892,7 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
             format!("is not the sentence for what the sub-boxes prove ('{}')", exact::cut(&reason, 200)),
         ));
     }
+    let sup = tally.sup;
     let stated_sup = doc.sup_sigma2_exact.as_ref().map(|x| x.0.clone());
     if stated_sup != sup {
         return Err(fail("$.sup_sigma2_exact", "is not the largest sub-box bound".into()));
@@ -769,39 +901,35 @@ pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, C
     if doc.sup_sigma2.map(|x| x.0) != sup_f {
         return Err(fail("$.sup_sigma2", "is not the exact bound rounded up".into()));
     }
-    // the shares are exact volumes rounded once: compared exactly
-    if doc.undecided_fraction.0 != fraction(&undecided, &range.volume()) {
+    if doc.undecided_fraction.0 != fraction(&tally.undecided, &range.volume()) {
         return Err(fail("$.undecided_fraction", "is not the undecided sub-boxes' share".into()));
     }
-    if doc.unstable_fraction.0 != fraction(&unstable_volume, &range.volume()) {
+    if doc.unstable_fraction.0 != fraction(&tally.unstable, &range.volume()) {
         return Err(fail("$.unstable_fraction", "is not the unstable sub-boxes' share".into()));
     }
-    let excluded_fraction = excluded.then(|| fraction(&excluded_volume, &range.volume()));
+    let excluded_fraction = excluded.then(|| fraction(&tally.excluded, &range.volume()));
     match (doc.excluded_fraction, excluded_fraction) {
         (None, None) => {}
         (Some(x), Some(y)) if x.0 == y => {}
         _ => return Err(fail("$.excluded_fraction", "is not the excluded sub-boxes' share (present exactly when the equilibrium or the noise fails for some parameter)".into())),
     }
-    match (&doc.sampled_max, &sampled_max) {
+    match (&doc.sampled_max, &tally.sampled_max) {
         (None, None) => {}
         (Some(stated), Some((v, at))) if close(stated.sigma2.0, *v) && &rationals(&stated.at) == at => {}
         _ => return Err(fail("$.sampled_max", "is not the largest re-derived sample".into())),
     }
-    let stable_volume = range.volume() - &unstable_volume - &excluded_volume - &undecided;
+    let stable_volume = range.volume() - &tally.unstable - &tally.excluded - &tally.undecided;
     let derived = statement(
-        &spec,
+        spec,
         section,
         verdict,
-        [&stable_volume, &unstable_volume, &excluded_volume, &undecided],
+        [&stable_volume, &tally.unstable, &tally.excluded, &tally.undecided],
         sup.as_ref(),
     );
     if doc.theorem != derived {
         return Err(fail("$.theorem", "is not the statement of what the sub-boxes prove".into()));
     }
-    let verdict = match verdict.at_every_point() {
-        Some(v) => v,
-        None => Verdict::Inconclusive,
-    };
+    let verdict = verdict.at_every_point().unwrap_or(Verdict::Inconclusive);
     let sigma2 = doc.sup_sigma2.map(|x| x.0).filter(|_| verdict == Verdict::Stable);
     Ok(CheckReport { name: spec.name.clone(), verdict, level: None, sigma2 })
 }

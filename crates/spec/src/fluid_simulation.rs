@@ -301,32 +301,90 @@ pub fn simulate_fluid_with(
     progress: &Progress,
     notes: Notes<'_>,
 ) -> Result<FluidSimulation, FluidSimulationError> {
-    let compressible = matches!(spec.problem.model, FluidModel::Compressible { .. });
-    let default_ny = if compressible { FLUID_SIMULATION_DEFAULT_NY.1 } else { FLUID_SIMULATION_DEFAULT_NY.0 };
-    let ny = options.ny.unwrap_or(spec.problem.ny.min(default_ny));
-    let (low, high) = (crate::NY_RANGE.0, FLUID_SIMULATION_MAX_NY);
-    if !(low..=high).contains(&ny) {
-        return Err(invalid(
-            "ny",
-            format!("the simulation's grid must have {low} to {high} points (dense SDE), got {ny}"),
-        ));
+    let shape = RunShape::of(spec, options)?;
+    let (problem, analysis) = stable_analysis(spec, shape.ny, progress)?;
+    let m = chosen_mode(options, &analysis, shape.compressible, problem.x_modes)?;
+    let row = analysis
+        .modes
+        .iter()
+        .find(|r| r.m == m)
+        .ok_or_else(|| FluidSimulationError::Failed(format!("mode {m} missing from the analysis")))?;
+    let (certified, verified) = (growth(row), row.sigma2_upper.is_some());
+    let ny = shape.ny;
+    let study = mode_study(&problem, analysis.form.galilean_shift, m).ok_or_else(|| {
+        FluidSimulationError::Unrepresentable(format!(
+            "the dense SDE of x-mode {m} at ny = {ny} could not be formed in doubles (its generator form overflows, or its form is not definite in floating point: noise amplitudes near 1e150 and above do this; the certificate runs on normalised noise, the simulation cannot): nothing to simulate"
+        ))
+    })?;
+    let plan = plan_run(&study, &shape, options, certified, progress, notes)?;
+    progress.check()?;
+    let series = run_series(&study, &plan, &shape, options.seed, progress)?;
+    Ok(summarise(
+        spec,
+        &problem,
+        &analysis,
+        &study,
+        &shape,
+        &plan,
+        options.seed,
+        Certified { m, certified, verified },
+        series,
+        notes,
+    ))
+}
+
+/// The certified growth of a mode: its proved bound, else its estimate.
+fn growth(r: &ModeResult) -> f64 {
+    r.sigma2_upper.unwrap_or(r.sigma2)
+}
+
+/// The run's grid, paths and time step, checked.
+struct RunShape {
+    compressible: bool,
+    ny: usize,
+    paths: usize,
+    dt: f64,
+}
+
+impl RunShape {
+    fn of(spec: &FluidSpec, options: &FluidSimulationOptions) -> Result<Self, FluidSimulationError> {
+        let compressible = matches!(spec.problem.model, FluidModel::Compressible { .. });
+        let default_ny = if compressible { FLUID_SIMULATION_DEFAULT_NY.1 } else { FLUID_SIMULATION_DEFAULT_NY.0 };
+        let ny = options.ny.unwrap_or(spec.problem.ny.min(default_ny));
+        let (low, high) = (crate::NY_RANGE.0, FLUID_SIMULATION_MAX_NY);
+        if !(low..=high).contains(&ny) {
+            return Err(invalid(
+                "ny",
+                format!("the simulation's grid must have {low} to {high} points (dense SDE), got {ny}"),
+            ));
+        }
+        let paths = options.paths.unwrap_or(FLUID_SIMULATION_DEFAULT_PATHS);
+        if !(2..=MAX_PATHS).contains(&paths) {
+            return Err(invalid("paths", format!("need 2 to {MAX_PATHS} paths, got {paths}")));
+        }
+        let dt = options.dt;
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(invalid("dt", format!("must be positive and finite, got {dt}")));
+        }
+        if options.outputs == 0 {
+            return Err(invalid("outputs", "need at least one output time".into()));
+        }
+        // the analysis at this grid has the spec's work limits (they depend
+        // on ny: a spec accepted at ny = 16 may not be at 512)
+        let fields = spec.problem.profile.eta.len();
+        crate::fluid::work_limits(spec.problem.profile.boundary, ny, spec.problem.x_modes, fields)
+            .map_err(|(_, message)| invalid("ny", format!("at ny = {ny}: {message}")))?;
+        Ok(RunShape { compressible, ny, paths, dt })
     }
-    let paths = options.paths.unwrap_or(FLUID_SIMULATION_DEFAULT_PATHS);
-    if !(2..=MAX_PATHS).contains(&paths) {
-        return Err(invalid("paths", format!("need 2 to {MAX_PATHS} paths, got {paths}")));
-    }
-    let dt = options.dt;
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(invalid("dt", format!("must be positive and finite, got {dt}")));
-    }
-    if options.outputs == 0 {
-        return Err(invalid("outputs", "need at least one output time".into()));
-    }
-    // the analysis at this grid has the spec's work limits (they depend on
-    // ny: a spec accepted at ny = 16 may not be at 512)
-    let fields = spec.problem.profile.eta.len();
-    crate::fluid::work_limits(spec.problem.profile.boundary, ny, spec.problem.x_modes, fields)
-        .map_err(|(_, message)| invalid("ny", format!("at ny = {ny}: {message}")))?;
+}
+
+/// The spec's problem at the simulation's grid and its analysis there,
+/// which must be stable with a certified mode (else nothing is simulated).
+fn stable_analysis(
+    spec: &FluidSpec,
+    ny: usize,
+    progress: &Progress,
+) -> Result<(FluidProblem, fluid::analysis::FluidAnalysis), FluidSimulationError> {
     let problem = FluidProblem { ny, ..spec.problem.clone() };
     let analysis =
         with_cancel_of(progress, |inner| analyse_with(&problem, &spec.settings, inner)).map_err(|e| match e {
@@ -340,10 +398,20 @@ pub fn simulate_fluid_with(
             reason: analysis.reason.clone(),
         });
     }
-    let growth = |r: &ModeResult| r.sigma2_upper.unwrap_or(r.sigma2);
-    let m = match options.mode {
-        Some(m) if (1..=problem.x_modes).contains(&m) => m,
-        Some(m) => return Err(invalid("mode", format!("the spec has x-modes 1 to {}, got {m}", problem.x_modes))),
+    Ok((problem, analysis))
+}
+
+/// The x-mode to simulate: the one asked for, else (compressible) the
+/// gravest, else the largest certified growth.
+fn chosen_mode(
+    options: &FluidSimulationOptions,
+    analysis: &fluid::analysis::FluidAnalysis,
+    compressible: bool,
+    x_modes: usize,
+) -> Result<usize, FluidSimulationError> {
+    Ok(match options.mode {
+        Some(m) if (1..=x_modes).contains(&m) => m,
+        Some(m) => return Err(invalid("mode", format!("the spec has x-modes 1 to {x_modes}, got {m}"))),
         // Compressible: the gravest mode. The pointwise noise of the
         // discrete SDE differs from the certified continuum generator form
         // by the Casimir defect, which grows with k (docs/fluids.md §1b): on
@@ -362,20 +430,30 @@ pub fn simulate_fluid_with(
             }
             best.m
         }
-    };
-    let row = analysis
-        .modes
-        .iter()
-        .find(|r| r.m == m)
-        .ok_or_else(|| FluidSimulationError::Failed(format!("mode {m} missing from the analysis")))?;
-    let (certified, verified) = (growth(row), row.sigma2_upper.is_some());
-    let study = mode_study(&problem, analysis.form.galilean_shift, m).ok_or_else(|| {
-        FluidSimulationError::Unrepresentable(format!(
-            "the dense SDE of x-mode {m} at ny = {ny} could not be formed in doubles (its generator form overflows, or its form is not definite in floating point: noise amplitudes near 1e150 and above do this; the certificate runs on normalised noise, the simulation cannot): nothing to simulate"
-        ))
-    })?;
-    let rate = study.initial_rate();
+    })
+}
 
+/// What the run will do: its output times, whether the exact moment runs,
+/// and the costs estimated for it.
+struct RunPlan {
+    grid: TimeGrid,
+    run_exact: bool,
+    cost: Estimate,
+    estimated_seconds: f64,
+}
+
+/// The run's times and costs: `t_end` (asked, or one growth time shortened
+/// to what a default run is kept to), the measured costs of the ensemble
+/// and the exact moment, and the refusals and notes they imply.
+fn plan_run(
+    study: &fluid::analysis::ModeStudy,
+    shape: &RunShape,
+    options: &FluidSimulationOptions,
+    certified: f64,
+    progress: &Progress,
+    notes: Notes<'_>,
+) -> Result<RunPlan, FluidSimulationError> {
+    let (dt, paths, ny) = (shape.dt, shape.paths, shape.ny);
     // Times: `steps` of `dt`, recorded every `record_every`. Default: one
     // growth time 1/Sigma_k^2 (see FLUID_SIMULATION_GROWTH_TIMES), at
     // least 1, shortened to what FLUID_SIMULATION_DEFAULT_SECONDS of
@@ -401,40 +479,8 @@ pub fn simulate_fluid_with(
         ));
     }
     let mut grid = time_grid(t_end, dt, options.outputs)?;
-
-    // Costs, measured here: a pilot of the ensemble's own stepping (on the
-    // thread pool, under the machine's present load) and one Taylor step
-    // of the exact moment time them; a constant rate per flop cannot know
-    // the machine, its load or the cost of the noise's phases.
-    progress.check()?;
-    // The pilot: PILOT_FLOPS worth of path-steps, at most a tenth of the
-    // run's, as paths of the run's length or fewer steps (at least twice
-    // the pool's threads in paths, so that none idles).
-    let pool = rayon::current_num_threads().max(1);
-    let run_path_steps = paths as f64 * grid.steps as f64;
-    let pilot_path_steps = (PILOT_FLOPS / study.flops_per_path_step()).min(run_path_steps / 10.0).max(1.0);
-    let pilot_steps = ((pilot_path_steps / (2 * pool) as f64) as usize).clamp(1, grid.steps);
-    let pilot_paths = ((pilot_path_steps / pilot_steps as f64).ceil() as usize).clamp(1, paths);
-    let timing = study
-        .time_ensemble(dt, pilot_steps, pilot_paths, options.seed)
-        .ok_or_else(|| FluidSimulationError::Failed("the drift's propagator could not be formed".into()))?;
-    progress.check()?;
-    let step_flops = study.exact_step_flops();
-    // One Taylor step is timed when the flop count says it is short (at
-    // ny = 256 in the compressible model it takes about a minute); the
-    // seconds per flop it gives scale the whole exact moment's count.
-    let exact_rate = if step_flops / FLOPS_PER_SECOND <= EXACT_PILOT_SECONDS {
-        study.time_exact_step(grid.t_end, grid.records).map(|s| s / step_flops)
-    } else {
-        None
-    };
-    let estimate = |grid: &TimeGrid| -> Estimate {
-        let path_steps = paths as f64 * grid.steps as f64;
-        let monte_carlo = timing.setup_seconds + timing.path_step_seconds * path_steps;
-        let (flops, units) = study.exact_growth_cost(grid.t_end, grid.records);
-        let exact = flops * exact_rate.unwrap_or(1.0 / FLOPS_PER_SECOND);
-        Estimate { path_steps, monte_carlo, exact, exact_units: units }
-    };
+    let costs = measure_costs(study, &grid, dt, paths, options.seed, progress)?;
+    let estimate = |grid: &TimeGrid| costs.estimate(study, paths, grid);
     if options.t_end.is_none() {
         // (an exact moment of too many Taylor steps is not run: not counted)
         let seconds = |t: f64| {
@@ -456,26 +502,26 @@ pub fn simulate_fluid_with(
         }
     }
     let cost = estimate(&grid);
-    let TimeGrid { steps, record_every, records, t_end, asked } = grid;
     // (said only of an end asked for: a default one is a time scale, not a time)
-    if options.t_end.is_some() && (t_end - asked).abs() > 1e-9 * asked {
+    if options.t_end.is_some() && (grid.t_end - grid.asked).abs() > 1e-9 * grid.asked {
         notes(format!(
-            "the run ends at t = {} ({records} output times of {record_every} steps of {}), not at t_end = {}",
-            short(t_end),
+            "the run ends at t = {} ({} output times of {} steps of {}), not at t_end = {}",
+            short(grid.t_end),
+            grid.records,
+            grid.record_every,
             short(dt),
-            short(asked)
+            short(grid.asked)
         ));
     }
-    let Estimate { path_steps, monte_carlo: mc_seconds, exact: exact_seconds, exact_units } = cost;
-    if mc_seconds > FLUID_SIMULATION_SECONDS && !options.force {
+    if cost.monte_carlo > FLUID_SIMULATION_SECONDS && !options.force {
         return Err(FluidSimulationError::TooLong {
-            path_steps,
+            path_steps: cost.path_steps,
             unknowns: study.unknowns(),
-            minutes: mc_seconds / 60.0,
+            minutes: cost.monte_carlo / 60.0,
         });
     }
-    let run_exact = exact_seconds.is_finite() && (exact_seconds <= FLUID_EXACT_SECONDS || options.force);
-    if !exact_seconds.is_finite() {
+    let run_exact = cost.exact.is_finite() && (cost.exact <= FLUID_EXACT_SECONDS || options.force);
+    if !cost.exact.is_finite() {
         notes(format!(
             "the exact second moment would need more than {} Taylor steps per output time (the noise's amplitude): not run",
             fluid::simulate::MAX_TAYLOR_STEPS
@@ -483,35 +529,147 @@ pub fn simulate_fluid_with(
     } else if !run_exact {
         notes(format!(
             "the exact second moment would take about {:.0} minutes at ny = {ny}: skipped (forcing runs it; a smaller ny is faster)",
-            exact_seconds / 60.0
+            cost.exact / 60.0
         ));
     }
     let estimated_seconds = cost.wall(run_exact);
     if estimated_seconds > 10.0 {
         notes(format!(
-            "about {estimated_seconds:.0} s of computation ({path_steps:.2e} path-steps on {} threads{})",
+            "about {estimated_seconds:.0} s of computation ({:.2e} path-steps on {} threads{})",
+            cost.path_steps,
             options.threads,
-            if exact_rate.is_some() { "; timed by a pilot run" } else { "; the exact moment by its flop count" }
+            if costs.exact_rate.is_some() { "; timed by a pilot run" } else { "; the exact moment by its flop count" }
         ));
     }
+    Ok(RunPlan { grid, run_exact, cost, estimated_seconds })
+}
+
+/// The costs measured on this machine: the ensemble's by a pilot of its
+/// own stepping, the exact moment's by one timed Taylor step (seconds per
+/// flop), when that step is short.
+struct Costs {
+    timing: fluid::analysis::EnsembleTiming,
+    exact_rate: Option<f64>,
+}
+
+impl Costs {
+    /// The estimate for a run of `paths` on `grid`.
+    fn estimate(&self, study: &fluid::analysis::ModeStudy, paths: usize, grid: &TimeGrid) -> Estimate {
+        let path_steps = paths as f64 * grid.steps as f64;
+        let monte_carlo = self.timing.setup_seconds + self.timing.path_step_seconds * path_steps;
+        let (flops, units) = study.exact_growth_cost(grid.t_end, grid.records);
+        let exact = flops * self.exact_rate.unwrap_or(1.0 / FLOPS_PER_SECOND);
+        Estimate { path_steps, monte_carlo, exact, exact_units: units }
+    }
+}
+
+/// Costs, measured here: a pilot of the ensemble's own stepping (on the
+/// thread pool, under the machine's present load) and one Taylor step of
+/// the exact moment time them; a constant rate per flop cannot know the
+/// machine, its load or the cost of the noise's phases.
+fn measure_costs(
+    study: &fluid::analysis::ModeStudy,
+    grid: &TimeGrid,
+    dt: f64,
+    paths: usize,
+    seed: u64,
+    progress: &Progress,
+) -> Result<Costs, FluidSimulationError> {
     progress.check()?;
+    // The pilot: PILOT_FLOPS worth of path-steps, at most a tenth of the
+    // run's, as paths of the run's length or fewer steps (at least twice
+    // the pool's threads in paths, so that none idles).
+    let pool = rayon::current_num_threads().max(1);
+    let run_path_steps = paths as f64 * grid.steps as f64;
+    let pilot_path_steps = (PILOT_FLOPS / study.flops_per_path_step()).min(run_path_steps / 10.0).max(1.0);
+    let pilot_steps = ((pilot_path_steps / (2 * pool) as f64) as usize).clamp(1, grid.steps);
+    let pilot_paths = ((pilot_path_steps / pilot_steps as f64).ceil() as usize).clamp(1, paths);
+    let timing = study
+        .time_ensemble(dt, pilot_steps, pilot_paths, seed)
+        .ok_or_else(|| FluidSimulationError::Failed("the drift's propagator could not be formed".into()))?;
+    progress.check()?;
+    let step_flops = study.exact_step_flops();
+    // One Taylor step is timed when the flop count says it is short (at
+    // ny = 256 in the compressible model it takes about a minute); the
+    // seconds per flop it gives scale the whole exact moment's count.
+    let exact_rate = if step_flops / FLOPS_PER_SECOND <= EXACT_PILOT_SECONDS {
+        study.time_exact_step(grid.t_end, grid.records).map(|s| s / step_flops)
+    } else {
+        None
+    };
+    Ok(Costs { timing, exact_rate })
+}
+
+/// The series a run produced.
+struct Series {
+    times: Vec<f64>,
+    mean: Vec<f64>,
+    std_error: Vec<f64>,
+    exact: Option<Vec<f64>>,
+    run_seconds: f64,
+}
+
+/// The ensemble and (beside it, on its own thread) the exact second
+/// moment, with progress counted over both.
+fn run_series(
+    study: &fluid::analysis::ModeStudy,
+    plan: &RunPlan,
+    shape: &RunShape,
+    seed: u64,
+    progress: &Progress,
+) -> Result<Series, FluidSimulationError> {
+    let TimeGrid { steps, record_every, records, t_end, .. } = plan.grid;
+    let (dt, paths) = (shape.dt, shape.paths);
     // (capped: a forced run of 1e7 paths of 1e8 steps would pass u64, and
     // the count only needs its proportions)
-    let planned = study.ensemble_units(steps, paths).saturating_add(if run_exact { exact_units } else { 0 });
+    let planned =
+        study.ensemble_units(steps, paths).saturating_add(if plan.run_exact { plan.cost.exact_units } else { 0 });
     progress.plan(planned.min(u64::MAX / 4));
     let started = std::time::Instant::now();
     let (rows, exact) = rayon::join(
-        || study.ensemble_with(dt, steps, record_every, paths, options.seed, progress),
-        || run_exact.then(|| study.exact_growth_with(t_end, records, progress)).transpose(),
+        || study.ensemble_with(dt, steps, record_every, paths, seed, progress),
+        || plan.run_exact.then(|| study.exact_growth_with(t_end, records, progress)).transpose(),
     );
     let run_seconds = started.elapsed().as_secs_f64();
     let (rows, exact) = (rows?, exact?);
     progress.settle();
     let rows = rows.ok_or_else(|| FluidSimulationError::Failed("the drift's propagator could not be formed".into()))?;
-    let times: Vec<f64> = rows.iter().map(|r| r.t).collect();
-    let mean: Vec<f64> = rows.iter().map(|r| r.mean).collect();
-    let std_error: Vec<f64> = rows.iter().map(|r| r.std_error).collect();
-    let exact: Option<Vec<f64>> = exact.filter(|e| e.len() == records).map(|e| e.iter().map(|(_, v)| *v).collect());
+    Ok(Series {
+        times: rows.iter().map(|r| r.t).collect(),
+        mean: rows.iter().map(|r| r.mean).collect(),
+        std_error: rows.iter().map(|r| r.std_error).collect(),
+        exact: exact.filter(|e| e.len() == records).map(|e| e.iter().map(|(_, v)| *v).collect()),
+        run_seconds,
+    })
+}
+
+/// The mode simulated and its certified growth.
+struct Certified {
+    m: usize,
+    certified: f64,
+    verified: bool,
+}
+
+/// What the run shows, beside the certified bound: the report and the
+/// typed result.
+#[allow(clippy::too_many_arguments)]
+fn summarise(
+    spec: &FluidSpec,
+    problem: &FluidProblem,
+    analysis: &fluid::analysis::FluidAnalysis,
+    study: &fluid::analysis::ModeStudy,
+    shape: &RunShape,
+    plan: &RunPlan,
+    seed: u64,
+    mode: Certified,
+    series: Series,
+    notes: Notes<'_>,
+) -> FluidSimulation {
+    let Certified { m, certified, verified } = mode;
+    let Series { times, mean, std_error, exact, run_seconds } = series;
+    let TimeGrid { steps, records, t_end, .. } = plan.grid;
+    let (compressible, ny, paths, dt) = (shape.compressible, shape.ny, shape.paths, shape.dt);
+    let rate = study.initial_rate();
     let bound: Vec<f64> = times.iter().map(|t| (certified * t).exp()).collect();
     let rate_curve: Vec<f64> = times.iter().map(|t| (rate * t).exp()).collect();
     let overflowed = mean
@@ -526,8 +684,6 @@ pub fn simulate_fluid_with(
             "{overflowed} values of the series are not finite (beyond the range of doubles; null in the report): a shorter t_end shows the growth"
         ));
     }
-
-    // What the run shows.
     let exact_over_bound = exact.as_ref().map(|e| e.iter().zip(&bound).map(|(e, b)| e / b).fold(0.0, f64::max));
     // The splitting's bias is O(dt^2); 4 standard errors plus 1e-3 of the
     // value (as in tests/it/fluid.rs) is the agreement asked of each time.
@@ -563,7 +719,7 @@ pub fn simulate_fluid_with(
         "dt": dt,
         "steps": steps,
         "t_end": t_end,
-        "seed": options.seed,
+        "seed": seed,
         "times": times,
         "monte_carlo_mean": mean,
         "monte_carlo_std_error": std_error,
@@ -578,7 +734,7 @@ pub fn simulate_fluid_with(
             "paper_bound_exceeded_at": paper_exceeded_at,
         },
     });
-    Ok(FluidSimulation {
+    FluidSimulation {
         report,
         compressible,
         m,
@@ -602,9 +758,9 @@ pub fn simulate_fluid_with(
         exact_over_bound,
         agreeing,
         paper_exceeded_at,
-        estimated_seconds,
+        estimated_seconds: plan.estimated_seconds,
         run_seconds,
-    })
+    }
 }
 
 /// The output times of a run: `steps` of `dt`, recorded every
