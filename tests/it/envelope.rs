@@ -85,7 +85,8 @@ fn malformed_headers_name_the_field() {
     let good: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(fixture_path("rigid-body-major-axis.cert.json")).unwrap())
             .unwrap();
-    let cases: [(&str, fn(&mut serde_json::Value)); 8] = [
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit); 8] = [
         ("$.kind", |c| c["kind"] = json!("lie_poisson")),
         ("$.kind", |c| c["kind"] = json!("../fluid")),
         ("$.kind", |c| c["kind"] = json!(7)),

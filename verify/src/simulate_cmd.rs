@@ -207,30 +207,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     let scheme = Scheme::from_name(&args.scheme)
         .ok_or_else(|| bad(format!("--scheme: '{}' is not 'lie' or 'heun'", excerpt(&args.scheme))))?;
     let cert = spec::certify_lie(&spec);
-    let system = &spec.system;
-    let coords = system.algebra().coordinates();
-    let observable = match &args.observable {
-        Some(name) => Some(coords.iter().position(|c| c == name).ok_or_else(|| {
-            bad(format!("--observable: unknown coordinate '{}' (coordinates: {})", excerpt(name), coords.join(", ")))
-        })?),
-        None => None,
-    };
-    let settings = StudySettings {
-        paths,
-        dt: args.dt,
-        t_end: args.t_end,
-        outputs: args.outputs,
-        seed: args.seed,
-        bins: args.bins,
-        scheme,
-        observable,
-        epsilon: args.epsilon.or(spec.stopping.map(|s| s.epsilon)).unwrap_or(0.1),
-        delta: args.delta.or(spec.stopping.map(|s| s.delta)).unwrap_or(1e-3),
-    };
-    let prepared = simulate::prepare(system, &cert.analysis, &settings).map_err(|e| study_failure(e, coords))?;
-    let (epsilon, delta, sigma2, stopping_time) =
-        (prepared.epsilon, prepared.delta, prepared.sigma2, prepared.stopping_time);
-    let observable = prepared.observable;
+    let coords = spec.system.algebra().coordinates();
+    let settings = study_settings(args, &spec, paths, scheme, coords)?;
+    let prepared = simulate::prepare(&spec.system, &cert.analysis, &settings).map_err(|e| study_failure(e, coords))?;
     let shard = match &args.shard {
         Some(text) => {
             let s = sweep::Shard::parse(text).map_err(|m| bad(format!("--shard '{}': {m}", excerpt(text))))?;
@@ -242,6 +221,64 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     // carry the same identity, and `--merge` insists on it.
     let identity = simulate::study_identity(&spec::spec_digest(&spec.raw), &spec.name, &settings, &prepared, coords);
     let threads = rayon::current_num_threads() as f64;
+    announce_cost(args, &prepared, shard, threads)?;
+    let run = Run {
+        args,
+        name: &spec.name,
+        coords,
+        prepared: &prepared,
+        paths,
+        scheme,
+        file_stem: file_stem_noted(&spec.name),
+    };
+    let Some(sums) = run.sums(shard, &identity)? else {
+        return Ok(());
+    };
+    let study = simulate::finish(&prepared, &sums);
+    let verdict = cert.json["verdict"].as_str().unwrap_or_default();
+    let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, threads as u64);
+    run.write_files(&report, &study)?;
+    run.write_charts(&study, &spec.system)?;
+    run.print_summary(&study);
+    Ok(())
+}
+
+/// The study's settings from the flags and the spec's stopping question.
+fn study_settings(
+    args: &SimulateArgs,
+    spec: &spec::Spec,
+    paths: usize,
+    scheme: Scheme,
+    coords: &[String],
+) -> Result<StudySettings, Failure> {
+    let observable = match &args.observable {
+        Some(name) => Some(coords.iter().position(|c| c == name).ok_or_else(|| {
+            bad(format!("--observable: unknown coordinate '{}' (coordinates: {})", excerpt(name), coords.join(", ")))
+        })?),
+        None => None,
+    };
+    Ok(StudySettings {
+        paths,
+        dt: args.dt,
+        t_end: args.t_end,
+        outputs: args.outputs,
+        seed: args.seed,
+        bins: args.bins,
+        scheme,
+        observable,
+        epsilon: args.epsilon.or(spec.stopping.map(|s| s.epsilon)).unwrap_or(0.1),
+        delta: args.delta.or(spec.stopping.map(|s| s.delta)).unwrap_or(1e-3),
+    })
+}
+
+/// Refuse a run estimated above 15 minutes (unless forced), and say when
+/// the default end time was moved or the run takes more than 10 s.
+fn announce_cost(
+    args: &SimulateArgs,
+    prepared: &simulate::Prepared<'_>,
+    shard: Option<(u64, u64)>,
+    threads: f64,
+) -> Result<(), Failure> {
     // More threads than cores (RAYON_NUM_THREADS up to 4 per core) do not
     // run faster: the estimate counts the cores that work.
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get) as f64;
@@ -258,7 +295,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
     if args.t_end.is_none() {
         // The default 8 T(eps, delta) is kept within [1, 200]: say so when
         // it was moved.
-        if let Some(t) = stopping_time.filter(|t| t.is_finite()) {
+        if let Some(t) = prepared.stopping_time.filter(|t| t.is_finite()) {
             let wanted = 8.0 * t;
             if wanted != prepared.ensemble.t_end {
                 eprintln!(
@@ -278,9 +315,34 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             threads
         );
     }
-    let file_stem = file_stem_noted(&spec.name);
-    let (index, count) = shard.unwrap_or((0, 1));
-    let sums = if args.merge.is_empty() {
+    Ok(())
+}
+
+/// One study's run: what its steps share.
+struct Run<'a> {
+    args: &'a SimulateArgs,
+    name: &'a str,
+    coords: &'a [String],
+    prepared: &'a simulate::Prepared<'a>,
+    paths: usize,
+    scheme: Scheme,
+    /// A safe stem: the name is data, and every file stays inside --out.
+    file_stem: String,
+}
+
+impl Run<'_> {
+    /// The study's exact sums: run here (all of it, or a shard, written to
+    /// its file: then `None`), or merged from the shard files of `--merge`.
+    fn sums(
+        &self,
+        shard: Option<(u64, u64)>,
+        identity: &serde_json::Value,
+    ) -> Result<Option<simulate::StudyShard>, Failure> {
+        let (args, prepared, paths) = (self.args, self.prepared, self.paths);
+        if !args.merge.is_empty() {
+            return merge_shards(&args.merge, identity, prepared).map(Some);
+        }
+        let (index, count) = shard.unwrap_or((0, 1));
         let shard_paths = simulate::block_paths(paths, &simulate::shard_blocks(paths, index, count)).len();
         let bar =
             crate::progress_bar(shard_paths as u64 * prepared.ensembles(), "{bar:40} {pos}/{len} paths ({eta} left)");
@@ -290,93 +352,105 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
             }
         };
         let never = std::sync::atomic::AtomicBool::new(false);
-        let sums = simulate::run_shard_cancellable(&prepared, index, count, &tick, &never)
-            .map_err(|e| study_failure(e, coords))?;
+        let sums = simulate::run_shard_cancellable(prepared, index, count, &tick, &never)
+            .map_err(|e| study_failure(e, self.coords))?;
         if let Some(b) = &bar {
             b.finish_and_clear();
         }
-        if shard.is_some() {
-            let path = args.out.join(format!("{file_stem}.shard-{index}-of-{count}.json"));
-            let document = simulate::shard_document(&identity, &sums);
-            write_atomic(&path, spec::to_pretty_json(&document).as_bytes()).map_err(|e| write_failure(&path, &e))?;
-            eprintln!(
-                "{}: shard {index} of {count}: {} paths of each ensemble; merge all {count} with `verify simulate {} [the same options] --merge FILES`; wrote {}",
-                excerpt(&spec.name),
-                sums.nonlinear.paths,
-                args.spec.display(),
-                path.display()
-            );
-            return Ok(());
+        if shard.is_none() {
+            return Ok(Some(sums));
         }
-        sums
-    } else {
-        merge_shards(&args.merge, &identity, &prepared)?
-    };
-    let study = simulate::finish(&prepared, &sums);
-    let Study { nonlinear, linear, exact_over_delta: exact, worst_over_delta: worst, bound_over_delta: bound, .. } =
-        &study;
-    let lyapunov = study.lyapunov;
-    let times = &nonlinear.times;
-    let t_end = prepared.ensemble.t_end;
-    // Outputs.
-    let dir = &args.out;
-    // The name is data: a safe stem (above) keeps every file inside --out.
-    let name = excerpt(&spec.name);
-    let observable_name = &coords[observable];
-    let verdict = cert.json["verdict"].as_str().unwrap_or_default();
-    let report = simulate::study_report(&spec.name, verdict, &prepared, &settings, &study, coords, threads as u64);
-    let json_path = dir.join(format!("{file_stem}.json"));
-    write_atomic(&json_path, spec::to_pretty_json(&report).as_bytes()).map_err(|e| write_failure(&json_path, &e))?;
-    if args.npz {
-        let npz_path = dir.join(format!("{file_stem}.npz"));
-        crate::npz_out::write_json_arrays(&npz_path, &report).map_err(|e| write_failure(&npz_path, &e))?;
+        let path = args.out.join(format!("{}.shard-{index}-of-{count}.json", self.file_stem));
+        let document = simulate::shard_document(identity, &sums);
+        write_atomic(&path, spec::to_pretty_json(&document).as_bytes()).map_err(|e| write_failure(&path, &e))?;
+        eprintln!(
+            "{}: shard {index} of {count}: {} paths of each ensemble; merge all {count} with `verify simulate {} [the same options] --merge FILES`; wrote {}",
+            excerpt(self.name),
+            sums.nonlinear.paths,
+            args.spec.display(),
+            path.display()
+        );
+        Ok(None)
     }
-    write_csv(
-        &dir.join(format!("{file_stem}.csv")),
-        nonlinear,
-        linear.as_ref(),
-        exact.as_deref(),
-        bound.as_deref(),
-        worst.as_deref(),
-        delta,
-    )?;
-    let mean_obs: Vec<f64> = nonlinear.mean.iter().map(|m| m[observable]).collect();
-    let mut other_means = vec![];
-    if args.compare_isotropic {
+
+    /// The report (JSON, and `.npz` with `--npz`) and the CSV series.
+    fn write_files(&self, report: &serde_json::Value, study: &Study) -> Result<(), Failure> {
+        let dir = &self.args.out;
+        let json_path = dir.join(format!("{}.json", self.file_stem));
+        write_atomic(&json_path, spec::to_pretty_json(report).as_bytes()).map_err(|e| write_failure(&json_path, &e))?;
+        if self.args.npz {
+            let npz_path = dir.join(format!("{}.npz", self.file_stem));
+            crate::npz_out::write_json_arrays(&npz_path, report).map_err(|e| write_failure(&npz_path, &e))?;
+        }
+        write_csv(
+            &dir.join(format!("{}.csv", self.file_stem)),
+            &study.nonlinear,
+            study.linear.as_ref(),
+            study.exact_over_delta.as_deref(),
+            study.bound_over_delta.as_deref(),
+            study.worst_over_delta.as_deref(),
+            self.prepared.delta,
+        )
+    }
+
+    /// With `--compare-isotropic`: the observable's mean under isotropic
+    /// noise of the same amplitude, on the same ensemble settings.
+    fn isotropic_means(&self, system: &casimir::System) -> Result<Vec<(String, Vec<f64>)>, Failure> {
+        if !self.args.compare_isotropic {
+            return Ok(vec![]);
+        }
         let iso = isotropic_system(system)
             .ok_or_else(|| bad("--compare-isotropic: the spec has no noise to compare with".into()))?;
         let model = simulate::Model::new(&iso);
-        let target = simulate::Target::Nonlinear { model: &model, scheme, mu0: prepared.mu0.clone() };
-        let bar = crate::progress_bar(paths as u64, "{bar:40} {pos}/{len} paths, isotropic noise ({eta} left)");
+        let target = simulate::Target::Nonlinear { model: &model, scheme: self.scheme, mu0: self.prepared.mu0.clone() };
+        let bar = crate::progress_bar(self.paths as u64, "{bar:40} {pos}/{len} paths, isotropic noise ({eta} left)");
         let tick = |k: u64| {
             if let Some(b) = &bar {
                 b.inc(k)
             }
         };
-        let stats = simulate::run_ensemble(&target, &prepared.ensemble, &tick).map_err(ensemble_failure)?;
+        let stats = simulate::run_ensemble(&target, &self.prepared.ensemble, &tick).map_err(ensemble_failure)?;
         if let Some(b) = &bar {
             b.finish_and_clear();
         }
-        other_means.push((
+        let observable = self.prepared.observable;
+        Ok(vec![(
             "mean, isotropic noise (same amplitude)".to_string(),
             stats.mean.iter().map(|m| m[observable]).collect(),
-        ));
+        )])
     }
-    write_density(
-        &dir.join(format!("{file_stem}-density")),
-        &DensityChart {
-            title: format!("{name}: density of {observable_name} ({} paths, {})", paths, scheme.as_str()),
-            observable: observable_name,
-            times,
-            histogram: &nonlinear.histogram,
-            range: study.histogram_range,
-            mean: mean_obs,
-            other_means,
-            stopping_time,
-        },
-    )
-    .map_err(io)?;
-    if let Some(lin) = &linear {
+
+    /// The observable's density, and the growth of `E|dmu_t|_P^2` against
+    /// the certified bound.
+    fn write_charts(&self, study: &Study, system: &casimir::System) -> Result<(), Failure> {
+        let Study {
+            nonlinear, linear, exact_over_delta: exact, worst_over_delta: worst, bound_over_delta: bound, ..
+        } = study;
+        let prepared = self.prepared;
+        let (observable, delta, stopping_time) = (prepared.observable, prepared.delta, prepared.stopping_time);
+        let times = &nonlinear.times;
+        let dir = &self.args.out;
+        let name = excerpt(self.name);
+        let observable_name = &self.coords[observable];
+        let mean_obs: Vec<f64> = nonlinear.mean.iter().map(|m| m[observable]).collect();
+        let other_means = self.isotropic_means(system)?;
+        write_density(
+            &dir.join(format!("{}-density", self.file_stem)),
+            &DensityChart {
+                title: format!("{name}: density of {observable_name} ({} paths, {})", self.paths, self.scheme.as_str()),
+                observable: observable_name,
+                times,
+                histogram: &nonlinear.histogram,
+                range: study.histogram_range,
+                mean: mean_obs,
+                other_means,
+                stopping_time,
+            },
+        )
+        .map_err(io)?;
+        let Some(lin) = linear else {
+            return Ok(());
+        };
         let over = |v: &[f64]| v.iter().map(|x| x / delta).collect::<Vec<_>>();
         let lin_mean = over(&lin.norm_mean);
         let se = over(&lin.norm_std_error);
@@ -389,7 +463,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
         }
         curves.push(("nonlinear ensemble (mean)".into(), over(&nonlinear.norm_mean), 3, false));
         write_growth(
-            &dir.join(format!("{file_stem}-growth")),
+            &dir.join(format!("{}-growth", self.file_stem)),
             &GrowthChart {
                 title: format!("{name}: growth of E|dmu_t|_P^2"),
                 times,
@@ -403,7 +477,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
                     (
                         format!(
                             "certified bound exp(Sigma^2 t), Sigma^2 = {}",
-                            crate::table::format_number(&serde_json::json!(sigma2.unwrap_or(0.0)))
+                            crate::table::format_number(&serde_json::json!(prepared.sigma2.unwrap_or(0.0)))
                         ),
                         b.clone(),
                     )
@@ -413,43 +487,49 @@ pub fn run(args: &SimulateArgs) -> Result<(), Failure> {
                 ratio_caption: crate::plots::FINITE_RATIO_CAPTION,
             },
         )
-        .map_err(io)?;
+        .map_err(io)
     }
-    // Summary.
-    eprintln!(
-        "{}: {} paths x {} steps ({}), Casimir drift {:.1e}; outputs in {}",
-        name,
-        paths,
-        nonlinear.steps,
-        scheme.as_str(),
-        nonlinear.casimir_drift,
-        dir.display()
-    );
-    // Every number to six significant digits at most, in one style.
-    let num = |x: f64| crate::table::format_number(&json!(x));
-    if let Some(s) = sigma2 {
+
+    /// The run in a few lines on stderr: paths, Casimir drift, Sigma^2 and
+    /// the stopping time, and each exceedance level against the ensemble.
+    fn print_summary(&self, study: &Study) {
+        let prepared = self.prepared;
+        let (epsilon, delta, stopping_time) = (prepared.epsilon, prepared.delta, prepared.stopping_time);
+        let nonlinear = &study.nonlinear;
         eprintln!(
-            "  Sigma^2 = {}, T({}, {}) = {}, moment Lyapunov exponent = {}",
-            num(s),
-            num(epsilon),
-            num(delta),
-            stopping_time.map_or("infinity".into(), num),
-            lyapunov.map_or("-".into(), num)
+            "{}: {} paths x {} steps ({}), Casimir drift {:.1e}; outputs in {}",
+            excerpt(self.name),
+            self.paths,
+            nonlinear.steps,
+            self.scheme.as_str(),
+            nonlinear.casimir_drift,
+            self.args.out.display()
         );
+        // Every number to six significant digits at most, in one style.
+        let num = |x: f64| crate::table::format_number(&json!(x));
+        if let Some(s) = prepared.sigma2 {
+            eprintln!(
+                "  Sigma^2 = {}, T({}, {}) = {}, moment Lyapunov exponent = {}",
+                num(s),
+                num(epsilon),
+                num(delta),
+                stopping_time.map_or("infinity".into(), num),
+                study.lyapunov.map_or("-".into(), num)
+            );
+        }
+        for e in &study.exceedance {
+            let certified = match e.certified_until {
+                Some(t) if t.is_infinite() => "certified for all t".to_string(),
+                Some(t) => format!("certified until t = {}", num(t)),
+                None => "not certified".to_string(),
+            };
+            let seen = e.empirical_first_exceeded.map_or_else(
+                || format!("not exceeded in the ensemble up to t = {}", num(prepared.ensemble.t_end)),
+                |t| format!("first exceeded in the ensemble at t = {}", num(t)),
+            );
+            eprintln!("  P(|dmu_t|_P^2 > {}) <= {}: {certified}; {seen}", num(epsilon), num(e.level));
+        }
     }
-    for e in &study.exceedance {
-        let certified = match e.certified_until {
-            Some(t) if t.is_infinite() => "certified for all t".to_string(),
-            Some(t) => format!("certified until t = {}", num(t)),
-            None => "not certified".to_string(),
-        };
-        let seen = e.empirical_first_exceeded.map_or_else(
-            || format!("not exceeded in the ensemble up to t = {}", num(t_end)),
-            |t| format!("first exceeded in the ensemble at t = {}", num(t)),
-        );
-        eprintln!("  P(|dmu_t|_P^2 > {}) <= {}: {certified}; {seen}", num(epsilon), num(e.level));
-    }
-    Ok(())
 }
 
 /// Read the shard files of a study and merge their exact sums
