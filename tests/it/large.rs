@@ -183,11 +183,11 @@ fn large_specs_go_through_the_contract() {
         (
             {
                 let mut w = v.clone();
-                w["settings"] = json!({});
+                w["settings"] = json!({"definiteness_tolerance": 2.0});
                 w
             },
-            "$.settings",
-            "no settings",
+            "$.settings.definiteness_tolerance",
+            "must be between",
         ),
         (
             {
@@ -531,4 +531,51 @@ fn the_verified_check_falls_back_honestly() {
     // closed form sigma^2 I1 (I2 - I3) / (I3 (I1 - I2)) = 3 sigma^2 = 2.7e-301
     assert!((2.7e-301 * (1.0 - 1e-12)..=2.7e-301 * 1.011).contains(&u), "{u}");
     spec::check_certificate_value(&cert).expect("re-checks");
+}
+
+/// One contract at every size: the same spec with the same settings is
+/// valid at 63 coordinates (the dense exact route) and at 66 (the sparse
+/// route), and each certificate records its route and why. The sparse route
+/// honours `definiteness_tolerance` (a tolerance above the chain's margin
+/// turns its verdict inconclusive, as on the dense route) and reports every
+/// other setting it cannot honour, with the reason; `check` re-derives the
+/// record, so an edited route fails.
+#[test]
+fn a_spec_keeps_its_meaning_across_the_route_boundary() {
+    let settings = json!({"definiteness_tolerance": 1e-9, "exact": false, "search_iterations": 50});
+    let mut small = chain(21, "-1/20", ["3", "2", "1"], 0, "3/10");
+    small["settings"] = settings.clone();
+    let mut big = chain(22, "-1/20", ["3", "2", "1"], 0, "3/10");
+    big["settings"] = settings.clone();
+    let options = spec::Options::default();
+    let small = spec::certify(&spec::parse(&small.to_string(), &options).unwrap(), &options).unwrap();
+    let big = spec::certify(&spec::parse(&big.to_string(), &options).unwrap(), &options).unwrap();
+    assert_eq!(small.json()["route"]["route"], "dense_exact");
+    assert!(small.json()["route"]["settings_not_honoured"].as_object().unwrap().is_empty());
+    assert_eq!(big.json()["route"]["route"], "sparse_float");
+    assert!(big.json()["route"]["why"].as_str().unwrap().starts_with("66 coordinates, more than 64"));
+    let skipped = big.json()["route"]["settings_not_honoured"].as_object().unwrap();
+    let mut keys: Vec<&String> = skipped.keys().collect();
+    keys.sort();
+    assert_eq!(keys, ["exact", "search_iterations"]);
+    assert_eq!(big.json()["settings"], settings);
+    for cert in [&small, &big] {
+        assert_eq!(cert.verdict().at_the_point(), Some(spec::Verdict::Stable));
+        assert!(spec::check(cert, &options).is_ok());
+    }
+    // A tolerance above every margin: no form is accepted as definite on
+    // either route (the restricted second variation of the chain has
+    // relative margin below 1/2, the largest tolerance accepted).
+    for k in [21, 22] {
+        let mut v = chain(k, "-1/20", ["3", "2", "1"], 0, "3/10");
+        v["settings"] = json!({"definiteness_tolerance": 0.5});
+        let cert = spec::certify(&spec::parse(&v.to_string(), &options).unwrap(), &options).unwrap();
+        assert_ne!(cert.verdict().at_the_point(), Some(spec::Verdict::Stable), "{k} bodies");
+    }
+    let mut edited = big.json().clone();
+    edited["route"]["route"] = json!("dense_exact");
+    assert!(spec::check_json(&edited.to_string(), &options).is_err());
+    let mut edited = big.json().clone();
+    edited["route"]["settings_not_honoured"].as_object_mut().unwrap().remove("exact");
+    assert!(spec::check_json(&edited.to_string(), &options).is_err());
 }

@@ -14,7 +14,7 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// Version of the certificate format.
-pub const CERTIFICATE_VERSION: u64 = 4;
+pub const CERTIFICATE_VERSION: u64 = 5;
 
 /// The engine version written into certificates.
 pub const ENGINE_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -315,6 +315,15 @@ pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
             fastest_direction: s.growth.direction.iter().map(|x| Float(*x)).collect(),
         }),
         settings: spec.settings.to_document(),
+        route: crate::record::RouteRecord {
+            route: crate::record::Route::DenseExact,
+            why: format!(
+                "{} coordinates, at most {}: dense matrices in rational arithmetic",
+                spec.system.dim(),
+                algebra::MAX_DIMENSION
+            ),
+            settings_not_honoured: BTreeMap::new(),
+        },
         spec: spec.raw.clone(),
     }
 }

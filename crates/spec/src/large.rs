@@ -27,7 +27,9 @@ use crate::check::{compare_with, fail, CheckError, CheckReport};
 use crate::document::{AlgebraDoc, SpecDocument};
 use crate::json::{child, index, Result, SpecError};
 use crate::parse::Stopping;
-use crate::record::{Engine, ExactRational, Float, LargeAnalysisRecord, LargeCertificateDocument, LevelOrNone};
+use crate::record::{
+    Engine, ExactRational, Float, LargeAnalysisRecord, LargeCertificateDocument, LevelOrNone, Route, RouteRecord,
+};
 use exact::Rational;
 use large::algebra::SparseAlgebra;
 use large::analysis::{analyse_large, analyse_large_with, LargeAnalysis, LargeSettings};
@@ -60,8 +62,14 @@ pub struct LargeSpec {
     pub parameters: BTreeMap<String, Rational>,
     /// The stopping question.
     pub stopping: Option<Stopping>,
-    /// The pipeline's settings (the defaults: a large spec takes none).
+    /// The pipeline's settings: the defaults, with the spec's settings
+    /// that this route honours.
     pub settings: LargeSettings,
+    /// The spec's `settings` object, as given.
+    pub settings_given: Option<Value>,
+    /// The settings the spec gives that this route does not honour, with
+    /// the reason each.
+    pub settings_not_honoured: BTreeMap<String, String>,
     /// The optional `sweep` section.
     pub sweep: crate::sweep::SweepSection,
 }
@@ -107,15 +115,8 @@ pub fn large_spec_from_value(value: Value) -> Result<LargeSpec> {
             format!("box certificates run the exact pipeline: at most {} coordinates", algebra::MAX_DIMENSION),
         ));
     }
-    if doc.settings.is_some() {
-        return Err(SpecError::new(
-            child(root, "settings"),
-            format!(
-                "systems above {} coordinates run the large pipeline, which takes no settings",
-                algebra::MAX_DIMENSION
-            ),
-        ));
-    }
+    let settings_given = value.get("settings").cloned();
+    let (settings, settings_not_honoured) = sparse_route_settings(settings_given.as_ref())?;
     let spath = child(&apath, "structure_constants");
     let rows = crate::parse::structure_rows(custom, &spath)?;
     let algebra = SparseAlgebra::new(&custom.coordinates, &rows).map_err(|e| SpecError::new(&apath, e.to_string()))?;
@@ -206,9 +207,48 @@ pub fn large_spec_from_value(value: Value) -> Result<LargeSpec> {
         system,
         parameters,
         stopping,
-        settings: LargeSettings::default(),
+        settings,
+        settings_given,
+        settings_not_honoured,
         sweep,
     })
+}
+
+/// Why the sparse route was taken, for a system of `n` coordinates.
+pub(crate) fn sparse_route_reason(n: usize) -> String {
+    format!(
+        "{n} coordinates, more than {}: dense rational matrices would hold n^2 entries of unbounded size, so the structure is checked exactly on its sparse form and the method runs in floating point, with a verified floating-point final check",
+        algebra::MAX_DIMENSION
+    )
+}
+
+/// The spec's settings on the sparse route. They are read and checked as
+/// on the dense exact route (the same names, ranges and JSON paths), so a
+/// spec keeps its meaning at every size; `definiteness_tolerance` is
+/// honoured (the same relative margin of the restricted second variation),
+/// and every other setting given is reported with the reason the route
+/// runs with its own value.
+fn sparse_route_settings(given: Option<&Value>) -> Result<(LargeSettings, BTreeMap<String, String>)> {
+    let engine = crate::settings::EngineSettings::from_json(given, "$.settings")?;
+    let mut settings = LargeSettings::default();
+    let mut not_honoured = BTreeMap::new();
+    for key in given.and_then(Value::as_object).map(|m| m.keys().collect::<Vec<_>>()).unwrap_or_default() {
+        let why = match key.as_str() {
+            "definiteness_tolerance" => {
+                settings.definiteness_tolerance = engine.pipeline.search.definiteness_tolerance;
+                continue;
+            }
+            "exact" => "the sparse route has no rational certification to switch on or off: its claims are verified floating point (level verified_float) or numerical, as the certificate's level says",
+            "search_iterations" | "search_expansions" => "the sparse route searches the multiplier family by the ellipsoid method with its own iteration limits",
+            "max_denominator" => "the sparse route rounds no choice to rationals: its multipliers are solved exactly from the floating-point ones",
+            "instability_tolerance" => "the sparse route's instability threshold is 1e-6 times the spectral radius of A (the dense route's is the setting times max(1, |A|_F))",
+            "discovery_degree" | "discovery_max_unknowns" => "Casimirs are not discovered on the sparse route: the spec gives them",
+            "optimise" | "optimisation_tolerance" | "optimisation_iterations" => "the sparse route's minimisation of Sigma^2 over the Casimir Hessian runs with its own schedule",
+            _ => "not a setting of the sparse route",
+        };
+        not_honoured.insert(key.clone(), why.to_string());
+    }
+    Ok((settings, not_honoured))
 }
 
 /// The typed certificate of a large spec.
@@ -232,6 +272,12 @@ pub fn large_certificate_document(
         stopping: None,
         spec_sha256: spec_digest(&spec.raw),
         dimension: spec.system.dim() as u64,
+        settings: spec.settings_given.clone(),
+        route: RouteRecord {
+            route: Route::SparseFloat,
+            why: sparse_route_reason(spec.system.dim()),
+            settings_not_honoured: spec.settings_not_honoured.clone(),
+        },
         analysis: LargeAnalysisRecord {
             equilibrium_residual: vec![],
             incompatible_noise: vec![],

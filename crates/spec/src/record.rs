@@ -189,8 +189,36 @@ pub struct CertificateDocument {
     pub growth: Option<GrowthRecord>,
     /// The settings in force (all of them).
     pub settings: SettingsDoc,
+    /// Which route certified the system, and why.
+    pub route: RouteRecord,
     /// The spec exactly as given.
     pub spec: Value,
+}
+
+/// The two routes of a finite-dimensional spec: the size decides which,
+/// never the meaning of the spec.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Route {
+    /// Dense matrices in rational arithmetic (at most 64 coordinates).
+    DenseExact,
+    /// Sparse exact structure checks, the method in floating point, and a
+    /// verified floating-point final check (above 64 coordinates).
+    SparseFloat,
+}
+
+/// Which route certified a finite-dimensional spec, why, and the settings
+/// it could not honour.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RouteRecord {
+    /// The route.
+    pub route: Route,
+    /// Why this route (the spec's size).
+    pub why: String,
+    /// The settings the spec gives that this route does not honour, each
+    /// with the reason (the route runs with its own value instead).
+    pub settings_not_honoured: BTreeMap<String, String>,
 }
 
 /// The engine's name and version.
@@ -1117,6 +1145,12 @@ pub struct LargeCertificateDocument {
     pub dimension: u64,
     /// What the pipeline computed on the way.
     pub analysis: LargeAnalysisRecord,
+    /// The settings the spec gives, as given (absent when it gives none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settings: Option<Value>,
+    /// Which route certified the system, why, and the settings it did not
+    /// honour.
+    pub route: RouteRecord,
     /// The spec exactly as given.
     pub spec: Value,
 }
