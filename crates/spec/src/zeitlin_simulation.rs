@@ -201,6 +201,65 @@ pub fn simulate_zeitlin(
     notes: &mut dyn FnMut(String),
 ) -> Result<Value, ZeitlinSimulationError> {
     let n = spec.input.n();
+    check_options(n, options)?;
+    let paths = options.paths.unwrap_or(ZEITLIN_SIMULATION_DEFAULT_PATHS);
+    let outcome = analyse_zeitlin_with(spec, &Progress::new());
+    let zonal = zonal_problem(spec, &outcome)?;
+    let choice = match (zonal.analysis.verdict, zonal.analysis.choice) {
+        (Verdict::Stable, Some(c)) => c,
+        (v, _) => {
+            return Err(ZeitlinSimulationError::NothingToCompare(format!(
+                "the certificate is `{}`: {}; a simulation is set beside a stable certificate's conserved form",
+                v.as_str(),
+                zonal.analysis.reason
+            )))
+        }
+    };
+    let analysis = &zonal.analysis;
+    // The blocks' lambda_max (empty under exact structure, Q = 0: every block 0).
+    let lambda = |m: usize| analysis.blocks.iter().find(|b| b.m == m).map_or(0.0, |b| b.lambda_max);
+    let m = match options.block {
+        Some(m) if (1..n).contains(&m) => m,
+        Some(m) => return Err(invalid("block", format!("need 1 <= block <= N - 1 = {}, got {m}", n - 1))),
+        None => (1..n).fold(1, |best, m| if lambda(m) > lambda(best) { m } else { best }),
+    };
+    let sde = BlockSde::new(&zonal.omega, &zonal.noise, &choice, m).map_err(from_block)?;
+    let (rate, start) = sde.top().ok_or_else(|| ZeitlinSimulationError::Failed("the block's top direction".into()))?;
+    let z0: Vec<Complex<f64>> = start.iter().map(|x| Complex::new(*x, 0.0)).collect();
+    let certified = analysis.sigma2_upper.or(analysis.sigma2).unwrap_or(0.0);
+    let plan = plan_run(n, paths, &sde, zonal.noise.len(), certified, lambda(m), options, notes)?;
+    let (dt, steps, outputs) = (options.dt, plan.steps, plan.outputs);
+    progress.plan(
+        paths as u64
+            + if plan.run_exact { steps as u64 } else { 0 }
+            + if plan.run_nonlinear { plan.nonlinear_paths as u64 } else { 0 },
+    );
+    let mc = sde.monte_carlo(&z0, dt, steps, outputs, paths, options.seed, progress).map_err(from_block)?;
+    let exact = if plan.run_exact {
+        Some(sde.exact_moment(&z0, dt, steps, outputs, progress).map_err(from_block)?)
+    } else {
+        None
+    };
+    let nonlinear = if plan.run_nonlinear {
+        let start = Start { omega: &zonal.omega, noise: &zonal.noise, choice: &choice, m, z0: &z0, delta: plan.delta };
+        Some(nonlinear_ensemble(&start, dt, steps, outputs, plan.nonlinear_paths, options.seed, progress)?)
+    } else {
+        None
+    };
+    let nonlinear_values =
+        nonlinear.iter().flat_map(|e| e.mean.iter().chain(&e.std_error).chain([&e.casimir_drift, &e.momentum_drift]));
+    if mc.mean.iter().chain(&mc.std_error).chain(exact.iter().flatten()).chain(nonlinear_values).any(|x| !x.is_finite())
+    {
+        return Err(ZeitlinSimulationError::Unrepresentable(
+            "the run left the doubles (a value became infinite or NaN): lower dt or t_end".into(),
+        ));
+    }
+    let run = Run { n, m, paths, rate, certified, block_lambda: lambda(m), plan };
+    Ok(report(spec, options, &zonal, &sde, &run, &mc, exact, nonlinear))
+}
+
+/// The options' ranges (the grid, the paths, the time step and end).
+fn check_options(n: usize, options: &ZeitlinSimulationOptions) -> Result<(), ZeitlinSimulationError> {
     if n > ZEITLIN_SIMULATION_MAX_N {
         return Err(invalid(
             "N",
@@ -225,36 +284,41 @@ pub fn simulate_zeitlin(
             return Err(invalid("t_end", format!("must be positive and finite, got {t}")));
         }
     }
-    let outcome = analyse_zeitlin_with(spec, &Progress::new());
-    let Zonal { omega, noise, analysis, axis } = zonal_problem(spec, &outcome)?;
-    let choice = match (analysis.verdict, analysis.choice) {
-        (Verdict::Stable, Some(c)) => c,
-        (v, _) => {
-            return Err(ZeitlinSimulationError::NothingToCompare(format!(
-                "the certificate is `{}`: {}; a simulation is set beside a stable certificate's conserved form",
-                v.as_str(),
-                analysis.reason
-            )))
-        }
-    };
-    let certified = analysis.sigma2_upper.or(analysis.sigma2).unwrap_or(0.0);
-    // The blocks' lambda_max (empty under exact structure, Q = 0: every block 0).
-    let lambda = |m: usize| analysis.blocks.iter().find(|b| b.m == m).map_or(0.0, |b| b.lambda_max);
-    let m = match options.block {
-        Some(m) if (1..n).contains(&m) => m,
-        Some(m) => return Err(invalid("block", format!("need 1 <= block <= N - 1 = {}, got {m}", n - 1))),
-        None => (1..n).fold(1, |best, m| if lambda(m) > lambda(best) { m } else { best }),
-    };
-    let sde = BlockSde::new(&omega, &noise, &choice, m).map_err(from_block)?;
-    let (rate, start) = sde.top().ok_or_else(|| ZeitlinSimulationError::Failed("the block's top direction".into()))?;
-    let z0: Vec<Complex<f64>> = start.iter().map(|x| Complex::new(*x, 0.0)).collect();
+    Ok(())
+}
+
+/// What the run will do: its steps and output times, and which of the
+/// exact moment and the nonlinear ensemble it runs (from estimated costs).
+struct Plan {
+    steps: usize,
+    outputs: usize,
+    run_exact: bool,
+    delta: f64,
+    nonlinear_paths: usize,
+    run_nonlinear: bool,
+}
+
+/// The run's length (asked, or one growth time shortened to what a default
+/// run is kept to), its costs, and the refusals and notes they imply.
+#[allow(clippy::too_many_arguments)]
+fn plan_run(
+    n: usize,
+    paths: usize,
+    sde: &BlockSde,
+    noise_fields: usize,
+    certified: f64,
+    block_lambda: f64,
+    options: &ZeitlinSimulationOptions,
+    notes: &mut dyn FnMut(String),
+) -> Result<Plan, ZeitlinSimulationError> {
+    let dt = options.dt;
     let len = sde.len() as f64;
     let threads = options.threads.max(1.0);
     // Complex flops: a matrix-vector product per half step (8 len^2), the
     // noise rotations and the norm; the exact moment four products (32 len^3).
-    let path_step_seconds = (16.0 * len * len + 20.0 * len * noise.len() as f64) / FLOPS_PER_SECOND;
+    let path_step_seconds = (16.0 * len * len + 20.0 * len * noise_fields as f64) / FLOPS_PER_SECOND;
     let exact_step_seconds = 32.0 * len * len * len / FLOPS_PER_SECOND;
-    let block_rate = lambda(m).max(0.0);
+    let block_rate = block_lambda.max(0.0);
     let t_end = match options.t_end {
         Some(t) => t,
         None => {
@@ -279,10 +343,10 @@ pub fn simulate_zeitlin(
     }
     let steps = steps_f as usize;
     // exp(Sigma^2 t) must be a double over the run (at most e^700).
-    if certified.max(lambda(m)) * steps as f64 * dt > 700.0 {
+    if certified.max(block_lambda) * steps as f64 * dt > 700.0 {
         return Err(ZeitlinSimulationError::Unrepresentable(format!(
             "exp(Sigma^2 t_end) = exp({:e}) is beyond the doubles: lower t_end (Sigma^2 = {certified:e})",
-            certified.max(lambda(m)) * steps as f64 * dt
+            certified.max(block_lambda) * steps as f64 * dt
         )));
     }
     let outputs = options.outputs.min(steps);
@@ -321,31 +385,39 @@ pub fn simulate_zeitlin(
             format!("the nonlinear ensemble is skipped: about {nonlinear_seconds:.0} s (forcing runs it)")
         });
     }
-    progress.plan(
-        paths as u64
-            + if run_exact { steps as u64 } else { 0 }
-            + if run_nonlinear { nonlinear_paths as u64 } else { 0 },
-    );
-    let mc = sde.monte_carlo(&z0, dt, steps, outputs, paths, options.seed, progress).map_err(from_block)?;
-    let exact =
-        if run_exact { Some(sde.exact_moment(&z0, dt, steps, outputs, progress).map_err(from_block)?) } else { None };
-    let nonlinear = if run_nonlinear {
-        let start = Start { omega: &omega, noise: &noise, choice: &choice, m, z0: &z0, delta };
-        Some(nonlinear_ensemble(&start, dt, steps, outputs, nonlinear_paths, options.seed, progress)?)
-    } else {
-        None
-    };
-    let nonlinear_values =
-        nonlinear.iter().flat_map(|e| e.mean.iter().chain(&e.std_error).chain([&e.casimir_drift, &e.momentum_drift]));
-    if mc.mean.iter().chain(&mc.std_error).chain(exact.iter().flatten()).chain(nonlinear_values).any(|x| !x.is_finite())
-    {
-        return Err(ZeitlinSimulationError::Unrepresentable(
-            "the run left the doubles (a value became infinite or NaN): lower dt or t_end".into(),
-        ));
-    }
+    Ok(Plan { steps, outputs, run_exact, delta, nonlinear_paths, run_nonlinear })
+}
+
+/// The numbers of a run the report states.
+struct Run {
+    n: usize,
+    m: usize,
+    paths: usize,
+    rate: f64,
+    certified: f64,
+    block_lambda: f64,
+    plan: Plan,
+}
+
+/// The report (`kind: "zeitlin-simulation"`): the series beside the
+/// certified and the block's bounds, and what they show.
+#[allow(clippy::too_many_arguments)]
+fn report(
+    spec: &ZeitlinSpec,
+    options: &ZeitlinSimulationOptions,
+    zonal: &Zonal,
+    sde: &BlockSde,
+    run: &Run,
+    mc: &zeitlin::block_sde::BlockMonteCarlo,
+    exact: Option<Vec<f64>>,
+    nonlinear: Option<Nonlinear>,
+) -> Value {
+    let Run { n, m, paths, rate, certified, block_lambda, ref plan } = *run;
+    let (dt, steps, delta) = (options.dt, plan.steps, plan.delta);
+    let analysis = &zonal.analysis;
     let h = sde.hbar();
     let certified_bound: Vec<f64> = mc.times.iter().map(|t| (certified * t).exp()).collect();
-    let block_bound: Vec<f64> = mc.times.iter().map(|t| (lambda(m) * t).exp()).collect();
+    let block_bound: Vec<f64> = mc.times.iter().map(|t| (block_lambda * t).exp()).collect();
     let exact_over_bound =
         exact.as_ref().map(|e| e.iter().zip(&certified_bound).map(|(e, b)| e / b).fold(f64::NEG_INFINITY, f64::max));
     let agreeing = exact.as_ref().map(|e| {
@@ -355,7 +427,7 @@ pub fn simulate_zeitlin(
             .count()
     });
     let times_qtime: Vec<f64> = mc.times.iter().map(|t| t / h).collect();
-    Ok(json!({
+    json!({
         "kind": "zeitlin-simulation",
         "format": 1,
         "engine": crate::ENGINE_VERSION,
@@ -363,13 +435,13 @@ pub fn simulate_zeitlin(
         "spec_digest": crate::spec_digest(&spec.raw),
         "N": n,
         "hbar": h,
-        "axis": axis,
+        "axis": zonal.axis,
         "block": m,
         "unknowns": sde.len(),
         "verdict": "stable",
         "sigma2": analysis.sigma2,
         "sigma2_upper": analysis.sigma2_upper,
-        "block_lambda_max": lambda(m),
+        "block_lambda_max": block_lambda,
         "initial_rate": rate,
         "paths": paths,
         "seed": options.seed,
@@ -401,7 +473,7 @@ pub fn simulate_zeitlin(
             "records": mc.times.len(),
         },
         "meaning": "E|z_t|_P^2 / |z_0|_P^2 for the perturbation's entries z_j = dW[j, j + m] on diagonal `block` of the linearised SDE about the zonal state (the blocks decouple), from the direction whose E|z|_P^2 grows fastest (initial_rate = lambda_max(Q_m, P_m)); P the certificate's energy–Casimir form; certified_bound = exp(sigma2_upper t), the certificate's proved bound (exp(sigma2 t) when none was proved), block_bound = exp(block_lambda_max t); the Monte Carlo and `exact` are of the Strang splitting of the exact drift and noise flows, the exact second moment of that scheme (O(dt^2) from the SDE's)",
-    }))
+    })
 }
 
 /// The nonlinear ensemble's statistics.
