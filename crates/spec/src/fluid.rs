@@ -634,27 +634,7 @@ fn empty_document(spec: &FluidSpec) -> FluidCertificateDocument {
 pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidCertificateDocument {
     let p = &spec.problem;
     let opt = |x: Option<f64>| x.map(Float);
-    let sigma2_check = match a.verification {
-        Some(VerificationLevel::ExactStructure) => "exact: the form is diagonal (a Casimir-momentum or enstrophy form) or the noise is a multiple of the identity, so Q = 0 identically for the discretised operators",
-        Some(VerificationLevel::VerifiedFloat) if p.model == FluidModel::Incompressible => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite, proved with rounding accounted for by the inertia of a banded lifted matrix (for the exact pencil of the stored stiffness, weights, Casimir weight and noise values) or, for a mode on a grid of at most 1023 unknowns where that proves nothing, by a dense floating-point Cholesky (Rump-style, for the floating-point matrices as computed); sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
-        Some(VerificationLevel::VerifiedFloat) => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite by a floating-point Cholesky with rounding accounted for (Rump-style), for the floating-point matrices as computed; sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
-        Some(VerificationLevel::Float) => "floating point only: the verified check did not pass",
-        _ => "no claim is made",
-    };
-    let checks = [
-        ("sigma2", sigma2_check),
-        (
-            "discretisation",
-            if a.compressible.as_ref().is_some_and(|c| c.generator.is_some()) {
-                "Q is the continuum generator form evaluated on the discrete space (compressible.generator): the claims are about that quotient with the discrete form K; the convergence table shows how they move under refinement, and compressible.generator.casimir_defect how far the pointwise noise on the discrete K is from it"
-            } else {
-                "the claims are about the discretised linear SDE; the convergence table shows how they move under refinement"
-            },
-        ),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v.to_string()))
-    .collect();
+    let checks = fluid_checks(p, a);
     // T is a guarantee: only a proved upper bound of Sigma^2 gives one (the
     // Lanczos value is a lower estimate).
     let stopping = crate::certificate::stopping_record(
@@ -666,26 +646,7 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         FluidModel::Incompressible => "vorticity: dw = -ik (U + U'' L^-1) w dt - sum_j ik eta_j w o dW^j per x-mode exp(ikx), L = k^2 - d^2/dy^2 with psi = 0 at walls",
         FluidModel::Compressible { .. } => "momentum-density m = rho u and density rho, noise acting by the coadjoint action (Lie derivative) of (eta_j(y), 0)",
     };
-    let unknowns = match p.profile.boundary {
-        Boundary::Walls => p.ny - 1,
-        Boundary::Periodic => p.ny,
-    };
-    let discretisation = DiscretisationRecord {
-        x: format!("Fourier modes m = 1..{} (k = 2 pi m / x_period); m = 0 is frozen (A = B = 0)", p.x_modes),
-        y: match p.profile.boundary {
-            Boundary::Walls => format!(
-                "continuous Galerkin spectral elements of degree {ELEMENT_DEGREE} with Gauss-Lobatto-Legendre quadrature, {} elements",
-                p.ny / ELEMENT_DEGREE
-            ),
-            Boundary::Periodic => format!(
-                "continuous Galerkin spectral elements of degree {ELEMENT_DEGREE} with Gauss-Lobatto-Legendre quadrature, {} elements around the periodic interval",
-                p.ny / ELEMENT_DEGREE
-            ),
-        },
-        ny: p.ny as u64,
-        unknowns_per_mode: unknowns as u64,
-        x_modes: p.x_modes as u64,
-    };
+    let discretisation = discretisation_record(p);
     let form = FluidFormRecord {
         kind: a.form.kind.to_string(),
         energy_coefficient: Float(a.form.energy),
@@ -721,31 +682,7 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         choice_sigma2: opt(a.paper_choice_sigma2),
         choice: "energy + Casimir with Phi'' = U/U'' (no Galilean shift, c = 0), when that form is definite".into(),
     };
-    let optimisation = FluidOptimisationRecord {
-        over: "the Galilean (momentum) multiplier c and the energy coefficient e of e H + C_Phi + c M, with the Casimir weight Phi''(omega_e) = (e U + c)/U'' bounded on the closed interval (a form with a continuum limit)".into(),
-        shift_curve: a.shift_curve.iter().map(|(c, s)| ShiftPoint { c: Float(*c), sigma2: Float(*s) }).collect(),
-        infimum: opt(a.sigma2),
-        attained_by: a.form.kind.to_string(),
-        discrete_pseudomomentum: (a.verdict == Verdict::Stable)
-            .then(|| fluid::analysis::discrete_pseudomomentum(p, &spec.settings))
-            .flatten()
-            .map(|d| DiscretePseudomomentumRecord {
-                meaning: format!(
-                    "U'' vanishes only at the walls (y = {}), which carry no unknowns, so on this grid V = diag(m_a / |U''(y_a)|) is definite and conserved by the discretised drift and by every noise field (Q = 0, Sigma^2 = 0 for the discretised linear SDE). It is not the headline: its weight 1/U'' is unbounded in the continuum, cond(V) grows with ny and the V-norm of a perturbation that does not vanish at a wall (norm_of_one, for omega = 1) grows without bound (docs/fluids.md §3, case 3)",
-                    d.zeros.iter().map(|z| format!("{z:.6}")).collect::<Vec<_>>().join(", ")
-                ),
-                sigma2: Float(0.0),
-                rows: d
-                    .rows
-                    .iter()
-                    .map(|r| PseudomomentumRowRecord {
-                        ny: r.ny as u64,
-                        condition_number: Float(r.condition_number),
-                        norm_of_one: Float(r.norm_of_one),
-                    })
-                    .collect(),
-            }),
-    };
+    let optimisation = optimisation_record(spec, a);
     let instability = a.instability.as_ref().map(|u| UnstableModeRecord {
         m: u.m as u64,
         k: Float(u.k),
@@ -753,52 +690,8 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         growth_rate_half_resolution: Float(u.growth_rate_coarse),
         ny: u.ny as u64,
     });
-    let instability_search = (!a.instability_search.is_empty()).then(|| {
-        a.instability_search
-            .iter()
-            .map(|s| ModeSearchRecord {
-                m: s.m as u64,
-                k: Float(s.k),
-                floor: Float(s.floor),
-                grids: s
-                    .grids
-                    .iter()
-                    .map(|g| SearchedGridRecord {
-                        ny: g.ny as u64,
-                        growth_rate: opt(g.growth_rate),
-                        phase_speed: opt(g.phase_speed),
-                        tracked: g.tracked,
-                    })
-                    .collect(),
-                outcome: s.outcome.as_str().to_string(),
-            })
-            .collect()
-    });
-    let compressible = a.compressible.as_ref().map(|cr| CompressibleRecord {
-        sound_speed: Float(cr.sound_speed),
-        noise_residuals: cr.noise_residuals.iter().map(|x| Float(*x)).collect(),
-        noise_residual_formula: "sup_y |U eta_k' + r_k'|: the y-momentum (grad sigma)^T m + rho grad r put into the equilibrium by noise field k = ((eta_k, 0), r_k)".into(),
-        compatible_noise: "eta constant wherever U != 0, or any eta with the potential r' = -U eta' ({\"transport\": eta, \"potential\": \"compatible\"})".into(),
-        compatible_completion: completion(&spec.raw, &cr.incompatible),
-        galilean_shift_interval: cr.shift_interval.map(|(lo, hi)| vec![Float(lo), Float(hi)]),
-        incompressible_verdict: cr.incompressible_verdict,
-        incompressible_sigma2: opt(cr.incompressible_sigma2),
-        generator: cr.generator.as_ref().map(|g| GeneratorRecord {
-            formulation: "g* coordinates (dm1, dm2, drho) on the spectral-element nodes (dm2 = 0 at the walls); K = int |dm1 + c drho|^2 + |dm2|^2 + (c_s^2 - (U + c)^2)|drho|^2 + w |dq|^2, dq = ik dm2 - dm1' + U drho' + 2U' drho, w = (U + c)/U''; the noise ((eta, 0), r) with r' = -U eta' transports dq, so the Casimir part contributes nothing and Q = sum_j int eta_j'^2 |dm1 - U drho|^2 (the continuum generator form on the discrete space); Sigma^2 = lambda_max(Q, K)".into(),
-            galilean_shift: Float(g.shift),
-            continuum_bound: opt(g.continuum_bound),
-            continuum_bound_formula: "sup_y sum_j eta_j'(y)^2 c_s^2 / (c_s^2 - (U(y) + c)^2), enclosed by interval arithmetic: Q <= that times the acoustic part of K, and the Casimir part is >= 0".into(),
-            casimir_defect_meaning: "|lambda|_max(Q_B - Q, K) of the gravest mode, Q_B the generator form of the pointwise noise on the discrete K: the discrete error of B dq = -ik eta dq, zero in the continuum".into(),
-            casimir_defect: g.casimir_defect.iter().map(|(ny, d)| DefectPoint { ny: *ny as u64, defect: Float(*d) }).collect(),
-            discrete_sde: g.discrete_sde.map(|(m, s)| DiscreteSdeRecord {
-                meaning: "the discretised linear SDE dX = A X dt + sum_j B_j X o dW_j with the pointwise noise B_j: d E V/dt = E X^H Q_B X (Ito), Q_B = K A~ + A~^H K + sum_j B_j^H K B_j, so E V(t) <= exp(sigma2 t) V(0) for every x-mode at this ny and every start, with sigma2 = max over the modes of lambda_max(Q_B, K) (a Lanczos estimate, float, not verified). Q_B - Q is the Casimir defect: it tends to 0 under refinement at fixed k and grows with k, so on a given grid the shortest waves of the discrete SDE can outgrow the certified Sigma^2 (docs/fluids.md §1b)".into(),
-                ny: spec.problem.ny as u64,
-                m: m as u64,
-                sigma2: Float(s),
-            }),
-            drift_residual: opt(g.drift_residual),
-        }),
-    });
+    let instability_search = instability_search_records(a);
+    let compressible = a.compressible.as_ref().map(|cr| compressible_record(spec, cr));
     let subject = crate::theorem::fluid_subject(
         &spec.name,
         matches!(p.model, FluidModel::Compressible { .. }),
@@ -842,6 +735,142 @@ pub fn fluid_certificate_document(spec: &FluidSpec, a: &FluidAnalysis) -> FluidC
         instability_search,
         compressible,
         ..empty_document(spec)
+    }
+}
+
+/// What each part of a fluid verdict rests on.
+fn fluid_checks(p: &FluidProblem, a: &FluidAnalysis) -> BTreeMap<String, String> {
+    let sigma2_check = match a.verification {
+        Some(VerificationLevel::ExactStructure) => "exact: the form is diagonal (a Casimir-momentum or enstrophy form) or the noise is a multiple of the identity, so Q = 0 identically for the discretised operators",
+        Some(VerificationLevel::VerifiedFloat) if p.model == FluidModel::Incompressible => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite, proved with rounding accounted for by the inertia of a banded lifted matrix (for the exact pencil of the stored stiffness, weights, Casimir weight and noise values) or, for a mode on a grid of at most 1023 unknowns where that proves nothing, by a dense floating-point Cholesky (Rump-style, for the floating-point matrices as computed); sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
+        Some(VerificationLevel::VerifiedFloat) => "verified_float: at the finest grid, per x-mode, V and sigma2_upper V - Q are positive definite by a floating-point Cholesky with rounding accounted for (Rump-style), for the floating-point matrices as computed; sigma2 (the Lanczos Ritz value, a Rayleigh quotient) is a lower estimate",
+        Some(VerificationLevel::Float) => "floating point only: the verified check did not pass",
+        _ => "no claim is made",
+    };
+    [
+        ("sigma2", sigma2_check),
+        (
+            "discretisation",
+            if a.compressible.as_ref().is_some_and(|c| c.generator.is_some()) {
+                "Q is the continuum generator form evaluated on the discrete space (compressible.generator): the claims are about that quotient with the discrete form K; the convergence table shows how they move under refinement, and compressible.generator.casimir_defect how far the pointwise noise on the discrete K is from it"
+            } else {
+                "the claims are about the discretised linear SDE; the convergence table shows how they move under refinement"
+            },
+        ),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v.to_string()))
+    .collect()
+}
+
+/// The discretisation: the x-modes, the spectral elements in y, the grid.
+fn discretisation_record(p: &FluidProblem) -> DiscretisationRecord {
+    let unknowns = match p.profile.boundary {
+        Boundary::Walls => p.ny - 1,
+        Boundary::Periodic => p.ny,
+    };
+    DiscretisationRecord {
+        x: format!("Fourier modes m = 1..{} (k = 2 pi m / x_period); m = 0 is frozen (A = B = 0)", p.x_modes),
+        y: match p.profile.boundary {
+            Boundary::Walls => format!(
+                "continuous Galerkin spectral elements of degree {ELEMENT_DEGREE} with Gauss-Lobatto-Legendre quadrature, {} elements",
+                p.ny / ELEMENT_DEGREE
+            ),
+            Boundary::Periodic => format!(
+                "continuous Galerkin spectral elements of degree {ELEMENT_DEGREE} with Gauss-Lobatto-Legendre quadrature, {} elements around the periodic interval",
+                p.ny / ELEMENT_DEGREE
+            ),
+        },
+        ny: p.ny as u64,
+        unknowns_per_mode: unknowns as u64,
+        x_modes: p.x_modes as u64,
+    }
+}
+
+/// The optimisation of `Sigma^2` over the Galilean shift and the energy
+/// coefficient, and the discrete pseudomomentum where it applies.
+fn optimisation_record(spec: &FluidSpec, a: &FluidAnalysis) -> FluidOptimisationRecord {
+    let (p, opt) = (&spec.problem, |x: Option<f64>| x.map(Float));
+    FluidOptimisationRecord {
+        over: "the Galilean (momentum) multiplier c and the energy coefficient e of e H + C_Phi + c M, with the Casimir weight Phi''(omega_e) = (e U + c)/U'' bounded on the closed interval (a form with a continuum limit)".into(),
+        shift_curve: a.shift_curve.iter().map(|(c, s)| ShiftPoint { c: Float(*c), sigma2: Float(*s) }).collect(),
+        infimum: opt(a.sigma2),
+        attained_by: a.form.kind.to_string(),
+        discrete_pseudomomentum: (a.verdict == Verdict::Stable)
+            .then(|| fluid::analysis::discrete_pseudomomentum(p, &spec.settings))
+            .flatten()
+            .map(|d| DiscretePseudomomentumRecord {
+                meaning: format!(
+                    "U'' vanishes only at the walls (y = {}), which carry no unknowns, so on this grid V = diag(m_a / |U''(y_a)|) is definite and conserved by the discretised drift and by every noise field (Q = 0, Sigma^2 = 0 for the discretised linear SDE). It is not the headline: its weight 1/U'' is unbounded in the continuum, cond(V) grows with ny and the V-norm of a perturbation that does not vanish at a wall (norm_of_one, for omega = 1) grows without bound (docs/fluids.md §3, case 3)",
+                    d.zeros.iter().map(|z| format!("{z:.6}")).collect::<Vec<_>>().join(", ")
+                ),
+                sigma2: Float(0.0),
+                rows: d
+                    .rows
+                    .iter()
+                    .map(|r| PseudomomentumRowRecord {
+                        ny: r.ny as u64,
+                        condition_number: Float(r.condition_number),
+                        norm_of_one: Float(r.norm_of_one),
+                    })
+                    .collect(),
+            }),
+    }
+}
+
+/// The search for an unstable mode, per x-mode and grid (absent when none ran).
+fn instability_search_records(a: &FluidAnalysis) -> Option<Vec<ModeSearchRecord>> {
+    let opt = |x: Option<f64>| x.map(Float);
+    (!a.instability_search.is_empty()).then(|| {
+        a.instability_search
+            .iter()
+            .map(|s| ModeSearchRecord {
+                m: s.m as u64,
+                k: Float(s.k),
+                floor: Float(s.floor),
+                grids: s
+                    .grids
+                    .iter()
+                    .map(|g| SearchedGridRecord {
+                        ny: g.ny as u64,
+                        growth_rate: opt(g.growth_rate),
+                        phase_speed: opt(g.phase_speed),
+                        tracked: g.tracked,
+                    })
+                    .collect(),
+                outcome: s.outcome.as_str().to_string(),
+            })
+            .collect()
+    })
+}
+
+/// The compressible model's noise-compatibility test and generator form.
+fn compressible_record(spec: &FluidSpec, cr: &fluid::analysis::CompressibleReport) -> CompressibleRecord {
+    let opt = |x: Option<f64>| x.map(Float);
+    CompressibleRecord {
+        sound_speed: Float(cr.sound_speed),
+        noise_residuals: cr.noise_residuals.iter().map(|x| Float(*x)).collect(),
+        noise_residual_formula: "sup_y |U eta_k' + r_k'|: the y-momentum (grad sigma)^T m + rho grad r put into the equilibrium by noise field k = ((eta_k, 0), r_k)".into(),
+        compatible_noise: "eta constant wherever U != 0, or any eta with the potential r' = -U eta' ({\"transport\": eta, \"potential\": \"compatible\"})".into(),
+        compatible_completion: completion(&spec.raw, &cr.incompatible),
+        galilean_shift_interval: cr.shift_interval.map(|(lo, hi)| vec![Float(lo), Float(hi)]),
+        incompressible_verdict: cr.incompressible_verdict,
+        incompressible_sigma2: opt(cr.incompressible_sigma2),
+        generator: cr.generator.as_ref().map(|g| GeneratorRecord {
+            formulation: "g* coordinates (dm1, dm2, drho) on the spectral-element nodes (dm2 = 0 at the walls); K = int |dm1 + c drho|^2 + |dm2|^2 + (c_s^2 - (U + c)^2)|drho|^2 + w |dq|^2, dq = ik dm2 - dm1' + U drho' + 2U' drho, w = (U + c)/U''; the noise ((eta, 0), r) with r' = -U eta' transports dq, so the Casimir part contributes nothing and Q = sum_j int eta_j'^2 |dm1 - U drho|^2 (the continuum generator form on the discrete space); Sigma^2 = lambda_max(Q, K)".into(),
+            galilean_shift: Float(g.shift),
+            continuum_bound: opt(g.continuum_bound),
+            continuum_bound_formula: "sup_y sum_j eta_j'(y)^2 c_s^2 / (c_s^2 - (U(y) + c)^2), enclosed by interval arithmetic: Q <= that times the acoustic part of K, and the Casimir part is >= 0".into(),
+            casimir_defect_meaning: "|lambda|_max(Q_B - Q, K) of the gravest mode, Q_B the generator form of the pointwise noise on the discrete K: the discrete error of B dq = -ik eta dq, zero in the continuum".into(),
+            casimir_defect: g.casimir_defect.iter().map(|(ny, d)| DefectPoint { ny: *ny as u64, defect: Float(*d) }).collect(),
+            discrete_sde: g.discrete_sde.map(|(m, s)| DiscreteSdeRecord {
+                meaning: "the discretised linear SDE dX = A X dt + sum_j B_j X o dW_j with the pointwise noise B_j: d E V/dt = E X^H Q_B X (Ito), Q_B = K A~ + A~^H K + sum_j B_j^H K B_j, so E V(t) <= exp(sigma2 t) V(0) for every x-mode at this ny and every start, with sigma2 = max over the modes of lambda_max(Q_B, K) (a Lanczos estimate, float, not verified). Q_B - Q is the Casimir defect: it tends to 0 under refinement at fixed k and grows with k, so on a given grid the shortest waves of the discrete SDE can outgrow the certified Sigma^2 (docs/fluids.md §1b)".into(),
+                ny: spec.problem.ny as u64,
+                m: m as u64,
+                sigma2: Float(s),
+            }),
+            drift_residual: opt(g.drift_residual),
+        }),
     }
 }
 
