@@ -1,14 +1,18 @@
 //! The whole finite-dimensional pipeline: from a validated [`System`] to a
 //! verdict with its evidence.
 
-use crate::bound::{family_lower_bound, InfimumWitness};
-use crate::certify::{certify_sigma2, ExactSigma2};
+mod optimum;
+mod proof;
+mod spectrum;
+
+use crate::bound::InfimumWitness;
+use crate::certify::ExactSigma2;
 use crate::form::{generator_form, GeneratorForm};
 use crate::growth::{growth_constant, GrowthConstant};
-use crate::instability::{instability_from_spectrum, spectrum, Instability};
+use crate::instability::Instability;
 use crate::linearise::{linearise, Linearisation};
-use crate::optimise::{optimise_choice, OptimiseSettings};
-use crate::spectral::{exact_spectrum_test, SpectralProof};
+use crate::optimise::OptimiseSettings;
+use crate::spectral::SpectralProof;
 use casimir::{find_definite_choice, CasimirChoice, SearchOutcome, SearchSettings, SecondVariation, System};
 use exact::Rational;
 use nalgebra::Complex;
@@ -185,11 +189,36 @@ impl Analysis {
 /// assert!((analysis.sigma2().unwrap() - 0.27).abs() < 1e-14);
 /// ```
 pub fn analyse(system: &System, settings: &Settings) -> Analysis {
+    let mut analysis = residuals(system);
+    if early_verdict(&mut analysis) {
+        return analysis;
+    }
+    let linearisation = linearise(system);
+    spectrum::spectral_evidence(&mut analysis, &linearisation, settings);
+    let choice = match definite_choice(system, settings, &mut analysis) {
+        Ok(choice) => choice,
+        Err(why) => return conclude_without_form(analysis, &why),
+    };
+    if matches!(analysis.spectral_proof, Some(SpectralProof::Unstable { .. })) || analysis.instability.is_some() {
+        // A conserved definite form rules out eigenvalues off the imaginary
+        // axis; both at once means a breakdown somewhere. Claim nothing.
+        analysis.verdict = Verdict::Inconclusive;
+        analysis.reason =
+            "contradictory evidence: a definite second variation was found, yet A appears to have an unstable eigenvalue".into();
+        return analysis;
+    }
+    stable(analysis, &linearisation, &choice, settings)
+}
+
+/// The exact residuals `ad*_{Dh(mu_e)} mu_e` and `ad*_{sigma_i} mu_e`, the
+/// isotropy algebra and the noise's commutation with the conserved
+/// quantities; the verdict not yet decided.
+fn residuals(system: &System) -> Analysis {
     let equilibrium_residual = system.equilibrium_residual();
     let noise_residuals = system.noise_residuals();
     let isotropy_basis = system.isotropy_basis();
     let noise_commutation = system.noise_commutation();
-    let mut analysis = Analysis {
+    Analysis {
         verdict: Verdict::Inconclusive,
         reason: String::new(),
         equilibrium_residual,
@@ -204,72 +233,51 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
         variation: None,
         search: None,
         stable: None,
-    };
+    }
+}
+
+/// Decides `not_an_equilibrium` or `noise_incompatible` from the exact
+/// residuals; whether it did.
+fn early_verdict(analysis: &mut Analysis) -> bool {
     if analysis.equilibrium_residual.iter().any(|r| !r.is_zero()) {
         analysis.verdict = Verdict::NotAnEquilibrium;
         analysis.reason = NOT_AN_EQUILIBRIUM.into();
-        return analysis;
+        return true;
     }
     let incompatible = incompatible_noise(&analysis.noise_residuals);
     if !incompatible.is_empty() {
         analysis.verdict = Verdict::NoiseIncompatible;
         analysis.reason = incompatible_reason(&incompatible);
-        return analysis;
+        return true;
     }
-    let linearisation = linearise(system);
-    let spectral = spectrum(&linearisation.a).and_then(|s| {
-        let instability = instability_from_spectrum(&linearisation.a, &s, settings.instability_tolerance)?;
-        Ok((s, instability))
-    });
-    analysis.linearisation = Some(linearisation.clone());
-    match spectral {
-        Ok((s, instability)) => {
-            analysis.spectrum = s;
-            analysis.instability = instability;
-        }
-        Err(e) => {
-            // Without a spectrum nothing about A can be claimed; the energy-
-            // Casimir test below does not need it.
-            analysis.spectrum_error = Some(e.to_string());
-        }
-    }
+    false
+}
 
-    if settings.exact {
-        let proof = exact_spectrum_test(&linearisation.a);
-        if proof == SpectralProof::ImaginaryAxis {
-            // Exact arithmetic rules out an unstable eigenvalue: any numerical
-            // one above the tolerance was round-off.
-            analysis.instability = None;
-        }
-        analysis.spectral_proof = Some(proof);
-    } else if analysis.instability.is_some() && exact_spectrum_test(&linearisation.a) == SpectralProof::ImaginaryAxis {
-        // Without exact proofs a floating-point instability is still
-        // confirmed: round-off off a defective eigenvalue on the imaginary
-        // axis (a Jordan block of size k >= 3 moves by eps^(1/k) |A|) is not
-        // reported as linear instability. (Only a claimed instability pays
-        // for the Sturm sequence; nothing is recorded as proved.)
-        analysis.instability = None;
-    }
-
+/// A definite second variation from the search over the Casimir freedom
+/// (the variation and the search recorded), or why there is none.
+fn definite_choice(system: &System, settings: &Settings, analysis: &mut Analysis) -> Result<CasimirChoice, String> {
     let Some(variation) = system.second_variation() else {
-        return conclude_without_form(analysis, NO_MULTIPLIERS);
+        return Err(NO_MULTIPLIERS.into());
     };
     let outcome = find_definite_choice(&variation, &settings.search);
     analysis.variation = Some(variation);
     analysis.search = Some(outcome.clone());
-    let Some(choice) = outcome.definite() else {
-        let why = not_definite_reason(&outcome, settings.search.definiteness_tolerance);
-        return conclude_without_form(analysis, &why);
-    };
-    if matches!(analysis.spectral_proof, Some(SpectralProof::Unstable { .. })) || analysis.instability.is_some() {
-        // A conserved definite form rules out eigenvalues off the imaginary
-        // axis; both at once means a breakdown somewhere. Claim nothing.
-        analysis.verdict = Verdict::Inconclusive;
-        analysis.reason =
-            "contradictory evidence: a definite second variation was found, yet A appears to have an unstable eigenvalue".into();
-        return analysis;
+    match outcome.definite() {
+        Some(choice) => Ok(choice.clone()),
+        None => Err(not_definite_reason(&outcome, settings.search.definiteness_tolerance)),
     }
-    let form = generator_form(&linearisation, &choice.p);
+}
+
+/// The `stable` verdict with its evidence: `Q` and `Sigma^2` for the first
+/// definite choice, the best choice over the freedom, and the exact claims
+/// (or `inconclusive` when `Sigma^2` cannot be computed or stated).
+fn stable(
+    mut analysis: Analysis,
+    linearisation: &Linearisation,
+    choice: &CasimirChoice,
+    settings: &Settings,
+) -> Analysis {
+    let form = generator_form(linearisation, &choice.p);
     let first_growth = match growth_constant(&choice.p, &form.q, choice.sign) {
         Ok(g) => g,
         Err(e) => {
@@ -278,84 +286,26 @@ pub fn analyse(system: &System, settings: &Settings) -> Analysis {
             return analysis;
         }
     };
-    let variation = analysis.variation.as_ref().expect("set above");
-    let optimum = if settings.optimise {
-        let noise_conserves_all = analysis.noise_commutation.iter().flatten().all(|&c| c);
-        optimise_choice(
-            variation,
-            &linearisation,
-            choice,
-            &form,
-            &first_growth,
-            noise_conserves_all,
-            &settings.optimisation,
-        )
-    } else {
-        None
-    };
-    let (best_choice, best_form, best_growth, mut summary) = match optimum {
-        Some(o) => {
-            let summary = OptimumSummary {
-                infimum: o.infimum,
-                infimum_lower_bound: o.infimum_lower_bound.clone(),
-                infimum_witness: o.infimum_witness.clone(),
-                attained: o.attained,
-                within_tolerance: o.within_tolerance,
-                q_depends_on_m: o.q_depends_on_m,
-                method: o.method,
-                infimum_parameters: o.infimum_parameters.clone(),
-            };
-            (o.choice, o.form, o.growth, Some(summary))
-        }
-        None => (choice.clone(), form, first_growth.clone(), None),
-    };
-    let exact = if settings.exact && settings.prove_bound {
-        certify_sigma2(&best_choice.p, &best_form.q, best_choice.sign, best_growth.largest_eigenvalue.max(0.0))
-    } else {
-        None
-    };
-    if let (Some(e), Some(o)) = (&exact, summary.as_mut()) {
-        // With free multipliers, a certified bound over the whole family
-        // (exact work, so at the exact level only), kept if consistent with
-        // the certified value.
-        if let (None, false, Some(t)) = (&o.infimum_lower_bound, o.q_depends_on_m, &o.infimum_parameters) {
-            let variation = analysis.variation.as_ref().expect("set above");
-            let lin = analysis.linearisation.as_ref().expect("set above");
-            if let Some((rho, x)) = family_lower_bound(variation, lin, best_choice.sign, t) {
-                if rho <= e.value {
-                    o.infimum_lower_bound = Some(rho);
-                    o.infimum_witness = Some(InfimumWitness::Matrix(x));
-                }
-            }
-        }
-    }
-    if let Some(e) = &exact {
-        // The certificate states Sigma^2 as a double beside the rational:
-        // one that no double holds is not rounded to 0 (towards "stable").
-        let f = exact::rational_to_f64(&e.value);
-        let representable = f.is_finite() && f >= f64::MIN_POSITIVE;
-        if !e.value.is_zero() && !representable {
-            analysis.verdict = Verdict::Inconclusive;
-            analysis.reason = format!(
-                "a definite second variation was found, but Sigma^2 = 2^{} (about, proved exactly) lies outside the range of double precision: rescale time or the noise amplitudes",
-                exact::binary_exponent(&e.value).unwrap_or(0)
-            );
-            return analysis;
-        }
+    let mut best = optimum::best_choice(&analysis, linearisation, choice, form, &first_growth, settings);
+    let exact = proof::certify(&analysis, &mut best, settings);
+    if let Some(reason) = exact.as_ref().and_then(proof::out_of_double_range) {
+        analysis.verdict = Verdict::Inconclusive;
+        analysis.reason = reason;
+        return analysis;
     }
     analysis.verdict = Verdict::Stable;
     analysis.reason = format!(
         "the second variation is {} definite: formally stable; E|dmu_t|_P^2 <= |dmu_0|_P^2 e^(Sigma^2 t)",
-        best_choice.sign
+        best.choice.sign
     );
     analysis.stable = Some(StableEvidence {
-        choice: best_choice,
-        form: best_form,
-        growth: best_growth,
+        choice: best.choice,
+        form: best.form,
+        growth: best.growth,
         exact,
         first_choice: choice.clone(),
         first_sigma2: first_growth.sigma2,
-        optimum: summary,
+        optimum: best.summary,
     });
     analysis
 }
