@@ -168,23 +168,7 @@ pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
         a.sigma2_bound(),
         "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta",
     );
-    let conserved = system
-        .conserved()
-        .iter()
-        .zip(&a.noise_commutation)
-        .map(|((kind, poly), commutes)| {
-            let (kind, source) = match kind {
-                casimir::ConservedKind::Casimir => ("casimir", spec.casimir_source.as_str()),
-                casimir::ConservedKind::FirstIntegral => ("first_integral", "spec"),
-            };
-            ConservedRecord {
-                kind: kind.into(),
-                source: source.into(),
-                expression: poly.to_string_with(coords),
-                commutes_with_noise: commutes.clone(),
-            }
-        })
-        .collect();
+    let conserved = conserved_records(spec, a);
     let search = match &a.search {
         Some(casimir::SearchOutcome::NotFound { best_positive_margin, best_negative_margin, restricted_dimension }) => {
             Some(SearchRecord {
@@ -195,64 +179,9 @@ pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
         }
         _ => None,
     };
-    let optimisation = a.stable.as_ref().map(|s| {
-        let mut opt = OptimisationRecord {
-            optimised: s.optimum.is_some(),
-            first_definite_choice: choice_record(&s.first_choice),
-            first_definite_sigma2: Float(s.first_sigma2),
-            infimum: None,
-            infimum_lower_bound: None,
-            infimum_witness: None,
-            infimum_witness_matrix: None,
-            gap: None,
-            attained: None,
-            within_tolerance: None,
-            q_depends_on_m: None,
-            method: None,
-            tolerance: None,
-        };
-        if let Some(o) = &s.optimum {
-            opt.infimum = Some(Float(o.infimum));
-            if let (Some(lb), Some(w)) = (&o.infimum_lower_bound, &o.infimum_witness) {
-                opt.infimum_lower_bound = Some(lb.to_string());
-                match w {
-                    generator::InfimumWitness::Vector(x) => opt.infimum_witness = Some(rationals(x)),
-                    generator::InfimumWitness::Matrix(x) => opt.infimum_witness_matrix = Some(matrix(x)),
-                }
-            }
-            opt.gap = Some(Float((s.growth.sigma2 - o.infimum).max(0.0)));
-            opt.attained = Some(o.attained);
-            opt.within_tolerance = Some(o.within_tolerance);
-            opt.q_depends_on_m = Some(o.q_depends_on_m);
-            opt.method = Some(o.method.to_string());
-            opt.tolerance = Some(Float(spec.settings.pipeline.optimisation.tolerance));
-        }
-        opt
-    });
+    let optimisation = a.stable.as_ref().map(|s| optimisation_record(spec, s));
     let exact = a.stable.as_ref().and_then(|s| s.exact.as_ref());
-    let algebra = spec.builtin.clone().unwrap_or_else(|| "an algebra given by structure constants".into());
-    let subject = crate::theorem::finite_subject(
-        &spec.name,
-        &algebra,
-        system.dim(),
-        &crate::theorem::listed(system.equilibrium(), "the spec's equilibrium"),
-        system.noise().len(),
-    );
-    let bound = a.stable.as_ref().map(|s| crate::theorem::Bound {
-        sigma2: match &s.exact {
-            Some(e) if e.value.to_string().len() <= 40 => e.value.to_string(),
-            _ => crate::theorem::significant(s.sigma2_bound(), true),
-        },
-        zero: s.sigma2_bound() == 0.0,
-        stopping: stopping.as_ref().map(|st| (st.epsilon.0, st.delta.0, Some(st.t.0).filter(|t| t.is_finite()))),
-    });
-    let theorem = crate::theorem::theorem(
-        &subject,
-        a.verdict,
-        Some(verification_level(a)),
-        bound.as_ref(),
-        a.instability.as_ref().map(|i| i.eigenvalue.re),
-    );
+    let theorem = lie_theorem(spec, a, stopping.as_ref());
     CertificateDocument {
         certificate_version: CERTIFICATE_VERSION,
         engine: Engine { name: "verify".into(), version: ENGINE_VERSION.into() },
@@ -319,11 +248,99 @@ pub fn certificate_document(spec: &Spec, a: &Analysis) -> CertificateDocument {
             route: crate::record::Route::DenseExact,
             why: format!(
                 "{} coordinates, at most {}: dense matrices in rational arithmetic",
-                spec.system.dim(),
+                system.dim(),
                 algebra::MAX_DIMENSION
             ),
             settings_not_honoured: BTreeMap::new(),
         },
         spec: spec.raw.clone(),
     }
+}
+
+/// The conserved quantities: each Casimir (where it came from) and first
+/// integral, with whether it commutes with each noise field.
+fn conserved_records(spec: &Spec, a: &Analysis) -> Vec<ConservedRecord> {
+    let coords = spec.system.algebra().coordinates();
+    spec.system
+        .conserved()
+        .iter()
+        .zip(&a.noise_commutation)
+        .map(|((kind, poly), commutes)| {
+            let (kind, source) = match kind {
+                casimir::ConservedKind::Casimir => ("casimir", spec.casimir_source.as_str()),
+                casimir::ConservedKind::FirstIntegral => ("first_integral", "spec"),
+            };
+            ConservedRecord {
+                kind: kind.into(),
+                source: source.into(),
+                expression: poly.to_string_with(coords),
+                commutes_with_noise: commutes.clone(),
+            }
+        })
+        .collect()
+}
+
+/// The minimisation of `Sigma^2` over the Casimir freedom, from the first
+/// definite choice to the infimum and its proved lower bound.
+fn optimisation_record(spec: &Spec, s: &generator::StableEvidence) -> OptimisationRecord {
+    let mut opt = OptimisationRecord {
+        optimised: s.optimum.is_some(),
+        first_definite_choice: choice_record(&s.first_choice),
+        first_definite_sigma2: Float(s.first_sigma2),
+        infimum: None,
+        infimum_lower_bound: None,
+        infimum_witness: None,
+        infimum_witness_matrix: None,
+        gap: None,
+        attained: None,
+        within_tolerance: None,
+        q_depends_on_m: None,
+        method: None,
+        tolerance: None,
+    };
+    if let Some(o) = &s.optimum {
+        opt.infimum = Some(Float(o.infimum));
+        if let (Some(lb), Some(w)) = (&o.infimum_lower_bound, &o.infimum_witness) {
+            opt.infimum_lower_bound = Some(lb.to_string());
+            match w {
+                generator::InfimumWitness::Vector(x) => opt.infimum_witness = Some(rationals(x)),
+                generator::InfimumWitness::Matrix(x) => opt.infimum_witness_matrix = Some(matrix(x)),
+            }
+        }
+        opt.gap = Some(Float((s.growth.sigma2 - o.infimum).max(0.0)));
+        opt.attained = Some(o.attained);
+        opt.within_tolerance = Some(o.within_tolerance);
+        opt.q_depends_on_m = Some(o.q_depends_on_m);
+        opt.method = Some(o.method.to_string());
+        opt.tolerance = Some(Float(spec.settings.pipeline.optimisation.tolerance));
+    }
+    opt
+}
+
+/// The statement proved (or estimated), generated from the data.
+fn lie_theorem(spec: &Spec, a: &Analysis, stopping: Option<&StoppingRecord>) -> crate::theorem::TheoremRecord {
+    let system = &spec.system;
+    let algebra = spec.builtin.clone().unwrap_or_else(|| "an algebra given by structure constants".into());
+    let subject = crate::theorem::finite_subject(
+        &spec.name,
+        &algebra,
+        system.dim(),
+        &crate::theorem::listed(system.equilibrium(), "the spec's equilibrium"),
+        system.noise().len(),
+    );
+    let bound = a.stable.as_ref().map(|s| crate::theorem::Bound {
+        sigma2: match &s.exact {
+            Some(e) if e.value.to_string().len() <= 40 => e.value.to_string(),
+            _ => crate::theorem::significant(s.sigma2_bound(), true),
+        },
+        zero: s.sigma2_bound() == 0.0,
+        stopping: stopping.map(|st| (st.epsilon.0, st.delta.0, Some(st.t.0).filter(|t| t.is_finite()))),
+    });
+    crate::theorem::theorem(
+        &subject,
+        a.verdict,
+        Some(verification_level(a)),
+        bound.as_ref(),
+        a.instability.as_ref().map(|i| i.eigenvalue.re),
+    )
 }

@@ -240,71 +240,17 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
     if name.trim().is_empty() {
         return Err(SpecError::new(child(root, "name"), "must not be empty"));
     }
-    let mut params = BTreeMap::new();
-    let ppath = child(root, "parameters");
-    for (key, v) in &doc.parameters {
-        let kpath = child(&ppath, key);
-        let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-            && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if !valid || ["y", "pi", "compatible"].contains(&key.as_str()) || fluid::expr::FUNCTIONS.contains(&key.as_str())
-        {
-            return Err(SpecError::new(
-                kpath,
-                format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi, a function or 'compatible')"),
-            ));
-        }
-        let x = constant(v, &kpath, &params)?;
-        params.insert(key.clone(), x);
-    }
+    let params = read_parameters(&doc.parameters, &child(root, "parameters"))?;
     let fpath = child(root, "fluid");
     let f = &doc.fluid;
-    let spath = child(&fpath, "sound_speed");
-    let model = match f.model {
-        ModelName::Incompressible => {
-            if f.sound_speed.is_some() {
-                return Err(SpecError::new(spath, "only a compressible model has a sound speed"));
-            }
-            FluidModel::Incompressible
-        }
-        ModelName::Compressible => {
-            let speed = f.sound_speed.as_ref().ok_or_else(|| SpecError::new(&spath, "required field is missing"))?;
-            let c = constant(speed, &spath, &params)?;
-            if c <= 0.0 {
-                return Err(SpecError::new(spath, format!("must be positive, got {c}")));
-            }
-            FluidModel::Compressible { sound_speed: c }
-        }
-    };
+    let model = read_model(f, &fpath, &params)?;
     let xpath = child(&fpath, "x_period");
     let x_period = constant(&f.x_period, &xpath, &params)?;
     if x_period <= 0.0 {
         return Err(SpecError::new(xpath, format!("must be positive, got {x_period}")));
     }
-    let ipath = child(&fpath, "y_interval");
-    let iv = &f.y_interval;
-    if iv.len() != 2 {
-        return Err(SpecError::new(&ipath, format!("expected [a, b], got {} entries", iv.len())));
-    }
-    let a = constant(&iv[0], &index(&ipath, 0), &params)?;
-    let b = constant(&iv[1], &index(&ipath, 1), &params)?;
-    if a >= b {
-        return Err(SpecError::new(index(&ipath, 1), format!("must exceed the left end {a}, got {b}")));
-    }
-    for (i, x) in [a, b].into_iter().enumerate() {
-        if x.abs() > MAX_COORDINATE {
-            return Err(SpecError::new(
-                index(&ipath, i),
-                format!("|{x:e}| exceeds {MAX_COORDINATE:e}: rescale y (the discretisation would leave the range of doubles)"),
-            ));
-        }
-    }
+    let (a, b) = read_y_interval(&f.y_interval, &child(&fpath, "y_interval"), &params)?;
     let length = b - a;
-    if length < 1e-10 * a.abs().max(b.abs()) || length < 1.0 / MAX_COORDINATE {
-        return Err(SpecError::new(
-            index(&ipath, 1),
-            format!("the interval [{a:e}, {b:e}] is too short for its position (length {length:e}; at least 1e-10 of max(|a|, |b|) and 1e-100): the grid nodes would not be distinct doubles"),
-        ));
-    }
     let boundary = match f.boundary {
         BoundaryName::Walls => Boundary::Walls,
         BoundaryName::Periodic => Boundary::Periodic,
@@ -312,53 +258,9 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
     let upath = child(&fpath, "shear_flow");
     let u = expr(&f.shear_flow, &upath, &params)?;
     let npath = child(&fpath, "noise");
-    if f.noise.len() > crate::parse::MAX_NOISE_FIELDS {
-        return Err(SpecError::new(
-            &npath,
-            format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
-        ));
-    }
-    let mut noise = Vec::with_capacity(f.noise.len());
-    let mut potentials = Vec::with_capacity(f.noise.len());
-    for (i, entry) in f.noise.iter().enumerate() {
-        let ipath = index(&npath, i);
-        match entry {
-            NoiseEntry::Transport(e) => {
-                noise.push(expr(e, &ipath, &params)?);
-                potentials.push(Potential::None);
-            }
-            NoiseEntry::WithPotential { transport, potential } => {
-                noise.push(expr(transport, &child(&ipath, "transport"), &params)?);
-                potentials.push(if potential.0.trim() == "compatible" {
-                    Potential::Compatible
-                } else {
-                    Potential::given(expr(potential, &child(&ipath, "potential"), &params)?)
-                });
-            }
-        }
-    }
-    let nypath = child(&fpath, "ny");
-    let ny = count(f.ny, &nypath)?;
-    if ny < NY_RANGE.0 {
-        return Err(SpecError::new(
-            nypath,
-            format!("ny = {ny} is too small: at least {} points are needed", NY_RANGE.0),
-        ));
-    }
-    if ny > NY_RANGE.1 {
-        return Err(SpecError::new(nypath, format!("ny = {ny} is too large (at most {})", NY_RANGE.1)));
-    }
-    if ny % ELEMENT_DEGREE != 0 {
-        return Err(SpecError::new(
-            nypath,
-            format!("ny must be a multiple of the element degree {ELEMENT_DEGREE} (ny / {ELEMENT_DEGREE} spectral elements), got {ny}"),
-        ));
-    }
+    let (noise, potentials) = read_noise(&f.noise, &npath, &params)?;
+    let (ny, x_modes) = read_grid(f, &fpath)?;
     let kpath = child(&fpath, "x_modes");
-    let x_modes = count(f.x_modes, &kpath)?;
-    if x_modes == 0 || x_modes > MAX_X_MODES {
-        return Err(SpecError::new(kpath, format!("must be between 1 and {MAX_X_MODES}, got {x_modes}")));
-    }
     // The wavenumbers against the interval: k^2 M beside the stiffness 1/h
     // must stay within the range of doubles.
     let two_pi = 2.0 * std::f64::consts::PI;
@@ -394,6 +296,146 @@ pub fn fluid_spec_from_value(value: Value) -> Result<FluidSpec> {
     let sweep = crate::sweep::read_sweep_section(doc.sweep.as_ref(), &child(root, "sweep"), &names)?;
     let problem = FluidProblem { model, profile, x_period, ny, x_modes };
     Ok(FluidSpec { name, raw: value, problem, stopping, settings, sweep })
+}
+
+/// The spec's parameters, in order, each a constant of the ones before it;
+/// names that would shadow `y`, `pi`, a function or `compatible` refused.
+fn read_parameters(
+    given: &BTreeMap<String, crate::document::Expression>,
+    ppath: &str,
+) -> Result<BTreeMap<String, f64>> {
+    let mut params = BTreeMap::new();
+    for (key, v) in given {
+        let kpath = child(ppath, key);
+        let valid = key.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !valid || ["y", "pi", "compatible"].contains(&key.as_str()) || fluid::expr::FUNCTIONS.contains(&key.as_str())
+        {
+            return Err(SpecError::new(
+                kpath,
+                format!("'{key}' is not a valid parameter name (letters, digits, '_'; not y, pi, a function or 'compatible')"),
+            ));
+        }
+        let x = constant(v, &kpath, &params)?;
+        params.insert(key.clone(), x);
+    }
+    Ok(params)
+}
+
+/// The model, and the sound speed a compressible one needs.
+fn read_model(f: &crate::document::FluidDoc, fpath: &str, params: &BTreeMap<String, f64>) -> Result<FluidModel> {
+    let spath = child(fpath, "sound_speed");
+    Ok(match f.model {
+        ModelName::Incompressible => {
+            if f.sound_speed.is_some() {
+                return Err(SpecError::new(spath, "only a compressible model has a sound speed"));
+            }
+            FluidModel::Incompressible
+        }
+        ModelName::Compressible => {
+            let speed = f.sound_speed.as_ref().ok_or_else(|| SpecError::new(&spath, "required field is missing"))?;
+            let c = constant(speed, &spath, params)?;
+            if c <= 0.0 {
+                return Err(SpecError::new(spath, format!("must be positive, got {c}")));
+            }
+            FluidModel::Compressible { sound_speed: c }
+        }
+    })
+}
+
+/// The interval `[a, b]` of `y`: ordered, within the range the
+/// discretisation keeps in doubles, and long enough for distinct nodes.
+fn read_y_interval(
+    iv: &[crate::document::Expression],
+    ipath: &str,
+    params: &BTreeMap<String, f64>,
+) -> Result<(f64, f64)> {
+    if iv.len() != 2 {
+        return Err(SpecError::new(ipath, format!("expected [a, b], got {} entries", iv.len())));
+    }
+    let a = constant(&iv[0], &index(ipath, 0), params)?;
+    let b = constant(&iv[1], &index(ipath, 1), params)?;
+    if a >= b {
+        return Err(SpecError::new(index(ipath, 1), format!("must exceed the left end {a}, got {b}")));
+    }
+    for (i, x) in [a, b].into_iter().enumerate() {
+        if x.abs() > MAX_COORDINATE {
+            return Err(SpecError::new(
+                index(ipath, i),
+                format!("|{x:e}| exceeds {MAX_COORDINATE:e}: rescale y (the discretisation would leave the range of doubles)"),
+            ));
+        }
+    }
+    let length = b - a;
+    if length < 1e-10 * a.abs().max(b.abs()) || length < 1.0 / MAX_COORDINATE {
+        return Err(SpecError::new(
+            index(ipath, 1),
+            format!("the interval [{a:e}, {b:e}] is too short for its position (length {length:e}; at least 1e-10 of max(|a|, |b|) and 1e-100): the grid nodes would not be distinct doubles"),
+        ));
+    }
+    Ok((a, b))
+}
+
+/// The noise fields, each a transport field with an optional potential.
+fn read_noise(
+    entries: &[NoiseEntry],
+    npath: &str,
+    params: &BTreeMap<String, f64>,
+) -> Result<(Vec<fluid::expr::Expr>, Vec<Potential>)> {
+    if entries.len() > crate::parse::MAX_NOISE_FIELDS {
+        return Err(SpecError::new(
+            npath,
+            format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
+        ));
+    }
+    let mut noise = Vec::with_capacity(entries.len());
+    let mut potentials = Vec::with_capacity(entries.len());
+    for (i, entry) in entries.iter().enumerate() {
+        let ipath = index(npath, i);
+        match entry {
+            NoiseEntry::Transport(e) => {
+                noise.push(expr(e, &ipath, params)?);
+                potentials.push(Potential::None);
+            }
+            NoiseEntry::WithPotential { transport, potential } => {
+                noise.push(expr(transport, &child(&ipath, "transport"), params)?);
+                potentials.push(if potential.0.trim() == "compatible" {
+                    Potential::Compatible
+                } else {
+                    Potential::given(expr(potential, &child(&ipath, "potential"), params)?)
+                });
+            }
+        }
+    }
+    Ok((noise, potentials))
+}
+
+/// The grid: `ny` (a multiple of the element degree, in range) and the
+/// number of x-modes.
+fn read_grid(f: &crate::document::FluidDoc, fpath: &str) -> Result<(usize, usize)> {
+    let nypath = child(fpath, "ny");
+    let ny = count(f.ny, &nypath)?;
+    if ny < NY_RANGE.0 {
+        return Err(SpecError::new(
+            nypath,
+            format!("ny = {ny} is too small: at least {} points are needed", NY_RANGE.0),
+        ));
+    }
+    if ny > NY_RANGE.1 {
+        return Err(SpecError::new(nypath, format!("ny = {ny} is too large (at most {})", NY_RANGE.1)));
+    }
+    if ny % ELEMENT_DEGREE != 0 {
+        return Err(SpecError::new(
+            nypath,
+            format!("ny must be a multiple of the element degree {ELEMENT_DEGREE} (ny / {ELEMENT_DEGREE} spectral elements), got {ny}"),
+        ));
+    }
+    let kpath = child(fpath, "x_modes");
+    let x_modes = count(f.x_modes, &kpath)?;
+    if x_modes == 0 || x_modes > MAX_X_MODES {
+        return Err(SpecError::new(kpath, format!("must be between 1 and {MAX_X_MODES}, got {x_modes}")));
+    }
+    Ok((ny, x_modes))
 }
 
 fn profile_error(e: ProfileError, fpath: &str) -> SpecError {
