@@ -63,6 +63,9 @@ use std::cell::Cell;
 
 type C = Complex<f64>;
 
+/// An eigenvalue of a projected matrix and its coefficient vector.
+type RitzPair = (C, Vec<C>);
+
 /// Settings of the matrix-free analysis, with documented defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MatrixFreeSettings {
@@ -205,7 +208,19 @@ fn sandwich(a: &DMatrix<C>, x: &DMatrix<C>, b: &DMatrix<C>) -> DMatrix<C> {
     product(&product(a, x), b)
 }
 
-impl Frame<'_> {
+impl<'a> Frame<'a> {
+    /// The frame of the eigenbasis `f` of `-i P_e` (eigenvalues `pi`):
+    /// `F^* W_e F` and whether it is diagonal (two products).
+    fn new(solver: &'a StreamSolver, f: DMatrix<C>, pi: Vec<f64>, w: &DMatrix<C>, hb: f64) -> Frame<'a> {
+        let n = w.nrows();
+        let wf = sandwich(&f.adjoint(), w, &f);
+        let w_diagonal = {
+            let diag: f64 = (0..n).map(|j| wf[(j, j)].norm_sqr()).sum();
+            (wf.norm_squared() - diag).max(0.0).sqrt() <= 1e-14 * wf.norm()
+        };
+        // Two products so far: F^* W_e F.
+        Frame { solver, f, pi, wf, w_diagonal, hb, products: Cell::new(2) }
+    }
     fn count(&self, k: usize) {
         self.products.set(self.products.get() + k);
     }
@@ -284,7 +299,7 @@ fn random_element(n: usize, seed: u64) -> DMatrix<C> {
 
 /// Eigenvalues and eigenvectors of a small matrix (real or complex), by
 /// faer.
-fn small_eigen<T>(h: &DMatrix<T>) -> Result<Vec<(C, Vec<C>)>, ZeitlinError>
+fn small_eigen<T>(h: &DMatrix<T>) -> Result<Vec<RitzPair>, ZeitlinError>
 where
     T: nalgebra::Scalar + faer::traits::ComplexField<Real = f64> + faer::traits::Conjugate<Canonical = T>,
 {
@@ -428,13 +443,7 @@ pub fn matrix_free_analysis(
     let distinct = omega.windows(2).all(|p| p[1] - p[0] > 1e-8 * spread);
     let (pvals, f) = hermitian_eigen(&(p_e * C::new(0.0, -1.0)))
         .ok_or_else(|| numerical("the eigenvalues of -i P_e did not converge"))?;
-    let wf = sandwich(&f.adjoint(), w, &f);
-    let w_diagonal = {
-        let diag: f64 = (0..n).map(|j| wf[(j, j)].norm_sqr()).sum();
-        (wf.norm_squared() - diag).max(0.0).sqrt() <= 1e-14 * wf.norm()
-    };
-    // Two products so far: F^* W_e F.
-    let frame = Frame { solver, f, pi: pvals.clone(), wf, w_diagonal, hb, products: Cell::new(2) };
+    let frame = Frame::new(solver, f, pvals, w, hb);
     let mut out = MatrixFreeAnalysis {
         dimension: n * n - 1,
         distinct_eigenvalues: distinct,
@@ -449,84 +458,182 @@ pub fn matrix_free_analysis(
         tau: 0.0,
         products: 0,
     };
-    // The drift in the spin basis, as the dense analysis forms it.
-    let drift_spin = |x: &DMatrix<C>| -> Result<DMatrix<C>, ZeitlinError> {
-        let psi = solver.solve(x).map_err(numerical)?;
-        frame.count(4);
-        Ok((commutator(p_e, x) + commutator(&psi, w)) / C::new(hb, 0.0))
-    };
+    let spin = SpinDrift { frame: &frame, w, p_e };
     if distinct {
-        let pi: Vec<f64> = {
-            let t = sandwich(&u.adjoint(), &(p_e * C::new(0.0, -1.0)), &u);
-            (0..n).map(|j| t[(j, j)].re).collect()
-        };
-        frame.count(2);
-        let c = |j: usize, k: usize| (pi[j] - pi[k]) / (omega[j] - omega[k]);
-        let to_frame = |x: &DMatrix<C>| sandwich(&u.adjoint(), x, &u);
-        let from_frame = |x: &DMatrix<C>| sandwich(&u, x, &u.adjoint());
-        // The full Hessian G + C on su(N), in the spin basis (C off the
-        // eigenbasis diagonal only).
-        let hessian = |x: &DMatrix<C>| -> Result<DMatrix<C>, ZeitlinError> {
-            let psi = solver.solve(x).map_err(numerical)?;
-            let t = to_frame(x);
-            let t = DMatrix::from_fn(n, n, |j, k| if j == k { C::new(0.0, 0.0) } else { t[(j, k)] * c(j, k) });
-            frame.count(4);
-            Ok(from_frame(&t) - psi)
-        };
-        for s in 0..3 {
-            progress.check()?;
-            let x = random_element(n, 2 * s + 1);
-            let y = random_element(n, 2 * s + 2);
-            let (rx, ry, ax, ay) = (hessian(&x)?, hessian(&y)?, drift_spin(&x)?, drift_spin(&y)?);
-            let num = (dot(&rx, &ay) + dot(&ax, &ry)).abs();
-            let den = rx.norm() * ay.norm() + ax.norm() * ry.norm();
-            if den > 0.0 {
-                out.drift_residual = out.drift_residual.max(num / den);
-            }
-        }
-        // Lanczos on R, restricted to the tangent space (off-diagonal in
-        // the eigenbasis), with full reorthogonalisation.
-        let restricted = |x: &DMatrix<C>| -> Result<DMatrix<C>, ZeitlinError> {
-            let t = to_frame(&-solver.solve(&from_frame(x)).map_err(numerical)?);
-            frame.count(4);
-            Ok(DMatrix::from_fn(n, n, |j, k| if j == k { C::new(0.0, 0.0) } else { t[(j, k)] + x[(j, k)] * c(j, k) }))
-        };
-        let start = to_frame(&random_element(n, 99));
-        let mut start = DMatrix::from_fn(n, n, |j, k| if j == k { C::new(0.0, 0.0) } else { start[(j, k)] });
-        start /= C::new(start.norm(), 0.0);
-        let mut basis = vec![start];
-        let (mut alpha, mut beta) = (vec![], vec![]);
-        for _ in 0..settings.lanczos_steps.clamp(1, n * n - n) {
-            progress.check()?;
-            progress.step(1);
-            let mut x = restricted(basis.last().expect("a vector"))?;
-            let (coef, norm) = orthogonalise(&basis, &mut x);
-            alpha.push(coef[coef.len() - 1]);
-            let size = alpha.iter().chain(&beta).fold(0.0f64, |a, v| a.max(v.abs()));
-            if not_above(norm, 1e-12 * size) {
-                break;
-            }
-            beta.push(norm);
-            basis.push(x / C::new(norm, 0.0));
-        }
-        let k = alpha.len();
-        let t = DMatrix::from_fn(k, k, |i, j| match i.abs_diff(j) {
-            0 => alpha[i],
-            1 => beta[i.min(j)],
-            _ => 0.0,
-        });
-        let ritz = crate::eigen::symmetric_eigenvalues(&t).ok_or_else(|| numerical("the Lanczos matrix"))?;
-        // A Ritz value within 1e-12 of the larger in size is rounding (its
-        // digits differ between machines): it is recorded as 0.
-        let size = ritz[0].abs().max(ritz[k - 1].abs());
-        let snap = |x: f64| if x.abs() <= 1e-12 * size { 0.0 } else { x };
-        let (lo, hi) = (snap(ritz[0]), snap(ritz[k - 1]));
-        out.restricted_ritz = Some((lo, hi));
-        out.indefinite = lo < -1e-9 * size && hi > 1e-9 * size;
+        let hessian = Hessian::new(&frame, &u, &omega, p_e);
+        out.drift_residual = conservation_residual(&hessian, &spin, progress)?;
+        let (ritz, indefinite) = restricted_ritz(&hessian, settings.lanczos_steps, progress)?;
+        out.restricted_ritz = Some(ritz);
+        out.indefinite = indefinite;
     }
 
     // 1. Arnoldi on the split propagator.
     progress.check()?;
+    let coupling_norm = coupling_norm(&frame)?;
+    let transport_norm = (frame.pi.last().copied().unwrap_or(0.0) - frame.pi.first().copied().unwrap_or(0.0)) / hb;
+    out.drift_norm = transport_norm + coupling_norm;
+    let scale = out.drift_norm;
+    if !(scale > 0.0 && scale.is_finite()) {
+        out.products = frame.products.get();
+        return Ok(out);
+    }
+    let tau = 2.0 / w_op.max(coupling_norm);
+    let rk_steps = ((tau * coupling_norm / 0.5).ceil() as usize).max(1);
+    out.tau = tau;
+    let basis = arnoldi(&frame, settings, tau, rk_steps, progress)?;
+    let (images, pairs) = rayleigh_ritz(&frame, &basis, settings, w_op, progress)?;
+    // 2. Davidson from each of the first three.
+    let mut found: Vec<(C, DMatrix<C>)> = vec![];
+    for (theta, y) in pairs.iter().take(3) {
+        let u = combine(&basis, y);
+        let au = combine(&images, y);
+        let (t, v, r) = davidson(&frame, (*theta, u, au), scale, settings.davidson_steps, progress)?;
+        if r <= settings.residual_tolerance {
+            found.push((t, v));
+        }
+    }
+    accept(&mut out, &spin, &found, settings, (scale, w_op), progress)?;
+    out.products = frame.products.get();
+    Ok(out)
+}
+
+/// The drift in the spin basis, as the dense analysis forms it:
+/// `A X = ([P_e, X] + [Delta^-1 X, W_e]) / hbar`.
+struct SpinDrift<'a> {
+    frame: &'a Frame<'a>,
+    w: &'a DMatrix<C>,
+    p_e: &'a DMatrix<C>,
+}
+
+impl SpinDrift<'_> {
+    /// `A X`, four products.
+    fn apply(&self, x: &DMatrix<C>) -> Result<DMatrix<C>, ZeitlinError> {
+        let psi = self.frame.solver.solve(x).map_err(numerical)?;
+        self.frame.count(4);
+        Ok((commutator(self.p_e, x) + commutator(&psi, self.w)) / C::new(self.frame.hb, 0.0))
+    }
+}
+
+/// The Hessian of `H + C_Phi` and its restriction `R` to the orbit's
+/// tangent space, in the eigenbasis `U` of `-i W_e` (see the module docs).
+struct Hessian<'a> {
+    frame: &'a Frame<'a>,
+    u: &'a DMatrix<C>,
+    omega: &'a [f64],
+    /// The diagonal of `U^* (-i P_e) U`.
+    pi: Vec<f64>,
+}
+
+impl<'a> Hessian<'a> {
+    /// `pi_j = (U^* (-i P_e) U)_jj` (two products).
+    fn new(frame: &'a Frame<'a>, u: &'a DMatrix<C>, omega: &'a [f64], p_e: &DMatrix<C>) -> Hessian<'a> {
+        let n = u.nrows();
+        let pi: Vec<f64> = {
+            let t = sandwich(&u.adjoint(), &(p_e * C::new(0.0, -1.0)), u);
+            (0..n).map(|j| t[(j, j)].re).collect()
+        };
+        frame.count(2);
+        Hessian { frame, u, omega, pi }
+    }
+
+    /// The Daleckii–Krein weight `c_jk = (pi_j - pi_k) / (omega_j - omega_k)`.
+    fn c(&self, j: usize, k: usize) -> f64 {
+        (self.pi[j] - self.pi[k]) / (self.omega[j] - self.omega[k])
+    }
+
+    /// `U^* X U`.
+    fn in_eigenbasis(&self, x: &DMatrix<C>) -> DMatrix<C> {
+        sandwich(&self.u.adjoint(), x, self.u)
+    }
+
+    /// `U X U^*`.
+    fn in_spin_basis(&self, x: &DMatrix<C>) -> DMatrix<C> {
+        sandwich(self.u, x, &self.u.adjoint())
+    }
+
+    /// The full Hessian G + C on su(N), in the spin basis (C off the
+    /// eigenbasis diagonal only).
+    fn full(&self, x: &DMatrix<C>) -> Result<DMatrix<C>, ZeitlinError> {
+        let n = x.nrows();
+        let psi = self.frame.solver.solve(x).map_err(numerical)?;
+        let t = self.in_eigenbasis(x);
+        let t = DMatrix::from_fn(n, n, |j, k| if j == k { C::new(0.0, 0.0) } else { t[(j, k)] * self.c(j, k) });
+        self.frame.count(4);
+        Ok(self.in_spin_basis(&t) - psi)
+    }
+
+    /// `R X = offdiag(U^* (-Delta^-1 (U X U^*)) U) + c o X`, in the
+    /// eigenbasis.
+    fn restricted(&self, x: &DMatrix<C>) -> Result<DMatrix<C>, ZeitlinError> {
+        let n = x.nrows();
+        let t = self.in_eigenbasis(&-self.frame.solver.solve(&self.in_spin_basis(x)).map_err(numerical)?);
+        self.frame.count(4);
+        Ok(DMatrix::from_fn(n, n, |j, k| if j == k { C::new(0.0, 0.0) } else { t[(j, k)] + x[(j, k)] * self.c(j, k) }))
+    }
+}
+
+/// `max |<R X, A Y> + <A X, R Y>| / (|R X| |A Y| + |A X| |R Y|)` over three
+/// random pairs, `R` the full Hessian: zero to rounding when it is conserved.
+fn conservation_residual(hessian: &Hessian, spin: &SpinDrift, progress: &Progress) -> Result<f64, ZeitlinError> {
+    let n = hessian.u.nrows();
+    let mut residual: f64 = 0.0;
+    for s in 0..3 {
+        progress.check()?;
+        let x = random_element(n, 2 * s + 1);
+        let y = random_element(n, 2 * s + 2);
+        let (rx, ry, ax, ay) = (hessian.full(&x)?, hessian.full(&y)?, spin.apply(&x)?, spin.apply(&y)?);
+        let num = (dot(&rx, &ay) + dot(&ax, &ry)).abs();
+        let den = rx.norm() * ay.norm() + ax.norm() * ry.norm();
+        if den > 0.0 {
+            residual = residual.max(num / den);
+        }
+    }
+    Ok(residual)
+}
+
+/// The extreme Ritz values `(lo, hi)` of `R` (bounds on its extreme
+/// eigenvalues), and whether they prove it indefinite.
+fn restricted_ritz(hessian: &Hessian, steps: usize, progress: &Progress) -> Result<((f64, f64), bool), ZeitlinError> {
+    let n = hessian.u.nrows();
+    // Lanczos on R, restricted to the tangent space (off-diagonal in
+    // the eigenbasis), with full reorthogonalisation.
+    let start = hessian.in_eigenbasis(&random_element(n, 99));
+    let mut start = DMatrix::from_fn(n, n, |j, k| if j == k { C::new(0.0, 0.0) } else { start[(j, k)] });
+    start /= C::new(start.norm(), 0.0);
+    let mut basis = vec![start];
+    let (mut alpha, mut beta) = (vec![], vec![]);
+    for _ in 0..steps.clamp(1, n * n - n) {
+        progress.check()?;
+        progress.step(1);
+        let mut x = hessian.restricted(basis.last().expect("a vector"))?;
+        let (coef, norm) = orthogonalise(&basis, &mut x);
+        alpha.push(coef[coef.len() - 1]);
+        let size = alpha.iter().chain(&beta).fold(0.0f64, |a, v| a.max(v.abs()));
+        if not_above(norm, 1e-12 * size) {
+            break;
+        }
+        beta.push(norm);
+        basis.push(x / C::new(norm, 0.0));
+    }
+    let k = alpha.len();
+    let t = DMatrix::from_fn(k, k, |i, j| match i.abs_diff(j) {
+        0 => alpha[i],
+        1 => beta[i.min(j)],
+        _ => 0.0,
+    });
+    let ritz = crate::eigen::symmetric_eigenvalues(&t).ok_or_else(|| numerical("the Lanczos matrix"))?;
+    // A Ritz value within 1e-12 of the larger in size is rounding (its
+    // digits differ between machines): it is recorded as 0.
+    let size = ritz[0].abs().max(ritz[k - 1].abs());
+    let snap = |x: f64| if x.abs() <= 1e-12 * size { 0.0 } else { x };
+    let (lo, hi) = (snap(ritz[0]), snap(ritz[k - 1]));
+    Ok(((lo, hi), lo < -1e-9 * size && hi > 1e-9 * size))
+}
+
+/// `|K|_est`: six steps of the power iteration on the coupling `K`, from
+/// a fixed random start.
+fn coupling_norm(frame: &Frame) -> Result<f64, ZeitlinError> {
+    let n = frame.wf.nrows();
     let mut x = sandwich(&frame.f.adjoint(), &random_element(n, 7), &frame.f);
     let mut coupling_norm = 0.0f64;
     for _ in 0..6 {
@@ -537,61 +644,106 @@ pub fn matrix_free_analysis(
         }
         x = y / C::new(coupling_norm, 0.0);
     }
-    let transport_norm = (pvals.last().copied().unwrap_or(0.0) - pvals.first().copied().unwrap_or(0.0)) / hb;
-    out.drift_norm = transport_norm + coupling_norm;
-    let scale = out.drift_norm;
-    if !(scale > 0.0 && scale.is_finite()) {
-        out.products = frame.products.get();
-        return Ok(out);
-    }
-    let tau = 2.0 / w_op.max(coupling_norm);
-    let rk_steps = ((tau * coupling_norm / 0.5).ceil() as usize).max(1);
-    out.tau = tau;
+    Ok(coupling_norm)
+}
+
+/// Arnoldi on the propagator `S ~ exp(tau A)` (Strang splitting, `rk_steps`
+/// Runge–Kutta steps of `K`), restarted `cycles - 1` times: the last
+/// cycle's orthonormal Krylov basis, in the frame.
+fn arnoldi(
+    frame: &Frame,
+    settings: &MatrixFreeSettings,
+    tau: f64,
+    rk_steps: usize,
+    progress: &Progress,
+) -> Result<Vec<DMatrix<C>>, ZeitlinError> {
+    let n = frame.wf.nrows();
     let m = settings.krylov.clamp(2, n * n - 1);
     let mut start = sandwich(&frame.f.adjoint(), &random_element(n, 11), &frame.f);
     let mut basis = vec![];
     for cycle in 0..settings.cycles.max(1) {
         progress.check()?;
-        basis = vec![start.clone()];
-        let mut hmat = DMatrix::<f64>::zeros(m + 1, m);
-        let mut size = m;
-        for j in 0..m {
-            progress.check()?;
-            progress.step(1);
-            let mut y = frame.strang(&basis[j], tau, rk_steps)?;
-            let (coef, norm) = orthogonalise(&basis, &mut y);
-            for (i, c) in coef.iter().enumerate() {
-                hmat[(i, j)] = *c;
-            }
-            hmat[(j + 1, j)] = norm;
-            if not_above(norm, 1e-13) {
-                size = j + 1;
-                break;
-            }
-            basis.push(y / C::new(norm, 0.0));
-        }
-        basis.truncate(size);
+        let (cycle_basis, hmat) = arnoldi_cycle(frame, start.clone(), m, (tau, rk_steps), progress)?;
+        basis = cycle_basis;
         if cycle + 1 == settings.cycles.max(1) {
             break;
         }
-        // Restart from the leading Ritz vectors (real and imaginary parts:
-        // the propagator is real on su(N)).
-        let hm = hmat.view((0, 0), (size, size)).into_owned();
-        let mut pairs = small_eigen(&hm)?;
-        pairs.sort_by(|a, b| b.0.norm().total_cmp(&a.0.norm()));
-        // Real combinations of the basis: Re and Im of the coefficient
-        // vectors, so the restart stays in su(N).
-        let restart: DMatrix<C> = pairs.iter().take(4).fold(DMatrix::zeros(n, n), |a, (_, y)| {
-            let re: Vec<C> = y.iter().map(|z| C::new(z.re + z.im, 0.0)).collect();
-            a + combine(&basis, &re)
-        });
-        let norm = restart.norm();
-        if not_above(norm, 0.0) {
+        match restart(&hmat, &basis)? {
+            Some(next) => start = next,
+            None => break,
+        }
+    }
+    Ok(basis)
+}
+
+/// One Arnoldi cycle of up to `m` steps of `S` from the unit `start`:
+/// the basis (ended early at a breakdown) and the Hessenberg matrix
+/// `(m + 1) x m`, whose leading square of the basis's size is the
+/// projection of `S`.
+fn arnoldi_cycle(
+    frame: &Frame,
+    start: DMatrix<C>,
+    m: usize,
+    (tau, rk_steps): (f64, usize),
+    progress: &Progress,
+) -> Result<(Vec<DMatrix<C>>, DMatrix<f64>), ZeitlinError> {
+    let mut basis = vec![start];
+    let mut hmat = DMatrix::<f64>::zeros(m + 1, m);
+    let mut size = m;
+    for j in 0..m {
+        progress.check()?;
+        progress.step(1);
+        let mut y = frame.strang(&basis[j], tau, rk_steps)?;
+        let (coef, norm) = orthogonalise(&basis, &mut y);
+        for (i, c) in coef.iter().enumerate() {
+            hmat[(i, j)] = *c;
+        }
+        hmat[(j + 1, j)] = norm;
+        if not_above(norm, 1e-13) {
+            size = j + 1;
             break;
         }
-        start = restart / C::new(norm, 0.0);
+        basis.push(y / C::new(norm, 0.0));
     }
-    // Rayleigh–Ritz of A on the Krylov basis: the candidates.
+    basis.truncate(size);
+    Ok((basis, hmat))
+}
+
+/// The next cycle's start: the real parts of the four leading Ritz
+/// vectors of the projected `S` (largest `|mu|` first), summed and
+/// normalised; `None` when that sum vanishes.
+fn restart(hmat: &DMatrix<f64>, basis: &[DMatrix<C>]) -> Result<Option<DMatrix<C>>, ZeitlinError> {
+    let n = basis[0].nrows();
+    // (The basis has the size of the projection: `arnoldi_cycle` truncates it.)
+    let size = basis.len();
+    // Restart from the leading Ritz vectors (real and imaginary parts:
+    // the propagator is real on su(N)).
+    let hm = hmat.view((0, 0), (size, size)).into_owned();
+    let mut pairs = small_eigen(&hm)?;
+    pairs.sort_by(|a, b| b.0.norm().total_cmp(&a.0.norm()));
+    // Real combinations of the basis: Re and Im of the coefficient
+    // vectors, so the restart stays in su(N).
+    let restart: DMatrix<C> = pairs.iter().take(4).fold(DMatrix::zeros(n, n), |a, (_, y)| {
+        let re: Vec<C> = y.iter().map(|z| C::new(z.re + z.im, 0.0)).collect();
+        a + combine(basis, &re)
+    });
+    let norm = restart.norm();
+    if not_above(norm, 0.0) {
+        return Ok(None);
+    }
+    Ok(Some(restart / C::new(norm, 0.0)))
+}
+
+/// Rayleigh–Ritz of A on the Krylov basis: the images `A v` and the
+/// candidates, the Ritz pairs with `Im >= 0` and real part above the
+/// resolution, largest real part first.
+fn rayleigh_ritz(
+    frame: &Frame,
+    basis: &[DMatrix<C>],
+    settings: &MatrixFreeSettings,
+    w_op: f64,
+    progress: &Progress,
+) -> Result<(Vec<DMatrix<C>>, Vec<RitzPair>), ZeitlinError> {
     progress.check()?;
     let av: Vec<DMatrix<C>> = basis.iter().map(|v| frame.drift(v)).collect::<Result<_, _>>()?;
     progress.step(settings.krylov as u64);
@@ -600,22 +752,27 @@ pub fn matrix_free_analysis(
     let mut pairs = small_eigen(&ha)?;
     pairs.retain(|(t, _)| t.im >= 0.0 && t.re > settings.rate_tolerance * w_op);
     pairs.sort_by(|a, b| b.0.re.total_cmp(&a.0.re));
-    // 2. Davidson from each of the first three.
-    let mut found: Vec<(C, DMatrix<C>)> = vec![];
-    for (theta, y) in pairs.iter().take(3) {
-        let u = combine(&basis, y);
-        let au = combine(&av, y);
-        let (t, v, r) = davidson(&frame, (*theta, u, au), scale, settings.davidson_steps, progress)?;
-        if r <= settings.residual_tolerance {
-            found.push((t, v));
-        }
-    }
-    // The backward error in the spin basis, for the converged pairs.
-    for (theta, v) in &found {
+    Ok((av, pairs))
+}
+
+/// The backward error in the spin basis, for the converged pairs: the
+/// rightmost is `best`, and the rightmost whose backward error is within
+/// `residual_tolerance |A|_est` and `1e-3` of its real part (above the
+/// resolution) is the growing eigenvalue. `scales` is `(|A|_est, |W_e|_op)`.
+fn accept(
+    out: &mut MatrixFreeAnalysis,
+    spin: &SpinDrift,
+    found: &[(C, DMatrix<C>)],
+    settings: &MatrixFreeSettings,
+    (scale, w_op): (f64, f64),
+    progress: &Progress,
+) -> Result<(), ZeitlinError> {
+    let frame = spin.frame;
+    for (theta, v) in found {
         progress.check()?;
-        let spin = sandwich(&frame.f, v, &frame.f.adjoint());
+        let spin_v = sandwich(&frame.f, v, &frame.f.adjoint());
         frame.count(2);
-        let backward = (drift_spin(&spin)? - &spin * *theta).norm() / spin.norm();
+        let backward = (spin.apply(&spin_v)? - &spin_v * *theta).norm() / spin_v.norm();
         if out.best.is_none_or(|(re, _, _)| theta.re > re) {
             out.best = Some((theta.re, theta.im.abs(), backward));
         }
@@ -627,6 +784,5 @@ pub fn matrix_free_analysis(
             out.backward_error = Some(backward);
         }
     }
-    out.products = frame.products.get();
-    Ok(out)
+    Ok(())
 }

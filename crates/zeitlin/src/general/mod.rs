@@ -31,6 +31,10 @@
 //! `N^2 - 1`) in the eigenbasis `U` of `-i W_e = U diag(omega) U^*`
 //! ([`dense_analysis`]).
 
+mod dense;
+
+pub use dense::dense_analysis;
+
 use crate::analysis::{analyse_with, hbar, ZeitlinAnalysis, ZeitlinError, ZeitlinProblem, ZeitlinSettings};
 use crate::laplacian::StreamSolver;
 use crate::matrix_free::{matrix_free_analysis, MatrixFreeAnalysis, MatrixFreeSettings};
@@ -344,16 +348,7 @@ pub fn analyse_general_with(
     progress: &Progress,
 ) -> Result<GeneralAnalysis, ZeitlinError> {
     let n = problem.n;
-    if !(2..=4096).contains(&n) {
-        return Err(ZeitlinError::Input(format!("N must be between 2 and 4096, got {n}")));
-    }
-    let (w, s_w) = normalised(&problem.w, n, "equilibrium")?;
-    let noise: Vec<(DMatrix<C>, f64)> = problem
-        .noise
-        .iter()
-        .enumerate()
-        .map(|(i, x)| normalised(x, n, &format!("noise[{i}]")))
-        .collect::<Result<_, _>>()?;
+    let input = Scaled::new(problem)?;
     let solver = StreamSolver::new(n).map_err(|e| ZeitlinError::Numerical(e.to_string()))?;
     let hb = hbar(n);
     let mut out = GeneralAnalysis {
@@ -361,7 +356,7 @@ pub fn analyse_general_with(
         level: VerificationLevel::Numerical,
         reason: String::new(),
         equilibrium_residual: 0.0,
-        noise_residuals: vec![0.0; noise.len()],
+        noise_residuals: vec![0.0; input.noise.len()],
         compatible_noise: vec![],
         frame: None,
         zonal: None,
@@ -369,72 +364,12 @@ pub fn analyse_general_with(
         matrix_free: None,
         hbar: hb,
     };
-    let p = solver.solve(&w).map_err(|e| ZeitlinError::Numerical(e.to_string()))?;
-    out.equilibrium_residual = relative_commutator(&p, &w);
-    if out.equilibrium_residual > settings.equilibrium_tolerance {
-        out.verdict = Verdict::NotAnEquilibrium;
-        out.reason = format!(
-            "[P_e, W_e] is not zero: |[P_e, W_e]|_F / (|P_e|_F |W_e|_F) = {:.3e} > {:.0e} (settings.equilibrium_tolerance): W_e is not a steady state",
-            out.equilibrium_residual, settings.equilibrium_tolerance
-        );
+    let p = solver.solve(&input.w).map_err(|e| ZeitlinError::Numerical(e.to_string()))?;
+    if !is_equilibrium(&mut out, &p, &input.w, settings) || !noise_is_compatible(&mut out, &input, settings)? {
         return Ok(out);
     }
-    out.noise_residuals = noise.iter().map(|(x, _)| relative_commutator(x, &w)).collect();
-    let incompatible: Vec<usize> =
-        (0..noise.len()).filter(|&i| out.noise_residuals[i] > settings.noise_tolerance).collect();
-    if !incompatible.is_empty() {
-        let (values, u) = eigenbasis(&w)?;
-        let cl = clusters(&values);
-        out.compatible_noise = noise.iter().map(|(x, s)| compatible_part(x, &u, &cl) * C::new(*s, 0.0)).collect();
-        out.verdict = Verdict::NoiseIncompatible;
-        out.reason = format!(
-            "[X_i, W_e] is not zero for noise field(s) {incompatible:?} (relative {:.3e} > {:.0e}): the noise moves the equilibrium; compatible noise commutes with W_e (for distinct eigenvalues: the functions of W_e), and compatible_noise gives each field's compatible part",
-            incompatible.iter().map(|&i| out.noise_residuals[i]).fold(0.0f64, f64::max),
-            settings.noise_tolerance
-        );
-        return Ok(out);
-    }
-    let tol = settings.equilibrium_tolerance;
-    // Zonal as given, or about some axis.
-    let zonal_in = |v: Option<&DMatrix<C>>| -> Option<(DMatrix<C>, Vec<DMatrix<C>>, f64)> {
-        let product = crate::eigen::complex_product;
-        let frame = |m: &DMatrix<C>| match v {
-            Some(v) => product(&product(&v.adjoint(), m), v),
-            None => m.clone(),
-        };
-        let wf = frame(&w);
-        let xs: Vec<DMatrix<C>> = noise.iter().map(|(x, _)| frame(x)).collect();
-        let off = xs.iter().map(off_diagonal).fold(off_diagonal(&wf), f64::max);
-        (off <= tol).then_some((wf, xs, off))
-    };
-    let mut reduced = zonal_in(None).map(|r| (Frame::Zonal, r));
-    if reduced.is_none() {
-        if let Some(axis) = symmetry_axis(&w, tol) {
-            let v = rotation_to_axis(n, axis).map_err(|e| ZeitlinError::Numerical(e.to_string()))?;
-            reduced = zonal_in(Some(&v)).map(|r| (Frame::Rotated { axis: quflow_axis(axis) }, r));
-        }
-    }
-    if let Some((frame, (wf, xs, off))) = reduced {
-        let diagonal = |m: &DMatrix<C>, s: f64| -> Vec<f64> { (0..n).map(|j| m[(j, j)].im * s).collect() };
-        let omega = diagonal(&wf, s_w);
-        let noise_diag: Vec<Vec<f64>> = xs.iter().zip(&noise).map(|(x, (_, s))| diagonal(x, *s)).collect();
-        let a = analyse_with(
-            &ZeitlinProblem { n, omega: omega.clone(), noise: noise_diag.clone() },
-            &settings.zonal,
-            progress,
-        )?;
-        out.verdict = a.verdict;
-        out.level = a.level;
-        out.reason = match &frame {
-            Frame::Zonal => a.reason.clone(),
-            Frame::Rotated { axis } => format!(
-                "zonal about the axis ({:.6}, {:.6}, {:.6}), analysed in the rotated frame (the model is rotation invariant): {}",
-                axis[0], axis[1], axis[2], a.reason
-            ),
-            Frame::General => unreachable!("a zonal frame"),
-        };
-        out.frame = Some(frame);
-        out.zonal = Some(ZonalReduction { omega, noise: noise_diag, off_diagonal: off, analysis: a });
+    if let Some((frame, reduced)) = zonal_frame(&input, settings.equilibrium_tolerance)? {
+        analyse_zonal_frame(&mut out, &input, frame, reduced, &settings.zonal, progress)?;
         return Ok(out);
     }
     out.frame = Some(Frame::General);
@@ -446,15 +381,7 @@ pub fn analyse_general_with(
         return Ok(out);
     }
     if n > settings.dense_max_n {
-        let mut m = matrix_free_analysis(&solver, &w, &p, &settings.matrix_free, progress)?;
-        progress.settle();
-        // Back to the user's units: the drift is linear in W_e.
-        m.eigenvalue = m.eigenvalue.map(|(re, im)| (re * s_w, im * s_w));
-        m.backward_error = m.backward_error.map(|e| e * s_w);
-        m.best = m.best.map(|(re, im, e)| (re * s_w, im * s_w, e * s_w));
-        m.drift_norm *= s_w;
-        m.resolution *= s_w;
-        m.tau /= s_w;
+        let m = matrix_free_in_units(&solver, &input, &p, &settings.matrix_free, progress)?;
         out.reason = matrix_free_reason(&m, n);
         if m.eigenvalue.is_some() {
             out.verdict = Verdict::LinearlyUnstable;
@@ -462,10 +389,180 @@ pub fn analyse_general_with(
         out.matrix_free = Some(m);
         return Ok(out);
     }
+    let d = dense_in_units(&solver, &input, &p, progress)?;
+    dense_verdict(&mut out, d);
+    Ok(out)
+}
+
+/// The input at unit size: `W_e` and each noise field, skew-Hermitian and
+/// trace-free, divided by a power of two (`s_w`, and each field's own).
+struct Scaled {
+    n: usize,
+    w: DMatrix<C>,
+    s_w: f64,
+    noise: Vec<(DMatrix<C>, f64)>,
+}
+
+impl Scaled {
+    /// [`normalised`] for `W_e` and each noise field, after checking `N`.
+    fn new(problem: &GeneralProblem) -> Result<Scaled, ZeitlinError> {
+        let n = problem.n;
+        if !(2..=4096).contains(&n) {
+            return Err(ZeitlinError::Input(format!("N must be between 2 and 4096, got {n}")));
+        }
+        let (w, s_w) = normalised(&problem.w, n, "equilibrium")?;
+        let noise: Vec<(DMatrix<C>, f64)> = problem
+            .noise
+            .iter()
+            .enumerate()
+            .map(|(i, x)| normalised(x, n, &format!("noise[{i}]")))
+            .collect::<Result<_, _>>()?;
+        Ok(Scaled { n, w, s_w, noise })
+    }
+}
+
+/// Whether `|[P_e, W_e]|_F / (|P_e|_F |W_e|_F)` (stored in `out`) is within
+/// the tolerance; if not, the verdict says `W_e` is not steady.
+fn is_equilibrium(out: &mut GeneralAnalysis, p: &DMatrix<C>, w: &DMatrix<C>, settings: &GeneralSettings) -> bool {
+    out.equilibrium_residual = relative_commutator(p, w);
+    if out.equilibrium_residual > settings.equilibrium_tolerance {
+        out.verdict = Verdict::NotAnEquilibrium;
+        out.reason = format!(
+            "[P_e, W_e] is not zero: |[P_e, W_e]|_F / (|P_e|_F |W_e|_F) = {:.3e} > {:.0e} (settings.equilibrium_tolerance): W_e is not a steady state",
+            out.equilibrium_residual, settings.equilibrium_tolerance
+        );
+        return false;
+    }
+    true
+}
+
+/// Whether every `|[X_i, W_e]|_F / (|X_i|_F |W_e|_F)` (stored in `out`) is
+/// within the tolerance; if not, the verdict says so and gives each
+/// field's projection onto the commutant of `W_e`, in the user's units.
+fn noise_is_compatible(
+    out: &mut GeneralAnalysis,
+    input: &Scaled,
+    settings: &GeneralSettings,
+) -> Result<bool, ZeitlinError> {
+    let noise = &input.noise;
+    out.noise_residuals = noise.iter().map(|(x, _)| relative_commutator(x, &input.w)).collect();
+    let incompatible: Vec<usize> =
+        (0..noise.len()).filter(|&i| out.noise_residuals[i] > settings.noise_tolerance).collect();
+    if incompatible.is_empty() {
+        return Ok(true);
+    }
+    let (values, u) = eigenbasis(&input.w)?;
+    let cl = clusters(&values);
+    out.compatible_noise = noise.iter().map(|(x, s)| compatible_part(x, &u, &cl) * C::new(*s, 0.0)).collect();
+    out.verdict = Verdict::NoiseIncompatible;
+    out.reason = format!(
+        "[X_i, W_e] is not zero for noise field(s) {incompatible:?} (relative {:.3e} > {:.0e}): the noise moves the equilibrium; compatible noise commutes with W_e (for distinct eigenvalues: the functions of W_e), and compatible_noise gives each field's compatible part",
+        incompatible.iter().map(|&i| out.noise_residuals[i]).fold(0.0f64, f64::max),
+        settings.noise_tolerance
+    );
+    Ok(false)
+}
+
+/// `W_e` and the noise in a frame `V` (`V^* M V`), with the largest
+/// relative off-diagonal part among them.
+struct InFrame {
+    w: DMatrix<C>,
+    noise: Vec<DMatrix<C>>,
+    off_diagonal: f64,
+}
+
+/// The state and noise in the frame `v` (as given for `None`), when every
+/// one of them is diagonal there to the tolerance.
+fn zonal_in(input: &Scaled, v: Option<&DMatrix<C>>, tol: f64) -> Option<InFrame> {
+    let product = crate::eigen::complex_product;
+    let frame = |m: &DMatrix<C>| match v {
+        Some(v) => product(&product(&v.adjoint(), m), v),
+        None => m.clone(),
+    };
+    let wf = frame(&input.w);
+    let xs: Vec<DMatrix<C>> = input.noise.iter().map(|(x, _)| frame(x)).collect();
+    let off = xs.iter().map(off_diagonal).fold(off_diagonal(&wf), f64::max);
+    (off <= tol).then_some(InFrame { w: wf, noise: xs, off_diagonal: off })
+}
+
+/// A frame in which the state and noise are zonal: as given, or rotated
+/// from the symmetry axis of `W_e` to the pole.
+fn zonal_frame(input: &Scaled, tol: f64) -> Result<Option<(Frame, InFrame)>, ZeitlinError> {
+    // Zonal as given, or about some axis.
+    let mut reduced = zonal_in(input, None, tol).map(|r| (Frame::Zonal, r));
+    if reduced.is_none() {
+        if let Some(axis) = symmetry_axis(&input.w, tol) {
+            let v = rotation_to_axis(input.n, axis).map_err(|e| ZeitlinError::Numerical(e.to_string()))?;
+            reduced = zonal_in(input, Some(&v), tol).map(|r| (Frame::Rotated { axis: quflow_axis(axis) }, r));
+        }
+    }
+    Ok(reduced)
+}
+
+/// The zonal pipeline on the diagonals in the zonal frame, in the user's
+/// units; its verdict is the pipeline's.
+fn analyse_zonal_frame(
+    out: &mut GeneralAnalysis,
+    input: &Scaled,
+    frame: Frame,
+    reduced: InFrame,
+    settings: &ZeitlinSettings,
+    progress: &Progress,
+) -> Result<(), ZeitlinError> {
+    let n = input.n;
+    let diagonal = |m: &DMatrix<C>, s: f64| -> Vec<f64> { (0..n).map(|j| m[(j, j)].im * s).collect() };
+    let omega = diagonal(&reduced.w, input.s_w);
+    let noise_diag: Vec<Vec<f64>> = reduced.noise.iter().zip(&input.noise).map(|(x, (_, s))| diagonal(x, *s)).collect();
+    let a = analyse_with(&ZeitlinProblem { n, omega: omega.clone(), noise: noise_diag.clone() }, settings, progress)?;
+    out.verdict = a.verdict;
+    out.level = a.level;
+    out.reason = match &frame {
+        Frame::Zonal => a.reason.clone(),
+        Frame::Rotated { axis } => format!(
+            "zonal about the axis ({:.6}, {:.6}, {:.6}), analysed in the rotated frame (the model is rotation invariant): {}",
+            axis[0], axis[1], axis[2], a.reason
+        ),
+        Frame::General => unreachable!("a zonal frame"),
+    };
+    out.frame = Some(frame);
+    out.zonal = Some(ZonalReduction { omega, noise: noise_diag, off_diagonal: reduced.off_diagonal, analysis: a });
+    Ok(())
+}
+
+/// The matrix-free analysis of the unit-size state, in the user's units.
+fn matrix_free_in_units(
+    solver: &StreamSolver,
+    input: &Scaled,
+    p: &DMatrix<C>,
+    settings: &MatrixFreeSettings,
+    progress: &Progress,
+) -> Result<MatrixFreeAnalysis, ZeitlinError> {
+    let s_w = input.s_w;
+    let mut m = matrix_free_analysis(solver, &input.w, p, settings, progress)?;
+    progress.settle();
+    // Back to the user's units: the drift is linear in W_e.
+    m.eigenvalue = m.eigenvalue.map(|(re, im)| (re * s_w, im * s_w));
+    m.backward_error = m.backward_error.map(|e| e * s_w);
+    m.best = m.best.map(|(re, im, e)| (re * s_w, im * s_w, e * s_w));
+    m.drift_norm *= s_w;
+    m.resolution *= s_w;
+    m.tau /= s_w;
+    Ok(m)
+}
+
+/// The dense analysis of the unit-size state, in the user's units: at the
+/// noise fields' common scale (a second run when their scales differ).
+fn dense_in_units(
+    solver: &StreamSolver,
+    input: &Scaled,
+    p: &DMatrix<C>,
+    progress: &Progress,
+) -> Result<DenseAnalysis, ZeitlinError> {
+    let (w, noise) = (&input.w, &input.noise);
     let xs: Vec<DMatrix<C>> = noise.iter().map(|(x, _)| x.clone()).collect();
     progress.plan(2);
     progress.check()?;
-    let mut d = dense_analysis(&solver, &w, &p, &xs)?;
+    let mut d = dense_analysis(solver, w, p, &xs)?;
     progress.step(1);
     // Back to the user's units: Sigma^2 scales as the noise squared (the
     // fields were each scaled to unit size: one common factor only when
@@ -475,14 +572,21 @@ pub fn analyse_general_with(
     if noise.iter().any(|(_, s)| *s != common) {
         let xs: Vec<DMatrix<C>> = noise.iter().map(|(x, s)| x * C::new(s / common, 0.0)).collect();
         progress.check()?;
-        d = dense_analysis(&solver, &w, &p, &xs)?;
+        d = dense_analysis(solver, w, p, &xs)?;
     }
     progress.settle();
     let k2 = common * common;
     let unscale = |x: f64| x * k2;
     d.sigma2 = d.sigma2.map(unscale);
     d.infimum = d.infimum.map(unscale);
-    d.growth_rate = d.growth_rate.map(|g| g * s_w);
+    d.growth_rate = d.growth_rate.map(|g| g * input.s_w);
+    Ok(d)
+}
+
+/// The verdict and its sentence from the dense analysis: stable with a
+/// definite form and a finite `Sigma^2`, unstable with a growing mode,
+/// else inconclusive.
+fn dense_verdict(out: &mut GeneralAnalysis, d: DenseAnalysis) {
     match (d.energy != 0.0, d.sigma2, d.growth_rate) {
         (true, Some(s2), _) if s2.is_finite() => {
             out.verdict = Verdict::Stable;
@@ -512,7 +616,6 @@ pub fn analyse_general_with(
         }
     }
     out.dense = Some(d);
-    Ok(out)
 }
 
 /// `x` with the significant digits a backward error `e` supports: the
@@ -607,258 +710,4 @@ fn symmetry_axis(w: &DMatrix<C>, tol: f64) -> Option<[f64; 3]> {
     let nf = n as f64;
     let scale = (nf * (nf * nf - 1.0) / 12.0).sqrt() * w.norm();
     (scale > 0.0 && commutes.norm() <= tol * scale).then_some(axis)
-}
-
-/// Orthonormal trace-free vectors (Helmert): `h_r = (1, ..., 1, -r, 0, ...)
-/// / sqrt(r (r + 1))`, `r = 1..n-1`.
-fn helmert(n: usize) -> Vec<Vec<f64>> {
-    (1..n)
-        .map(|r| {
-            let c = 1.0 / ((r * (r + 1)) as f64).sqrt();
-            (0..n)
-                .map(|j| {
-                    if j < r {
-                        c
-                    } else if j == r {
-                        -(r as f64) * c
-                    } else {
-                        0.0
-                    }
-                })
-                .collect()
-        })
-        .collect()
-}
-
-/// The dense energy–Casimir analysis of a steady `W_e` (unit size) with
-/// compatible noise, in real coordinates orthonormal for `<A, B> = Re tr(A
-/// B^*)/N`, taken in the eigenbasis `U` of `-i W_e`: for `j < k` the real
-/// and imaginary parts of `(U^* X U)_jk` times `sqrt(2/N)` (the orbit's
-/// tangent space), then the diagonal's trace-free part in a Helmert basis
-/// times `1/sqrt N` (the directions of the Casimir gradients).
-///
-/// * `G = -Delta^-1` (the energy's Hessian), from the stream solve;
-/// * the Casimir `tr Phi(-iW)/N` has, by the Daleckii–Krein formula, the
-///   Hessian `c_jk |(U^* X U)_jk|^2 / N` with `c_jk = (pi_j - pi_k)/(omega_j -
-///   omega_k)` times `eps` (criticality: `Phi'(omega_j) = eps pi_j`, with
-///   `pi` the eigenvalues of `-i P_e` on the same eigenvectors), and free
-///   curvature on the diagonal, which is the Casimir Hessian `K` of the
-///   finite-dimensional engine;
-/// * `P = eps (G + C) + K`, `Q = P A~ + A~^T P + sum B_i^T P B_i` with the
-///   drift `A X = ([P_e, X] + [Delta^-1 X, W_e])/hbar` and the noise `B_i X
-///   = [X_i, X]/hbar` (`Q` does not depend on `K`: the drift and the noise
-///   keep every Casimir);
-/// * `eps` is the sign that makes the restricted `R = Z^T (G + C) Z`
-///   definite (Finsler); the infimum of `Sigma^2` over `K` is
-///   `lambda_max(Z^T Q Z, Z^T P Z)`, approached as `K` grows; `K` is built
-///   for a target just above it by the Schur complement, as the
-///   finite-dimensional optimiser does.
-///
-/// Without a definite form, the largest real part of the drift's
-/// eigenvalues (faer) decides linear instability.
-pub fn dense_analysis(
-    solver: &StreamSolver,
-    w: &DMatrix<C>,
-    p_e: &DMatrix<C>,
-    noise: &[DMatrix<C>],
-) -> Result<DenseAnalysis, ZeitlinError> {
-    let n = w.nrows();
-    let nf = n as f64;
-    let hb = hbar(n);
-    let (omega, u) = eigenbasis(w)?;
-    let cl = clusters(&omega);
-    let numerical = |what: &str| ZeitlinError::Numerical(what.to_string());
-    let distinct = cl.last().copied().unwrap_or(0) + 1 == n;
-    let pi: Vec<f64> = {
-        let t = u.adjoint() * (p_e * C::new(0.0, -1.0)) * &u;
-        (0..n).map(|j| t[(j, j)].re).collect()
-    };
-    // Coordinates: off-diagonal pairs first, then the diagonal.
-    let pairs: Vec<(usize, usize)> = (0..n).flat_map(|j| (j + 1..n).map(move |k| (j, k))).collect();
-    let off = 2 * pairs.len();
-    let dim = n * n - 1;
-    let h = helmert(n);
-    let root = (2.0 / nf).sqrt();
-    let coords = |t: &DMatrix<C>| -> Vec<f64> {
-        let mut v = Vec::with_capacity(dim);
-        for &(j, k) in &pairs {
-            v.push(root * t[(j, k)].re);
-            v.push(root * t[(j, k)].im);
-        }
-        for hr in &h {
-            v.push(hr.iter().enumerate().map(|(j, x)| x * t[(j, j)].im).sum::<f64>() / nf.sqrt());
-        }
-        v
-    };
-    let element = |a: usize| -> DMatrix<C> {
-        let mut t = DMatrix::zeros(n, n);
-        if a < off {
-            let (j, k) = pairs[a / 2];
-            let x = 1.0 / root; // sqrt(N/2)
-            if a % 2 == 0 {
-                t[(j, k)] = C::new(x, 0.0);
-                t[(k, j)] = C::new(-x, 0.0);
-            } else {
-                t[(j, k)] = C::new(0.0, x);
-                t[(k, j)] = C::new(0.0, x);
-            }
-        } else {
-            for (j, x) in h[a - off].iter().enumerate() {
-                t[(j, j)] = C::new(0.0, x * nf.sqrt());
-            }
-        }
-        &u * t * u.adjoint()
-    };
-    let to_frame = |x: &DMatrix<C>| u.adjoint() * x * &u;
-    let inv_lap = |x: &DMatrix<C>| solver.solve(x).map_err(|e| ZeitlinError::Numerical(e.to_string()));
-    let mut g = DMatrix::<f64>::zeros(dim, dim);
-    let mut a_mat = DMatrix::<f64>::zeros(dim, dim);
-    let mut b_mats: Vec<DMatrix<f64>> = vec![DMatrix::zeros(dim, dim); noise.len()];
-    for b in 0..dim {
-        let e = element(b);
-        let psi = inv_lap(&e)?;
-        let gcol = coords(&to_frame(&(-&psi)));
-        let acol = coords(&to_frame(&((commutator(p_e, &e) + commutator(&psi, w)) / C::new(hb, 0.0))));
-        for r in 0..dim {
-            g[(r, b)] = gcol[r];
-            a_mat[(r, b)] = acol[r];
-        }
-        for (bm, x) in b_mats.iter_mut().zip(noise) {
-            let col = coords(&to_frame(&(commutator(x, &e) / C::new(hb, 0.0))));
-            for r in 0..dim {
-                bm[(r, b)] = col[r];
-            }
-        }
-    }
-    let g = (&g + g.transpose()) * 0.5;
-    // eps-free part of P: G + C, C diagonal in these coordinates.
-    let mut p1 = g.clone();
-    for (q, &(j, k)) in pairs.iter().enumerate() {
-        // (Between equal eigenvalues, where no test is made, 0.)
-        let c = if distinct { (pi[j] - pi[k]) / (omega[j] - omega[k]) } else { 0.0 };
-        p1[(2 * q, 2 * q)] += c;
-        p1[(2 * q + 1, 2 * q + 1)] += c;
-    }
-    let generator = |p: &DMatrix<f64>| -> DMatrix<f64> {
-        let mut at = a_mat.clone();
-        for b in &b_mats {
-            at += b * b * 0.5;
-        }
-        let mut q = p * &at + at.transpose() * p;
-        for b in &b_mats {
-            q += b.transpose() * p * b;
-        }
-        (&q + q.transpose()) * 0.5
-    };
-    let drift = &p1 * &a_mat + a_mat.transpose() * &p1;
-    let drift_residual = {
-        let d = p1.norm() * a_mat.norm();
-        if d > 0.0 && distinct {
-            drift.norm() / d
-        } else {
-            0.0
-        }
-    };
-    let q1 = generator(&p1);
-    let r = p1.view((0, 0), (off, off)).into_owned();
-    let eig = if distinct {
-        crate::eigen::symmetric_eigenvalues(&r).ok_or_else(|| numerical("the restricted Hessian's eigenvalues"))?
-    } else {
-        vec![]
-    };
-    let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &x| (lo.min(x), hi.max(x.abs())));
-    let top = eig.iter().fold(f64::NEG_INFINITY, |a, &x| a.max(x));
-    // With repeated eigenvalues the orbit is smaller and the Casimir
-    // directions are not the diagonal: no energy–Casimir test is made (the
-    // margin is reported as -infinity), only the spectrum.
-    let (margin_plus, margin_minus) = if !distinct {
-        (f64::NEG_INFINITY, f64::NEG_INFINITY)
-    } else if hi > 0.0 {
-        (lo / hi, -top / hi)
-    } else {
-        (0.0, 0.0)
-    };
-    let mut out = DenseAnalysis {
-        dimension: dim,
-        distinct_eigenvalues: distinct,
-        energy: 0.0,
-        restricted_margin: margin_plus.max(margin_minus),
-        sigma2: None,
-        infimum: None,
-        condition_number: None,
-        drift_residual,
-        growth_rate: None,
-    };
-    const DEFINITE: f64 = 1e-9;
-    let eps = if margin_plus > DEFINITE {
-        1.0
-    } else if margin_minus > DEFINITE {
-        -1.0
-    } else {
-        0.0
-    };
-    if eps == 0.0 {
-        let values = crate::eigen::real_eigenvalues(&a_mat).ok_or_else(|| numerical("the drift's eigenvalues"))?;
-        let rate = values.iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max);
-        let scale = values.iter().map(|z| z.norm()).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
-        out.growth_rate = Some(if rate > 1e-6 * scale { rate } else { 0.0 });
-        return Ok(out);
-    }
-    out.energy = eps;
-    let p = &p1 * eps;
-    let q = &q1 * eps;
-    let cas = n - 1;
-    let block = |m: &DMatrix<f64>, r0: usize, c0: usize, nr: usize, nc: usize| m.view((r0, c0), (nr, nc)).into_owned();
-    let frame = numerics::dense::FramePencil {
-        pz: block(&p, 0, 0, off, off),
-        pzw: block(&p, 0, off, off, cas),
-        pw: block(&p, off, off, cas, cas),
-        qz: block(&q, 0, 0, off, off),
-        qzw: block(&q, 0, off, off, cas),
-        qw: block(&q, off, off, cas, cas),
-    };
-    // The level-set block's natural size, added along the Casimir directions.
-    let level = (lo.abs() * hi).sqrt().max(f64::MIN_POSITIVE);
-    let c = frame.complete(level, 1e10).ok_or_else(|| numerical("no Casimir Hessian made P definite"))?;
-    out.infimum = Some(c.infimum);
-    let (sigma2, cond) = (c.sigma2, c.condition_number);
-    out.sigma2 = Some(sigma2.max(0.0));
-    out.condition_number = Some(cond);
-    Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::sphere::from_harmonics;
-
-    /// The definite branch, which no Zeitlin equilibrium zonal in no frame
-    /// has reached (docs/zeitlin.md), on an artificial pencil: with `P_e`
-    /// replaced by `W_e` itself, `pi = omega`, every `c_jk = 1`, and `G + C
-    /// = G + I` is definite on the tangent space (`eps = +1`). The Casimir
-    /// Hessian built for a target just above the infimum gives a `Sigma^2`
-    /// at most 1e-6 above it (the first target, 1e-8 above, with `cond(P)`
-    /// within 1e10), and never below it (the infimum is over all Casimir
-    /// Hessians).
-    #[test]
-    fn the_definite_branch_reaches_the_infimum_on_an_artificial_pencil() {
-        let n = 5;
-        let w = from_harmonics(n, &[(3, 1, 1.0), (3, -2, 0.6), (3, 0, -0.2), (2, 1, 0.3)]).unwrap();
-        let solver = StreamSolver::new(n).unwrap();
-        // Noise that commutes with W: 0.1 i (H^2 - tr(H^2)/N) with H = -i W.
-        let h = &w * C::new(0.0, -1.0);
-        let mut h2 = &h * &h;
-        let mean = h2.trace() / n as f64;
-        for j in 0..n {
-            h2[(j, j)] -= mean;
-        }
-        let x = h2 * C::new(0.0, 0.1);
-        let d = dense_analysis(&solver, &w, &w, &[x]).unwrap();
-        assert_eq!(d.energy, 1.0);
-        assert!(d.restricted_margin > 1e-3, "{}", d.restricted_margin);
-        let (s, inf) = (d.sigma2.unwrap(), d.infimum.unwrap());
-        assert!(inf > 0.0);
-        assert!(s >= inf * (1.0 - 1e-10) && s <= inf * (1.0 + 1e-6), "sigma2 {s}, infimum {inf}");
-        assert!(d.condition_number.unwrap() <= 1e10);
-    }
 }
