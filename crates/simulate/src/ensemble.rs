@@ -644,30 +644,24 @@ pub fn run_blocks_cancellable(
     progress: &(dyn Fn(u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<EnsembleSums, EnsembleError> {
-    let dim = match target {
+    let (dim, noise_count) = match target {
         Target::Nonlinear { model, mu0, .. } => {
             if mu0.len() != model.dim() {
                 return Err(EnsembleError::Invalid { field: "mu0", message: "wrong length".into() });
             }
-            model.dim()
+            (model.dim(), model.noise_count())
         }
         Target::Linear { model, x0 } => {
             if x0.len() != model.dim() {
                 return Err(EnsembleError::Invalid { field: "x0", message: "wrong length".into() });
             }
-            model.dim()
+            (model.dim(), model.noise_count())
         }
     };
     settings.validate(dim)?;
     let steps = settings.steps();
     let stride = (steps / settings.outputs as u64).max(1);
     let n_times = (steps / stride) as usize + 1;
-    let dt = settings.dt;
-    let sqdt = dt.sqrt();
-    let noise_count = match target {
-        Target::Nonlinear { model, .. } => model.noise_count(),
-        Target::Linear { model, .. } => model.noise_count(),
-    };
     if blocks.start > blocks.end || blocks.end > settings.paths.div_ceil(BLOCK) {
         return Err(EnsembleError::Invalid {
             field: "blocks",
@@ -688,71 +682,15 @@ pub fn run_blocks_cancellable(
             },
             diff: vec![0.0; dim],
         };
-        let mut dw = vec![0.0; noise_count];
         let first = block * BLOCK;
         let last = (first + BLOCK).min(settings.paths);
+        let dt = settings.dt;
+        let run = BlockRun { first, last, steps, stride, n_times, dt, sqdt: dt.sqrt(), seed: settings.seed };
         match target {
             Target::Nonlinear { model, scheme, mu0 } => {
-                let c0 = model.casimir_values(mu0);
-                // The path loop, generic over the step so that the
-                // fixed-size kernels are inlined into it.
-                let mut paths = |step: &mut dyn FnMut(&mut [f64], &[f64])| {
-                    let mut mu = mu0.clone();
-                    for path in first..last {
-                        let mut rng = path_rng(settings.seed, path as u64);
-                        mu.copy_from_slice(mu0);
-                        rec.record(&mut acc, 0, &mu);
-                        for s in 1..=steps {
-                            for w in dw.iter_mut() {
-                                let z: f64 = StandardNormal.sample(&mut rng);
-                                *w = z * sqdt;
-                            }
-                            step(&mut mu, &dw);
-                            if s % stride == 0 {
-                                let k = (s / stride) as usize;
-                                if k < n_times {
-                                    rec.record(&mut acc, k, &mu);
-                                }
-                            }
-                        }
-                        for (c, c0) in model.casimir_values(&mu).iter().zip(&c0) {
-                            acc.drift = acc.drift.max((c - c0).abs());
-                        }
-                    }
-                };
-                let block = BlockRun { first, last, steps, stride, n_times, dt, sqdt, seed: settings.seed };
-                match (*scheme, model.kernel3(), model.kernel6()) {
-                    (Scheme::LieHeun, Some(k), _) => kernel_paths(&k, &block, mu0, &c0, model, &mut rec, &mut acc),
-                    (Scheme::LieHeun, _, Some(k)) => kernel_paths(&k, &block, mu0, &c0, model, &mut rec, &mut acc),
-                    _ => {
-                        let mut stepper = Stepper::new(model, *scheme);
-                        paths(&mut |mu, dw| stepper.step(mu, dt, dw))
-                    }
-                }
+                nonlinear_block(model, *scheme, mu0, &run, noise_count, &mut rec, &mut acc)
             }
-            Target::Linear { model, x0 } => {
-                let mut x = x0.clone();
-                let mut kbuf = vec![0.0; dim * dim];
-                let mut ybuf = vec![0.0; 2 * dim];
-                for path in first..last {
-                    let mut rng = path_rng(settings.seed, path as u64);
-                    x.copy_from_slice(x0);
-                    rec.record(&mut acc, 0, &x);
-                    for s in 1..=steps {
-                        for w in dw.iter_mut() {
-                            let z: f64 = StandardNormal.sample(&mut rng);
-                            *w = z * sqdt;
-                        }
-                        model.step(&mut x, dt, &dw, &mut kbuf, &mut ybuf);
-                        if s % stride == 0 {
-                            let k = (s / stride) as usize;
-                            if k < n_times {
-                                rec.record(&mut acc, k, &x);
-                            }
-                        }
-                    }
-                }
-            }
+            Target::Linear { model, x0 } => linear_block(model, x0, &run, noise_count, &mut rec, &mut acc),
         }
         progress((last - first) as u64);
         acc
@@ -778,4 +716,83 @@ pub fn run_blocks_cancellable(
         return Err(EnsembleError::Cancelled);
     }
     Ok(total)
+}
+
+/// The paths `run.first..run.last` of the nonlinear system from `mu0`:
+/// the fixed-size Lie–Heun kernels where the dimension has one, else the
+/// general stepper; each path's Casimir drift into `acc`.
+fn nonlinear_block(
+    model: &Model,
+    scheme: Scheme,
+    mu0: &[f64],
+    run: &BlockRun,
+    noise_count: usize,
+    rec: &mut Recorder<'_>,
+    acc: &mut Accumulator,
+) {
+    let c0 = model.casimir_values(mu0);
+    match (scheme, model.kernel3(), model.kernel6()) {
+        (Scheme::LieHeun, Some(k), _) => kernel_paths(&k, run, mu0, &c0, model, rec, acc),
+        (Scheme::LieHeun, _, Some(k)) => kernel_paths(&k, run, mu0, &c0, model, rec, acc),
+        _ => {
+            let mut stepper = Stepper::new(model, scheme);
+            let mut dw = vec![0.0; noise_count];
+            let mut mu = mu0.to_vec();
+            for path in run.first..run.last {
+                let mut rng = path_rng(run.seed, path as u64);
+                mu.copy_from_slice(mu0);
+                rec.record(acc, 0, &mu);
+                for s in 1..=run.steps {
+                    for w in dw.iter_mut() {
+                        let z: f64 = StandardNormal.sample(&mut rng);
+                        *w = z * run.sqdt;
+                    }
+                    stepper.step(&mut mu, run.dt, &dw);
+                    if s % run.stride == 0 {
+                        let k = (s / run.stride) as usize;
+                        if k < run.n_times {
+                            rec.record(acc, k, &mu);
+                        }
+                    }
+                }
+                for (c, c0) in model.casimir_values(&mu).iter().zip(&c0) {
+                    acc.drift = acc.drift.max((c - c0).abs());
+                }
+            }
+        }
+    }
+}
+
+/// The paths `run.first..run.last` of the linearised SDE from `x0`.
+fn linear_block(
+    model: &LinearModel,
+    x0: &[f64],
+    run: &BlockRun,
+    noise_count: usize,
+    rec: &mut Recorder<'_>,
+    acc: &mut Accumulator,
+) {
+    let dim = x0.len();
+    let mut dw = vec![0.0; noise_count];
+    let mut x = x0.to_vec();
+    let mut kbuf = vec![0.0; dim * dim];
+    let mut ybuf = vec![0.0; 2 * dim];
+    for path in run.first..run.last {
+        let mut rng = path_rng(run.seed, path as u64);
+        x.copy_from_slice(x0);
+        rec.record(acc, 0, &x);
+        for s in 1..=run.steps {
+            for w in dw.iter_mut() {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                *w = z * run.sqdt;
+            }
+            model.step(&mut x, run.dt, &dw, &mut kbuf, &mut ybuf);
+            if s % run.stride == 0 {
+                let k = (s / run.stride) as usize;
+                if k < run.n_times {
+                    rec.record(acc, k, &x);
+                }
+            }
+        }
+    }
 }

@@ -279,7 +279,13 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<VerificationLe
     let hessians: Vec<Matrix> = ks.iter().map(|k| Matrix::from_rows(&k.hessian_at(mu))).collect();
     verify_infimum_bound(&r, &g, &sp, &sq, cert)?;
     verify_family_bound(&r, &g, &hessians, &form_of, &sp, &sq, cert)?;
-    // Sigma^2.
+    verify_sigma2_exact(&sp, &sq, n, cert, level)
+}
+
+/// `Sigma^2` as stated: the double nearest `sigma2_exact`, `S sP - sQ`
+/// positive semidefinite (the bound holds), singular when claimed sharp,
+/// and tight to 1e-9 (`0.999999999 S` no longer bounds `Q`), all exactly.
+fn verify_sigma2_exact(sp: &Matrix, sq: &Matrix, n: usize, cert: &Value, level: &str) -> Claim<VerificationLevel> {
     let sigma2_float = get(cert, &["sigma2"])?.as_f64().ok_or_else(|| failure("$.sigma2", "expected a number"))?;
     let Some(exact_value) = cert.get("sigma2_exact") else {
         if level == VerificationLevel::Exact.as_str() {
@@ -296,7 +302,7 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<VerificationLe
     if s.is_negative() {
         return Err(failure("$.sigma2_exact", "negative"));
     }
-    let gap = sp.scale(&s).sub(&sq);
+    let gap = sp.scale(&s).sub(sq);
     if !gap.is_positive_semidefinite() {
         return Err(failure("$.sigma2_exact", "sigma2 * sP - sQ is not positive semidefinite: the bound is false"));
     }
@@ -317,7 +323,7 @@ fn verify_stable(spec: &Spec, cert: &Value, level: &str) -> Claim<VerificationLe
     // this when P is ill-conditioned).
     if !s.is_zero() {
         let lowered = &s * Rational::new_small(999_999_999, 1_000_000_000);
-        if sp.scale(&lowered).sub(&sq).is_positive_semidefinite() {
+        if sp.scale(&lowered).sub(sq).is_positive_semidefinite() {
             return Err(failure(
                 "$.sigma2_exact",
                 "not tight: 0.999999999 sigma2 still bounds Q, so sigma2 is not sharp to 1e-9",

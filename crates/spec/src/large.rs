@@ -165,29 +165,7 @@ pub fn large_spec_from_value(value: Value) -> Result<LargeSpec> {
         .map(|(i, e)| constant(&e.0, &index(&epath, i), &symbols))
         .collect::<Result<Vec<_>>>()?;
     let npath = child(root, "noise");
-    if doc.noise.len() > crate::parse::MAX_NOISE_FIELDS {
-        return Err(SpecError::new(
-            &npath,
-            format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
-        ));
-    }
-    let mut noise = Vec::with_capacity(doc.noise.len());
-    for (i, field) in doc.noise.iter().enumerate() {
-        let fpath = index(&npath, i);
-        if field.len() != n {
-            return Err(SpecError::new(
-                &fpath,
-                format!("expected {n} components (the algebra's dimension), got {}", field.len()),
-            ));
-        }
-        noise.push(
-            field
-                .iter()
-                .enumerate()
-                .map(|(j, e)| constant(&e.0, &index(&fpath, j), &symbols))
-                .collect::<Result<Vec<_>>>()?,
-        );
-    }
+    let noise = read_noise(&doc.noise, &npath, n, &symbols)?;
     let system =
         LargeSystem::new(algebra, hamiltonian, casimirs, first_integrals, equilibrium, noise).map_err(|e| {
             let at = match &e {
@@ -212,6 +190,39 @@ pub fn large_spec_from_value(value: Value) -> Result<LargeSpec> {
         settings_not_honoured,
         sweep,
     })
+}
+
+/// The noise fields: at most `MAX_NOISE_FIELDS`, each of `n` constants.
+fn read_noise(
+    given: &[Vec<crate::document::Expression>],
+    npath: &str,
+    n: usize,
+    symbols: &SparseSymbols,
+) -> Result<Vec<Vec<Rational>>> {
+    if given.len() > crate::parse::MAX_NOISE_FIELDS {
+        return Err(SpecError::new(
+            npath,
+            format!("at most {} noise fields are supported", crate::parse::MAX_NOISE_FIELDS),
+        ));
+    }
+    let mut noise = Vec::with_capacity(given.len());
+    for (i, field) in given.iter().enumerate() {
+        let fpath = index(npath, i);
+        if field.len() != n {
+            return Err(SpecError::new(
+                &fpath,
+                format!("expected {n} components (the algebra's dimension), got {}", field.len()),
+            ));
+        }
+        noise.push(
+            field
+                .iter()
+                .enumerate()
+                .map(|(j, e)| constant(&e.0, &index(&fpath, j), symbols))
+                .collect::<Result<Vec<_>>>()?,
+        );
+    }
+    Ok(noise)
 }
 
 /// Why the sparse route was taken, for a system of `n` coordinates.
@@ -312,62 +323,12 @@ pub fn large_certificate_document(
     doc.verdict = a.verdict;
     doc.reason = a.reason.clone();
     doc.level = LevelOrNone((a.verdict != Verdict::Inconclusive).then_some(a.level));
-    let r = &mut doc.analysis;
-    r.equilibrium_residual =
-        a.equilibrium_residual.iter().take(64).map(|(i, v)| (*i as u64, ExactRational(v.clone()))).collect();
-    r.incompatible_noise =
-        (0..a.noise_residuals.len()).filter(|&i| !a.noise_residuals[i].is_empty()).map(|i| i as u64).collect();
-    r.multipliers = a.multipliers.iter().map(|x| Float(*x)).collect();
-    r.multiplier_residual = Float(a.multiplier_residual);
-    r.family_dimension = a.family_dimension as u64;
-    r.restricted_dimension = a.restricted_dimension as u64;
-    r.sign = Float(a.sign);
-    r.restricted_margin = a.restricted_margin.is_finite().then_some(Float(a.restricted_margin));
-    r.q_depends_on_casimirs = a.q_depends_on_casimirs;
-    r.condition_number = a.condition_number.map(Float);
-    r.drift_residual = Float(a.drift_residual);
-    r.growth_rate = a.growth_rate.filter(|_| a.verdict == Verdict::LinearlyUnstable).map(Float);
+    fill_analysis_record(&mut doc.analysis, a);
     match a.verdict {
         Verdict::NotAnEquilibrium | Verdict::NoiseIncompatible => {
             checks.insert("residuals".to_string(), "exact: the residuals are computed in rational arithmetic from the sparse structure constants and polynomials".to_string());
         }
-        Verdict::Stable => {
-            r.exact_multipliers =
-                a.exact_multipliers.as_ref().map(|m| m.iter().map(|x| ExactRational(x.clone())).collect());
-            r.verification = a.verification.clone();
-            doc.sigma2 = a.sigma2.map(Float);
-            doc.infimum = a.infimum.map(Float);
-            if let (Some(upper), Some(VerificationLevel::VerifiedFloat)) = (a.sigma2_upper, doc.level.0) {
-                checks.insert(
-                    "form".to_string(),
-                    "verified_float: the multipliers are exact rationals with G lambda + Dh = 0 proved in rational arithmetic (analysis.exact_multipliers), so the functional s (h + lambda.C) + (C - C_e)^T K' (C - C_e)/2 is conserved and exactly critical; its exact Hessian P is proved positive definite by a floating-point Cholesky test with every rounding between the exact data and the tested matrix bounded (Rump-style)".to_string(),
-                );
-                checks.insert(
-                    "sigma2".to_string(),
-                    "verified_float: sigma2_upper P - Q is proved positive definite for the exact P and the exact Q = sum_i (B_i^T P B_i + sym(P B_i^2)) (the drift part is exactly zero for a conserved critical functional), roundings bounded; sigma2 is lambda_max(sQ, sP) by a dense generalized eigenproblem (faer), an estimate; infimum: lambda_max restricted to ker G^T".to_string(),
-                );
-                doc.sigma2_upper = Some(Float(upper));
-                doc.stopping = stopping_record(
-                    spec.stopping,
-                    Some(upper),
-                    "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta, with Sigma^2 = sigma2_upper, for the linearised SDE",
-                );
-            } else {
-                checks.insert(
-                    "form".to_string(),
-                    "numerical: the multipliers by least squares (analysis.multiplier_residual), the restricted Hessian's eigenvalues on ker G^T (analysis.restricted_margin), the Casimir Hessian by a Schur completion; nothing is proved (analysis.verification says why)".to_string(),
-                );
-                checks.insert(
-                    "sigma2".to_string(),
-                    "numerical: lambda_max(sQ, sP) by a dense generalized eigenproblem (faer); infimum: lambda_max restricted to ker G^T".to_string(),
-                );
-                doc.stopping = stopping_record(
-                    spec.stopping,
-                    a.sigma2,
-                    "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta, with the numerical Sigma^2: an estimate, not a guarantee",
-                );
-            }
-        }
+        Verdict::Stable => fill_stable(&mut doc, &mut checks, spec, a),
         Verdict::LinearlyUnstable => {
             checks.insert(
                 "instability".to_string(),
@@ -394,6 +355,69 @@ pub fn large_certificate_document(
         doc.analysis.growth_rate.map(|x| x.0),
     );
     doc
+}
+
+/// The pipeline's intermediate results, as the certificate records them.
+fn fill_analysis_record(r: &mut LargeAnalysisRecord, a: &LargeAnalysis) {
+    r.equilibrium_residual =
+        a.equilibrium_residual.iter().take(64).map(|(i, v)| (*i as u64, ExactRational(v.clone()))).collect();
+    r.incompatible_noise =
+        (0..a.noise_residuals.len()).filter(|&i| !a.noise_residuals[i].is_empty()).map(|i| i as u64).collect();
+    r.multipliers = a.multipliers.iter().map(|x| Float(*x)).collect();
+    r.multiplier_residual = Float(a.multiplier_residual);
+    r.family_dimension = a.family_dimension as u64;
+    r.restricted_dimension = a.restricted_dimension as u64;
+    r.sign = Float(a.sign);
+    r.restricted_margin = a.restricted_margin.is_finite().then_some(Float(a.restricted_margin));
+    r.q_depends_on_casimirs = a.q_depends_on_casimirs;
+    r.condition_number = a.condition_number.map(Float);
+    r.drift_residual = Float(a.drift_residual);
+    r.growth_rate = a.growth_rate.filter(|_| a.verdict == Verdict::LinearlyUnstable).map(Float);
+}
+
+/// A stable verdict's numbers, stopping time and checks: proved
+/// (`verified_float`, at `sigma2_upper`) or numerical (at `sigma2`).
+fn fill_stable(
+    doc: &mut LargeCertificateDocument,
+    checks: &mut BTreeMap<String, String>,
+    spec: &LargeSpec,
+    a: &LargeAnalysis,
+) {
+    doc.analysis.exact_multipliers =
+        a.exact_multipliers.as_ref().map(|m| m.iter().map(|x| ExactRational(x.clone())).collect());
+    doc.analysis.verification = a.verification.clone();
+    doc.sigma2 = a.sigma2.map(Float);
+    doc.infimum = a.infimum.map(Float);
+    if let (Some(upper), Some(VerificationLevel::VerifiedFloat)) = (a.sigma2_upper, doc.level.0) {
+        checks.insert(
+            "form".to_string(),
+            "verified_float: the multipliers are exact rationals with G lambda + Dh = 0 proved in rational arithmetic (analysis.exact_multipliers), so the functional s (h + lambda.C) + (C - C_e)^T K' (C - C_e)/2 is conserved and exactly critical; its exact Hessian P is proved positive definite by a floating-point Cholesky test with every rounding between the exact data and the tested matrix bounded (Rump-style)".to_string(),
+        );
+        checks.insert(
+            "sigma2".to_string(),
+            "verified_float: sigma2_upper P - Q is proved positive definite for the exact P and the exact Q = sum_i (B_i^T P B_i + sym(P B_i^2)) (the drift part is exactly zero for a conserved critical functional), roundings bounded; sigma2 is lambda_max(sQ, sP) by a dense generalized eigenproblem (faer), an estimate; infimum: lambda_max restricted to ker G^T".to_string(),
+        );
+        doc.sigma2_upper = Some(Float(upper));
+        doc.stopping = stopping_record(
+            spec.stopping,
+            Some(upper),
+            "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta, with Sigma^2 = sigma2_upper, for the linearised SDE",
+        );
+    } else {
+        checks.insert(
+            "form".to_string(),
+            "numerical: the multipliers by least squares (analysis.multiplier_residual), the restricted Hessian's eigenvalues on ker G^T (analysis.restricted_margin), the Casimir Hessian by a Schur completion; nothing is proved (analysis.verification says why)".to_string(),
+        );
+        checks.insert(
+            "sigma2".to_string(),
+            "numerical: lambda_max(sQ, sP) by a dense generalized eigenproblem (faer); infimum: lambda_max restricted to ker G^T".to_string(),
+        );
+        doc.stopping = stopping_record(
+            spec.stopping,
+            a.sigma2,
+            "P(|dmu_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dmu_0|_P^2 = delta, with the numerical Sigma^2: an estimate, not a guarantee",
+        );
+    }
 }
 
 /// Certify a large spec: the certificate JSON.

@@ -734,66 +734,87 @@ fn fill_general(
                 },
             });
             if let Some(m) = &g.matrix_free {
-                doc.residuals.drift = Float(m.drift_residual);
-                doc.matrix_free = Some(ZeitlinMatrixFreeRecord {
-                    dimension: m.dimension as u64,
-                    distinct_eigenvalues: m.distinct_eigenvalues,
-                    restricted_ritz: m.restricted_ritz.map(|(lo, hi)| [Float(lo), Float(hi)]),
-                    indefinite: m.indefinite,
-                    drift_residual: Float(m.drift_residual),
-                    drift_norm: Float(m.drift_norm),
-                    eigenvalue: m.eigenvalue.map(|(re, im)| [Float(re), Float(im)]),
-                    backward_error: m.backward_error.map(Float),
-                    best: m
-                        .best
-                        .filter(|(re, _, _)| *re > m.resolution && m.eigenvalue.is_none())
-                        .map(|(re, im, e)| [Float(re), Float(im), Float(e)]),
-                    resolution: Float(m.resolution),
-                });
-                if g.verdict == Verdict::LinearlyUnstable {
-                    doc.growth_rate = m.eigenvalue.map(|(re, _)| Float(re));
-                    checks.insert(
-                        "instability".to_string(),
-                        "numerical: an eigenpair (lambda, v) of the drift found matrix-free (Arnoldi on a Strang-split propagator exp(tau A), then Davidson on A preconditioned by the transport), accepted when its backward error |A v - lambda v|_F / |v|_F, computed with A in the spin basis, is at most 1e-6 of |A|_est and 1e-3 of Re lambda: lambda is an exact eigenvalue of A + E with |E|_F that small (evidence, not a proof, for a non-normal A)".to_string(),
-                    );
-                }
+                fill_matrix_free(doc, checks, g.verdict, m);
             }
             if let Some(d) = &g.dense {
-                doc.residuals.drift = Float(d.drift_residual);
-                doc.dense = Some(ZeitlinDenseRecord {
-                    dimension: d.dimension as u64,
-                    distinct_eigenvalues: d.distinct_eigenvalues,
-                    restricted_margin: d.restricted_margin.is_finite().then_some(Float(d.restricted_margin)),
-                    energy_coefficient: Float(d.energy),
-                    infimum: d.infimum.map(Float),
-                    condition_number: d.condition_number.map(Float),
-                    drift_residual: Float(d.drift_residual),
-                });
-                doc.growth_rate = d.growth_rate.filter(|_| g.verdict == Verdict::LinearlyUnstable).map(Float);
-                match g.verdict {
-                    Verdict::Stable => {
-                        doc.sigma2 = d.sigma2.map(Float);
-                        checks.insert(
-                            "sigma2".to_string(),
-                            "numerical: lambda_max(Q, P) by a dense generalized eigenproblem at a Casimir Hessian built for a target just above the infimum over it (dense.infimum)".to_string(),
-                        );
-                        doc.stopping = stopping_record(
-                            spec.stopping,
-                            d.sigma2,
-                            "P(|dW_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dW_0|_P^2 = delta, with the numerical Sigma^2: an estimate, not a guarantee",
-                        );
-                    }
-                    Verdict::LinearlyUnstable => {
-                        checks.insert(
-                            "instability".to_string(),
-                            "numerical: the eigenvalues of the dense drift (dimension N^2 - 1, faer), and the largest real part exceeds 1e-6 of the largest modulus".to_string(),
-                        );
-                    }
-                    _ => {}
-                }
+                fill_dense(doc, checks, spec, g.verdict, d);
             }
         }
         None => {}
+    }
+}
+
+/// A general state's matrix-free analysis (above `dense_max_n`).
+fn fill_matrix_free(
+    doc: &mut ZeitlinCertificateDocument,
+    checks: &mut BTreeMap<String, String>,
+    verdict: Verdict,
+    m: &zeitlin::matrix_free::MatrixFreeAnalysis,
+) {
+    doc.residuals.drift = Float(m.drift_residual);
+    doc.matrix_free = Some(ZeitlinMatrixFreeRecord {
+        dimension: m.dimension as u64,
+        distinct_eigenvalues: m.distinct_eigenvalues,
+        restricted_ritz: m.restricted_ritz.map(|(lo, hi)| [Float(lo), Float(hi)]),
+        indefinite: m.indefinite,
+        drift_residual: Float(m.drift_residual),
+        drift_norm: Float(m.drift_norm),
+        eigenvalue: m.eigenvalue.map(|(re, im)| [Float(re), Float(im)]),
+        backward_error: m.backward_error.map(Float),
+        best: m
+            .best
+            .filter(|(re, _, _)| *re > m.resolution && m.eigenvalue.is_none())
+            .map(|(re, im, e)| [Float(re), Float(im), Float(e)]),
+        resolution: Float(m.resolution),
+    });
+    if verdict == Verdict::LinearlyUnstable {
+        doc.growth_rate = m.eigenvalue.map(|(re, _)| Float(re));
+        checks.insert(
+            "instability".to_string(),
+            "numerical: an eigenpair (lambda, v) of the drift found matrix-free (Arnoldi on a Strang-split propagator exp(tau A), then Davidson on A preconditioned by the transport), accepted when its backward error |A v - lambda v|_F / |v|_F, computed with A in the spin basis, is at most 1e-6 of |A|_est and 1e-3 of Re lambda: lambda is an exact eigenvalue of A + E with |E|_F that small (evidence, not a proof, for a non-normal A)".to_string(),
+        );
+    }
+}
+
+/// A general state's dense analysis in real coordinates of su(N).
+fn fill_dense(
+    doc: &mut ZeitlinCertificateDocument,
+    checks: &mut BTreeMap<String, String>,
+    spec: &ZeitlinSpec,
+    verdict: Verdict,
+    d: &zeitlin::general::DenseAnalysis,
+) {
+    doc.residuals.drift = Float(d.drift_residual);
+    doc.dense = Some(ZeitlinDenseRecord {
+        dimension: d.dimension as u64,
+        distinct_eigenvalues: d.distinct_eigenvalues,
+        restricted_margin: d.restricted_margin.is_finite().then_some(Float(d.restricted_margin)),
+        energy_coefficient: Float(d.energy),
+        infimum: d.infimum.map(Float),
+        condition_number: d.condition_number.map(Float),
+        drift_residual: Float(d.drift_residual),
+    });
+    doc.growth_rate = d.growth_rate.filter(|_| verdict == Verdict::LinearlyUnstable).map(Float);
+    match verdict {
+        Verdict::Stable => {
+            doc.sigma2 = d.sigma2.map(Float);
+            checks.insert(
+                "sigma2".to_string(),
+                "numerical: lambda_max(Q, P) by a dense generalized eigenproblem at a Casimir Hessian built for a target just above the infimum over it (dense.infimum)".to_string(),
+            );
+            doc.stopping = stopping_record(
+                spec.stopping,
+                d.sigma2,
+                "P(|dW_t|_P^2 > epsilon) <= (delta/epsilon) exp(Sigma^2 t) for |dW_0|_P^2 = delta, with the numerical Sigma^2: an estimate, not a guarantee",
+            );
+        }
+        Verdict::LinearlyUnstable => {
+            checks.insert(
+                "instability".to_string(),
+                "numerical: the eigenvalues of the dense drift (dimension N^2 - 1, faer), and the largest real part exceeds 1e-6 of the largest modulus".to_string(),
+            );
+        }
+        _ => {}
     }
 }
 
