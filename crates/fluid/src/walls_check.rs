@@ -226,82 +226,78 @@ fn form_definite(l: &crate::banded::SymBanded, s: f64, (m, w): (&[f64], &[f64]))
     sc.inertia() == Some((tp, tn))
 }
 
-/// `bar V - Q ≻ 0` by the lifting of the module docs (`V ≻ 0` proved apart).
-/// `m` and `w` in the banded order.
-fn below_bar(
-    grid: &YGrid,
-    l: &crate::banded::SymBanded,
-    k: f64,
-    s: f64,
-    (m, w): (&[f64], &[f64]),
-    coef: &Coefficients,
-    bar: f64,
-) -> bool {
-    let n = grid.n();
-    let p = l.bandwidth();
-
-    // rho = bar / k^2, rounded down (module docs).
+/// `rho = bar / k^2` rounded down (module docs), `0` below the normal
+/// range; `None` when `k^2` or the quotient is not a finite normal number.
+fn rounded_rho(bar: f64, k: f64) -> Option<f64> {
     let u = f64::EPSILON / 2.0;
     let k2 = k * k;
     if !(k2.is_finite() && k2 >= f64::MIN_POSITIVE) {
-        return false;
+        return None;
     }
     let rho0 = bar / k2;
     if !rho0.is_finite() {
-        return false;
+        return None;
     }
-    let rho = if rho0 < f64::MIN_POSITIVE { 0.0 } else { rho0 * (1.0 - 4.0 * u) };
+    Some(if rho0 < f64::MIN_POSITIVE { 0.0 } else { rho0 * (1.0 - 4.0 * u) })
+}
 
-    // The noise fields that are not constant, each less its mean (its
-    // rounding is counted in the entries' bounds below).
-    let (eta, s2) = coef.centred_noise();
-    let (eta, s2): (Vec<Vec<f64>>, Vec<f64>) = (eta.iter().map(|e| grid.to_banded(e)).collect(), grid.to_banded(&s2));
-    let nj = eta.len();
-    if s2.iter().any(|x| !x.is_finite()) {
-        return false;
+/// What every node of the lifting of the module docs shares: the sign `s`,
+/// `rho`, the power of two `t`, the centred noise `eta_j` and `S2`, in the
+/// banded order.
+struct Lifting {
+    s: f64,
+    rho: f64,
+    t: f64,
+    eta: Vec<Vec<f64>>,
+    s2: Vec<f64>,
+}
+
+/// One entry of `U` at a node: `(value, scale, rounds)` with
+/// `|exact - value| <= gamma_rounds scale`.
+type Entry = (f64, f64, usize);
+
+impl Lifting {
+    /// The number of non-constant noise fields `J`.
+    fn fields(&self) -> usize {
+        self.eta.len()
     }
-    if rho == 0.0 {
-        // bar V - Q ≻ 0 at bar = 0 is not attempted (the lifting divides by rho)
-        return false;
-    }
-    // t: a power of two near the larger of max S2 and rho (exact, so 4t is
-    // too): the two squares are then of the size of their difference.
-    let s2max = s2.iter().fold(0.0f64, |a, x| a.max(*x));
-    let t = numerics::scaling::nearest_power_of_two(s2max.max(rho));
-    // The lifted unknowns per node: with noise y+, y-, y1..yJ; without, y0.
-    // omega is eliminated exactly first (its block D is diagonal), so the
-    // matrix factored is the Schur complement S = lower - U D^-1 U^T
-    // (module docs), of bandwidth (J + 2)(p + 1) - 1.
-    let (rows, width) = lifted_size(n, p, nj);
-    let grams = rows / n;
-    let idx = |a: usize, c: usize| a * grams + c;
-    // U's entries at node a, Gram c: (value, scale, rounds) with
-    // |exact - value| <= gamma_rounds scale (the counts of the lifting
-    // above); a nonzero value below the normal range proves nothing.
-    let mut u_vals: Vec<(f64, f64, usize)> = Vec::with_capacity(grams);
-    let mut sc = Bounded::new(rows, width);
-    let mut d_pos = 0;
-    for a in 0..n {
-        // D_a = s rho m w (two roundings): normal and nonzero, so that its
-        // sign is exact and its error relative
-        let Some(d) = crate::banded::product_without_early_underflow(&[s * rho, m[a], w[a]]) else {
-            return false;
-        };
-        if !(d.is_finite() && d.abs() >= f64::MIN_POSITIVE) {
-            return false;
+
+    /// The lower block `-L / g_c` at an entry `lab` of `L`, for Gram `c`,
+    /// with its roundings.
+    fn lower(&self, c: usize, lab: f64) -> (f64, usize) {
+        let (s, t, rho) = (self.s, self.t, self.rho);
+        if self.fields() > 0 {
+            // a power of two times lab: exact unless it lands below the
+            // normal range (a tiny t), where one rounding is counted
+            let v = 4.0 * t * s * lab;
+            let r = usize::from(lab != 0.0 && v.abs() < f64::MIN_POSITIVE);
+            match c {
+                0 => (-v, r),
+                1 => (v, r),
+                _ => (s * lab, 0),
+            }
+        } else {
+            (-s * lab / rho, 1)
         }
-        d_pos += usize::from(d > 0.0);
+    }
+
+    /// `U`'s entries at node `a` (weight `m_a`), one per Gram:
+    /// `M (S2 + t + rho)`, `M (S2 - t + rho)`, `M E_j` with noise, `M`
+    /// without; `false` where one proves nothing (below the normal range,
+    /// not finite, or underflowed to 0).
+    fn gram_entries(&self, a: usize, m_a: f64, u_vals: &mut Vec<Entry>) -> bool {
+        let (nj, eta, s2, t, rho) = (self.fields(), &self.eta, &self.s2, self.t, self.rho);
         u_vals.clear();
         if nj > 0 {
-            let plus = m[a] * ((s2[a] + t) + rho);
+            let plus = m_a * ((s2[a] + t) + rho);
             u_vals.push((plus, plus.abs(), 2 * nj + 5));
-            u_vals.push((m[a] * ((s2[a] - t) + rho), plus.abs(), 2 * nj + 5));
-            for e in &eta {
-                let v = e[a] * m[a];
+            u_vals.push((m_a * ((s2[a] - t) + rho), plus.abs(), 2 * nj + 5));
+            for e in eta {
+                let v = e[a] * m_a;
                 u_vals.push((v, v.abs(), 2));
             }
         } else {
-            u_vals.push((m[a], m[a].abs(), 0));
+            u_vals.push((m_a, m_a.abs(), 0));
         }
         if u_vals.iter().any(|(v, sc, _)| (*v != 0.0 && v.abs() < f64::MIN_POSITIVE) || !sc.is_finite()) {
             return false;
@@ -316,37 +312,18 @@ fn below_bar(
         } else {
             false
         };
-        if underflowed_to_zero {
-            return false;
-        }
-        // the lower block -L / g_c at (a, b), with its roundings
-        let lower = |c: usize, lab: f64| -> (f64, usize) {
-            if nj > 0 {
-                // a power of two times lab: exact unless it lands below the
-                // normal range (a tiny t), where one rounding is counted
-                let v = 4.0 * t * s * lab;
-                let r = usize::from(lab != 0.0 && v.abs() < f64::MIN_POSITIVE);
-                match c {
-                    0 => (-v, r),
-                    1 => (v, r),
-                    _ => (s * lab, 0),
-                }
-            } else {
-                (-s * lab / rho, 1)
-            }
-        };
-        for b in a.saturating_sub(p)..a {
-            let lab = l.get(a, b);
-            for c in 0..grams {
-                let (v, r) = lower(c, lab);
-                sc.set(idx(a, c), idx(b, c), v, r);
-            }
-        }
+        !underflowed_to_zero
+    }
+
+    /// Node `a`'s own block of the Schur complement, `lower(a, a) - U_c U_e / D_a`
+    /// for the Grams `c >= e` (`laa` = `L_aa`, first row `first`), set in
+    /// `sc` with its rounding; `false` where a quotient proves nothing.
+    fn node_block(&self, sc: &mut Bounded, first: usize, d: f64, laa: f64, u_vals: &[Entry]) -> bool {
+        let grams = u_vals.len();
         // node a's own block: lower(a, a) - U_c U_e / D_a. The quotient
         // carries the roundings of both factors, twice those of D_a (a
         // quotient: 1 / (1 - gamma_r) <= 1 + gamma_2r), and its own two;
         // the difference one more, relative to the sum of magnitudes.
-        let laa = l.get(a, a);
         let u = f64::EPSILON / 2.0;
         for c in 0..grams {
             for e in 0..=c {
@@ -368,13 +345,90 @@ fn below_bar(
                 }
                 let q_rounds = rc + re + 2 * 2 + 2;
                 if c == e {
-                    let (lv, lr) = lower(c, laa);
+                    let (lv, lr) = self.lower(c, laa);
                     let scale = (lv.abs() + q_scale) * (1.0 + 2.0 * u);
-                    sc.set_with_error(idx(a, c), idx(a, e), lv - q, scale, q_rounds.max(lr) + 1);
+                    sc.set_with_error(first + c, first + e, lv - q, scale, q_rounds.max(lr) + 1);
                 } else {
-                    sc.set_with_error(idx(a, c), idx(a, e), -q, q_scale, q_rounds);
+                    sc.set_with_error(first + c, first + e, -q, q_scale, q_rounds);
                 }
             }
+        }
+        true
+    }
+}
+
+/// `bar V - Q ≻ 0` by the lifting of the module docs (`V ≻ 0` proved apart).
+/// `m` and `w` in the banded order.
+fn below_bar(
+    grid: &YGrid,
+    l: &crate::banded::SymBanded,
+    k: f64,
+    s: f64,
+    (m, w): (&[f64], &[f64]),
+    coef: &Coefficients,
+    bar: f64,
+) -> bool {
+    let n = grid.n();
+    let p = l.bandwidth();
+
+    // rho = bar / k^2, rounded down (module docs).
+    let Some(rho) = rounded_rho(bar, k) else {
+        return false;
+    };
+
+    // The noise fields that are not constant, each less its mean (its
+    // rounding is counted in the entries' bounds below).
+    let (eta, s2) = coef.centred_noise();
+    let (eta, s2): (Vec<Vec<f64>>, Vec<f64>) = (eta.iter().map(|e| grid.to_banded(e)).collect(), grid.to_banded(&s2));
+    let nj = eta.len();
+    if s2.iter().any(|x| !x.is_finite()) {
+        return false;
+    }
+    if rho == 0.0 {
+        // bar V - Q ≻ 0 at bar = 0 is not attempted (the lifting divides by rho)
+        return false;
+    }
+    // t: a power of two near the larger of max S2 and rho (exact, so 4t is
+    // too): the two squares are then of the size of their difference.
+    let s2max = s2.iter().fold(0.0f64, |a, x| a.max(*x));
+    let t = numerics::scaling::nearest_power_of_two(s2max.max(rho));
+    let lifting = Lifting { s, rho, t, eta, s2 };
+    // The lifted unknowns per node: with noise y+, y-, y1..yJ; without, y0.
+    // omega is eliminated exactly first (its block D is diagonal), so the
+    // matrix factored is the Schur complement S = lower - U D^-1 U^T
+    // (module docs), of bandwidth (J + 2)(p + 1) - 1.
+    let (rows, width) = lifted_size(n, p, nj);
+    let grams = rows / n;
+    let idx = |a: usize, c: usize| a * grams + c;
+    // U's entries at node a, Gram c: (value, scale, rounds) with
+    // |exact - value| <= gamma_rounds scale (the counts of the lifting
+    // above); a nonzero value below the normal range proves nothing.
+    let mut u_vals: Vec<Entry> = Vec::with_capacity(grams);
+    let mut sc = Bounded::new(rows, width);
+    let mut d_pos = 0;
+    for a in 0..n {
+        // D_a = s rho m w (two roundings): normal and nonzero, so that its
+        // sign is exact and its error relative
+        let Some(d) = crate::banded::product_without_early_underflow(&[s * rho, m[a], w[a]]) else {
+            return false;
+        };
+        if !(d.is_finite() && d.abs() >= f64::MIN_POSITIVE) {
+            return false;
+        }
+        d_pos += usize::from(d > 0.0);
+        if !lifting.gram_entries(a, m[a], &mut u_vals) {
+            return false;
+        }
+        // the lower block -L / g_c at (a, b), with its roundings
+        for b in a.saturating_sub(p)..a {
+            let lab = l.get(a, b);
+            for c in 0..grams {
+                let (v, r) = lifting.lower(c, lab);
+                sc.set(idx(a, c), idx(b, c), v, r);
+            }
+        }
+        if !lifting.node_block(&mut sc, idx(a, 0), d, l.get(a, a), &u_vals) {
+            return false;
         }
     }
     // the lifted matrix's inertia for bar V - Q ≻ 0, less D's (Haynsworth)
