@@ -736,30 +736,48 @@ fn nonlinear_block(
         (Scheme::LieHeun, _, Some(k)) => kernel_paths(&k, run, mu0, &c0, model, rec, acc),
         _ => {
             let mut stepper = Stepper::new(model, scheme);
-            let mut dw = vec![0.0; noise_count];
-            let mut mu = mu0.to_vec();
-            for path in run.first..run.last {
-                let mut rng = path_rng(run.seed, path as u64);
-                mu.copy_from_slice(mu0);
-                rec.record(acc, 0, &mu);
-                for s in 1..=run.steps {
-                    for w in dw.iter_mut() {
-                        let z: f64 = StandardNormal.sample(&mut rng);
-                        *w = z * run.sqdt;
-                    }
-                    stepper.step(&mut mu, run.dt, &dw);
-                    if s % run.stride == 0 {
-                        let k = (s / run.stride) as usize;
-                        if k < run.n_times {
-                            rec.record(acc, k, &mu);
-                        }
-                    }
-                }
-                for (c, c0) in model.casimir_values(&mu).iter().zip(&c0) {
+            let end = |mu: &[f64], acc: &mut Accumulator| {
+                for (c, c0) in model.casimir_values(mu).iter().zip(&c0) {
                     acc.drift = acc.drift.max((c - c0).abs());
+                }
+            };
+            run_paths(run, mu0, noise_count, rec, acc, |mu, dw| stepper.step(mu, run.dt, dw), end);
+        }
+    }
+}
+
+/// The paths `run.first..run.last` from `start`, each with its own stream
+/// ([`path_rng`]): Brownian increments `sqrt(dt) N(0, 1)`, `step`, the state
+/// recorded every `stride` steps, and `end` at the end of each path.
+fn run_paths(
+    run: &BlockRun,
+    start: &[f64],
+    noise_count: usize,
+    rec: &mut Recorder<'_>,
+    acc: &mut Accumulator,
+    mut step: impl FnMut(&mut [f64], &[f64]),
+    mut end: impl FnMut(&[f64], &mut Accumulator),
+) {
+    let mut dw = vec![0.0; noise_count];
+    let mut x = start.to_vec();
+    for path in run.first..run.last {
+        let mut rng = path_rng(run.seed, path as u64);
+        x.copy_from_slice(start);
+        rec.record(acc, 0, &x);
+        for s in 1..=run.steps {
+            for w in dw.iter_mut() {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                *w = z * run.sqdt;
+            }
+            step(&mut x, &dw);
+            if s % run.stride == 0 {
+                let k = (s / run.stride) as usize;
+                if k < run.n_times {
+                    rec.record(acc, k, &x);
                 }
             }
         }
+        end(&x, acc);
     }
 }
 
@@ -773,26 +791,8 @@ fn linear_block(
     acc: &mut Accumulator,
 ) {
     let dim = x0.len();
-    let mut dw = vec![0.0; noise_count];
-    let mut x = x0.to_vec();
     let mut kbuf = vec![0.0; dim * dim];
     let mut ybuf = vec![0.0; 2 * dim];
-    for path in run.first..run.last {
-        let mut rng = path_rng(run.seed, path as u64);
-        x.copy_from_slice(x0);
-        rec.record(acc, 0, &x);
-        for s in 1..=run.steps {
-            for w in dw.iter_mut() {
-                let z: f64 = StandardNormal.sample(&mut rng);
-                *w = z * run.sqdt;
-            }
-            model.step(&mut x, run.dt, &dw, &mut kbuf, &mut ybuf);
-            if s % run.stride == 0 {
-                let k = (s / run.stride) as usize;
-                if k < run.n_times {
-                    rec.record(acc, k, &x);
-                }
-            }
-        }
-    }
+    let step = |x: &mut [f64], dw: &[f64]| model.step(x, run.dt, dw, &mut kbuf, &mut ybuf);
+    run_paths(run, x0, noise_count, rec, acc, step, |_, _| {});
 }

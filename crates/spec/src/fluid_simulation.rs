@@ -8,6 +8,7 @@
 //! at `t = 0` ([`fluid::analysis::ModeStudy`]); a Monte Carlo and the exact
 //! second moment give `E V(t) / V(0)`.
 
+use crate::run_options::{check_paths_dt_outputs, MAX_STEPS};
 use crate::FluidSpec;
 use fluid::analysis::{analyse_with, mode_study, FluidError, FluidModel, FluidProblem, ModeResult, Progress, Verdict};
 use serde_json::{json, Value};
@@ -22,10 +23,6 @@ pub const FLUID_SIMULATION_DEFAULT_NY: (usize, usize) = (32, 16);
 pub const FLUID_SIMULATION_MAX_NY: usize = 512;
 /// Paths when none are asked for.
 pub const FLUID_SIMULATION_DEFAULT_PATHS: usize = 1000;
-/// At most this many paths.
-const MAX_PATHS: usize = 10_000_000;
-/// At most this many steps per path.
-const MAX_STEPS: f64 = 1e8;
 /// Floating-point operations per second and thread assumed for the exact
 /// moment when one of its Taylor steps is too long to time
 /// ([`EXACT_PILOT_SECONDS`]). Measured on the 2-core machine:
@@ -359,16 +356,8 @@ impl RunShape {
             ));
         }
         let paths = options.paths.unwrap_or(FLUID_SIMULATION_DEFAULT_PATHS);
-        if !(2..=MAX_PATHS).contains(&paths) {
-            return Err(invalid("paths", format!("need 2 to {MAX_PATHS} paths, got {paths}")));
-        }
         let dt = options.dt;
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(invalid("dt", format!("must be positive and finite, got {dt}")));
-        }
-        if options.outputs == 0 {
-            return Err(invalid("outputs", "need at least one output time".into()));
-        }
+        check_paths_dt_outputs(paths, dt, options.outputs).map_err(|(field, message)| invalid(field, message))?;
         // the analysis at this grid has the spec's work limits (they depend
         // on ny: a spec accepted at ny = 16 may not be at 512)
         let fields = spec.problem.profile.eta.len();

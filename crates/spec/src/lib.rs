@@ -69,6 +69,8 @@ mod library;
 mod parse;
 mod pretty;
 pub mod record;
+#[cfg(feature = "fluid")]
+mod run_options;
 mod settings;
 mod sweep;
 pub mod theorem;

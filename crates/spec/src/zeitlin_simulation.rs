@@ -16,6 +16,7 @@
 //! increments, with its Casimir drift. Times are the model's `t`
 //! (quflow's), and the report gives them per `qtime = t / hbar` too.
 
+use crate::run_options::{check_paths_dt_outputs, MAX_STEPS};
 use crate::zeitlin::{analyse_zeitlin_with, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec};
 use nalgebra::Complex;
 use outcome::{Progress, Verdict};
@@ -26,10 +27,6 @@ use zeitlin::isospectral::IsospectralError;
 
 /// Paths when none are asked for.
 pub const ZEITLIN_SIMULATION_DEFAULT_PATHS: usize = 1000;
-/// At most this many paths.
-const MAX_PATHS: usize = 10_000_000;
-/// At most this many steps.
-const MAX_STEPS: f64 = 1e8;
 /// `N` at most (dense blocks of `N - m` complex unknowns; the exact moment
 /// costs `O(N^3)` per step).
 pub const ZEITLIN_SIMULATION_MAX_N: usize = 512;
@@ -269,16 +266,7 @@ fn check_options(n: usize, options: &ZeitlinSimulationOptions) -> Result<(), Zei
         ));
     }
     let paths = options.paths.unwrap_or(ZEITLIN_SIMULATION_DEFAULT_PATHS);
-    if !(2..=MAX_PATHS).contains(&paths) {
-        return Err(invalid("paths", format!("need 2 to {MAX_PATHS} paths, got {paths}")));
-    }
-    let dt = options.dt;
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(invalid("dt", format!("must be positive and finite, got {dt}")));
-    }
-    if options.outputs == 0 {
-        return Err(invalid("outputs", "need at least one output time".into()));
-    }
+    check_paths_dt_outputs(paths, options.dt, options.outputs).map_err(|(field, message)| invalid(field, message))?;
     if let Some(t) = options.t_end {
         if !(t.is_finite() && t > 0.0) {
             return Err(invalid("t_end", format!("must be positive and finite, got {t}")));
