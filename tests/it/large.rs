@@ -281,8 +281,8 @@ fn every_exact_fixture_agrees_through_the_large_pipeline() {
         let Ok(parsed) = spec::parse_spec(&text) else { continue };
         let exact_cert: Value =
             serde_json::from_str(&std::fs::read_to_string(path.with_extension("cert.json")).unwrap()).unwrap();
-        let system = large::system::LargeSystem::from_exact(&parsed.system).unwrap();
-        let a = large::analysis::analyse_large(&system, &large::analysis::LargeSettings::default()).unwrap();
+        let system = large::LargeSystem::from_exact(&parsed.system).unwrap();
+        let a = large::analyse_large(&system, &large::LargeSettings::default()).unwrap();
         assert_eq!(a.verdict.as_str(), exact_cert["verdict"], "{name}: large says {}", a.reason);
         if a.verdict == spec::Verdict::Stable {
             let (l, e) = (a.sigma2.unwrap(), exact_cert["sigma2"].as_f64().unwrap());
@@ -357,8 +357,8 @@ fn the_so_n_rigid_body_agrees_with_the_exact_engine() {
         let e = exact(&v);
         assert_eq!(e["verdict"], "stable", "so({n}): {}", e["reason"]);
         let parsed = spec::parse_spec(&v.to_string()).unwrap();
-        let system = large::system::LargeSystem::from_exact(&parsed.system).unwrap();
-        let a = large::analysis::analyse_large(&system, &large::analysis::LargeSettings::default()).unwrap();
+        let system = large::LargeSystem::from_exact(&parsed.system).unwrap();
+        let a = large::analyse_large(&system, &large::LargeSettings::default()).unwrap();
         let (l, x) = (a.sigma2.unwrap(), e["sigma2"].as_f64().unwrap());
         assert!((l - x).abs() <= 1e-9 * x, "so({n}): large {l}, exact {x}");
         values.push(x);
@@ -383,10 +383,10 @@ fn dense_structure_constants_are_checked_at_random_points() {
             })
             .collect()
     };
-    assert!(large::algebra::SparseAlgebra::new(&names, &to_rows(&rows)).is_ok());
+    assert!(large::SparseAlgebra::new(&names, &to_rows(&rows)).is_ok());
     // [E_01, E_23] = 0 in so(40); make it E_01.
     rows.push(json!([0, names.iter().position(|n| n == "M_2_3").unwrap(), 0, 1]));
-    let e = large::algebra::SparseAlgebra::new(&names, &to_rows(&rows)).unwrap_err();
+    let e = large::SparseAlgebra::new(&names, &to_rows(&rows)).unwrap_err();
     assert!(e.to_string().contains("Jacobi identity fails"), "{e}");
 }
 

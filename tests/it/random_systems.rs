@@ -261,9 +261,9 @@ fn agrees_with_the_large_pipeline(
     exact: &serde_json::Value,
     text: &str,
 ) -> Result<(), TestCaseError> {
-    let system = large::system::LargeSystem::from_exact(&spec.system)
+    let system = large::LargeSystem::from_exact(&spec.system)
         .map_err(|e| TestCaseError::fail(format!("the large pipeline refused the system: {e}\n{text}")))?;
-    let Ok(a) = large::analysis::analyse_large(&system, &large::analysis::LargeSettings::default()) else {
+    let Ok(a) = large::analyse_large(&system, &large::LargeSettings::default()) else {
         return Ok(()); // a numerical breakdown claims nothing
     };
     let (l, e) = (a.verdict.as_str(), exact["verdict"].as_str().unwrap_or(""));

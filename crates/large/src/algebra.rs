@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 /// stored sparsely (only the nonzero brackets, both orders).
 ///
 /// ```
-/// use large::algebra::SparseAlgebra;
+/// use large::SparseAlgebra;
 /// use exact::Rational;
 /// let one = Rational::from(1);
 /// // two copies of so(3): [e0, e1] = e2 (cyclic) and [e3, e4] = e5 (cyclic)

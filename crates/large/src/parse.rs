@@ -221,7 +221,7 @@ impl Semantics for Polynomials<'_> {
 /// Parse an expression in the coordinates and parameters.
 ///
 /// ```
-/// use large::parse::{parse_sparse, SparseSymbols};
+/// use large::{parse_sparse, SparseSymbols};
 /// let names: Vec<String> = (0..1500).map(|i| format!("x{i}")).collect();
 /// let s = SparseSymbols::new(&names, &Default::default());
 /// let p = parse_sparse("x0^2/2 + 3*x1499*x7 - 1/4", &s).unwrap();

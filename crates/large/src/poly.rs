@@ -19,7 +19,7 @@ pub type SparseMonomial = Vec<(u32, u16)>;
 /// A polynomial in `nvars` variables with rational coefficients.
 ///
 /// ```
-/// use large::poly::SparsePoly;
+/// use large::SparsePoly;
 /// use exact::Rational;
 /// let n = 1000;
 /// let x = SparsePoly::var(n, 3);
@@ -87,7 +87,7 @@ impl SparsePoly {
     /// ```
     /// let s = exact::Symbols::new(&["x", "y"]);
     /// let p = exact::parse_expression("x^2*y - 3/4", &s).unwrap();
-    /// let q = large::poly::SparsePoly::from_poly(&p);
+    /// let q = large::SparsePoly::from_poly(&p);
     /// assert_eq!(q.num_terms(), 2);
     /// assert_eq!(q.eval_f64(&[2.0, 3.0]), 11.25);
     /// ```
@@ -294,7 +294,7 @@ impl SparsePoly {
     /// entries only.
     ///
     /// ```
-    /// use large::poly::SparsePoly;
+    /// use large::SparsePoly;
     /// use exact::Rational;
     /// // p = x0^2 x1 / 3 at (2, 5): d00 = 2 x1 / 3 = 10/3, d01 = 2 x0 / 3 = 4/3, d11 = 0
     /// let (x0, x1) = (SparsePoly::var(2, 0), SparsePoly::var(2, 1));

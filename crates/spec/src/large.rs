@@ -31,12 +31,12 @@ use crate::record::{
     Engine, ExactRational, Float, LargeAnalysisRecord, LargeCertificateDocument, LevelOrNone, Route, RouteRecord,
 };
 use exact::Rational;
-use large::algebra::SparseAlgebra;
-use large::analysis::{analyse_large, analyse_large_with, LargeAnalysis, LargeSettings};
-use large::parse::{parse_sparse, SparseSymbols};
-use large::poly::SparsePoly;
-use large::system::LargeSystem;
 use large::LargeError;
+use large::LargeSystem;
+use large::SparseAlgebra;
+use large::SparsePoly;
+use large::{analyse_large, analyse_large_with, LargeAnalysis, LargeSettings};
+use large::{parse_sparse, SparseSymbols};
 use outcome::{Cancelled, Progress, Verdict, VerificationLevel};
 use serde_json::Value;
 use std::collections::BTreeMap;

@@ -15,7 +15,7 @@ use outcome::Progress;
 use std::collections::BTreeMap;
 
 /// A Hessian stored by one entry per unordered pair (as
-/// [`crate::poly::SparsePoly::hessian_at_f64`] gives it).
+/// [`crate::SparsePoly::hessian_at_f64`] gives it).
 type SparseHessian = BTreeMap<(usize, usize), f64>;
 
 /// `into += scale M` for the symmetric `M` stored by one entry per

@@ -114,7 +114,7 @@ pub struct LargeAnalysis {
     /// `Sigma^2` at the chosen form.
     pub sigma2: Option<f64>,
     /// A proved upper bound on `Sigma^2` (level `verified_float`,
-    /// [`crate::verified`]).
+    /// [`crate::VerifiedPencil`]).
     pub sigma2_upper: Option<f64>,
     /// The exact multipliers of the verified functional.
     pub exact_multipliers: Option<Vec<Rational>>,
@@ -142,7 +142,7 @@ pub const VERIFIED_MARGINS: [f64; 4] = [1e-8, 1e-6, 1e-4, 1e-2];
 
 impl LargeAnalysis {
     /// Whether `bar` (for the system as given) is proved an upper bound on
-    /// `Sigma^2` by the verified check ([`crate::verified`]); `false` when
+    /// `Sigma^2` by the verified check ([`crate::VerifiedPencil`]); `false` when
     /// there is no verified check.
     pub fn proves_upper(&self, bar: f64) -> bool {
         match &self.pencil {
@@ -156,10 +156,10 @@ impl LargeAnalysis {
 /// Run the pipeline (see the module docs).
 ///
 /// ```
-/// use large::algebra::SparseAlgebra;
-/// use large::parse::{parse_sparse, SparseSymbols};
-/// use large::system::LargeSystem;
-/// use large::analysis::{analyse_large, LargeSettings};
+/// use large::SparseAlgebra;
+/// use large::{parse_sparse, SparseSymbols};
+/// use large::LargeSystem;
+/// use large::{analyse_large, LargeSettings};
 /// use exact::Rational;
 /// // The rigid body about its major axis (I = 3, 2, 1), noise 3/10 along it:
 /// // Sigma^2 = sigma^2 I1 (I2 - I3)/(I3 (I1 - I2)) = 0.27.
