@@ -7,7 +7,7 @@
 
 use nalgebra::{Complex, DMatrix};
 
-pub use numerics::dense::{condition_number, largest_generalized, real_eigenvalues, symmetric_eigenvalues};
+pub(crate) use numerics::dense::{real_eigenvalues, symmetric_eigenvalues};
 
 type C = Complex<f64>;
 

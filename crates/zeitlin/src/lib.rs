@@ -3,7 +3,8 @@
 //! transport noise, and the stochastic energy–Casimir method for its zonal
 //! equilibria.
 //!
-//! * [`laplacian`]: the Hoppe–Yau Laplacian on one off-diagonal (tridiagonal);
+//! * [`laplacian`]: the Hoppe–Yau Laplacian on one off-diagonal (tridiagonal), and
+//!   the `O(N^2)` stream solve `P = Delta_N^{-1} W` ([`laplacian::StreamSolver`]);
 //! * [`zonal`]: zonal harmonics `T_{l0}` and the quantisation of a profile `omega(z)`;
 //! * [`general`]: equilibria and noise given as matrices: the checks, the zonal frame of a
 //!   tilted zonal state, and a dense analysis of states zonal in no frame;
@@ -11,8 +12,13 @@
 //!   any `(N^2 - 1)`-square matrix;
 //! * [`sphere`]: quflow's real spherical-harmonic basis `T_lm`, spin matrices and rotations;
 //! * [`analysis`]: the per-block energy–Casimir–momentum form, `Q`, and `Sigma^2`;
+//! * [`block_sde`]: one azimuthal block of the linearised SDE about a zonal
+//!   state, its Monte Carlo and its exact second moment;
 //! * [`isospectral`]: Monte Carlo of the full nonlinear model with the
-//!   Casimir-preserving stochastic isospectral midpoint, and an `O(N^2)` stream solve.
+//!   Casimir-preserving stochastic isospectral midpoint.
+//!
+//! The modules are the crate's namespaces (one concern each); the
+//! eigen-solvers they share are private.
 //!
 //! Conventions are quflow's: `<A, B> = Re tr(A B^*) / N`, the bracket
 //! `[A, B] / hbar` with `hbar = 2 / sqrt(N^2 - 1)`, `W = i diag(omega)` for a
@@ -21,7 +27,7 @@
 
 pub mod analysis;
 pub mod block_sde;
-pub mod eigen;
+mod eigen;
 pub mod general;
 pub mod isospectral;
 pub mod laplacian;

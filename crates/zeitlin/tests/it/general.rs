@@ -201,7 +201,7 @@ fn dense_growth(w: &DMatrix<C>) -> f64 {
             (false, true) => z.im,
         }
     });
-    zeitlin::eigen::real_eigenvalues(&real).unwrap().iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max)
+    numerics::dense::real_eigenvalues(&real).unwrap().iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// A Rossby–Haurwitz state of degree 3 (steady, zonal about no axis): no
