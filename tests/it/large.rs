@@ -579,3 +579,43 @@ fn a_spec_keeps_its_meaning_across_the_route_boundary() {
     edited["route"]["settings_not_honoured"].as_object_mut().unwrap().remove("exact");
     assert!(spec::check_json(&edited.to_string(), &options).is_err());
 }
+
+/// One parser at every size: the dense route's `parse_expression` and the
+/// sparse route's `parse_sparse` are the same parser
+/// (`exact::parse_polynomial`) over two polynomial types, so every
+/// expression means the same polynomial, and every error is the same error
+/// at the same character, on both.
+#[test]
+fn both_routes_read_an_expression_the_same_way() {
+    let names: Vec<String> = ["x", "y", "z"].iter().map(|s| s.to_string()).collect();
+    let parameters: std::collections::BTreeMap<String, exact::Rational> =
+        [("a".to_string(), exact::parse_number("3/10").unwrap())].into_iter().collect();
+    let mut dense = exact::Symbols::new(&names);
+    dense.set_parameter("a", parameters["a"].clone());
+    let sparse = large::SparseSymbols::new(&names, &parameters);
+    let texts = [
+        "(x + y)^2 - 2*x*y",
+        "a*x^2/2 + y*z - 1/4",
+        "(x - a)^3 * (y + 2)^2",
+        "2^-3 * z + 0.25e1",
+        "x / y",
+        "x^(1/2)",
+        "x^-1",
+        "0^-2",
+        "(x + y + z)^65",
+        "x + w",
+        "sin(x)",
+        "((x",
+        "1/0",
+        "(10^64)^64^64",
+    ];
+    for text in texts {
+        let d = exact::parse_expression(text, &dense);
+        let s = large::parse_sparse(text, &sparse);
+        match (d, s) {
+            (Ok(d), Ok(s)) => assert_eq!(large::SparsePoly::from_poly(&d), s, "{text}"),
+            (Err(d), Err(s)) => assert_eq!(d, s, "{text}"),
+            (d, s) => panic!("{text}: dense {d:?}, sparse {s:?}"),
+        }
+    }
+}

@@ -44,7 +44,9 @@ pub use number::{
     parse_number, power_of_two, rational_from_f64, rational_to_f64, rational_to_f64_up, NumberError, Rational,
     MAX_CERTIFICATE_DIGITS, MAX_LITERAL_DIGITS,
 };
-pub use parse::{parse_expression, Limits, ParseError, ParseErrorKind, Symbols};
+pub use parse::{
+    parse_expression, parse_polynomial, Limits, ParseError, ParseErrorKind, PolynomialArithmetic, SymbolTable, Symbols,
+};
 pub use poly::{monomial_count, monomials_of_degree, Derivatives, Monomial, Poly};
 pub use rational::integer_scale;
 pub use text::{cut, quote};

@@ -87,10 +87,6 @@ impl Symbols {
     pub fn parameters(&self) -> &BTreeMap<String, Rational> {
         &self.parameters
     }
-
-    fn known_names(&self) -> Vec<String> {
-        self.coordinates.iter().cloned().chain(self.parameters.keys().cloned()).collect()
-    }
 }
 
 /// What went wrong in an expression.
@@ -166,12 +162,127 @@ pub struct ParseError {
     pub position: usize,
 }
 
+/// What the polynomial language needs of a polynomial type, so that one
+/// parser serves the dense [`Poly`] (up to 64 coordinates) and the large
+/// pipeline's sparse polynomials (thousands): arithmetic, and the sizes the
+/// limits are checked against before a result is formed.
+pub trait PolynomialArithmetic: Sized {
+    /// The constant `c` in `nvars` variables.
+    fn constant(nvars: usize, c: Rational) -> Self;
+    /// The variable `x_i`.
+    fn var(nvars: usize, i: usize) -> Self;
+    /// `self + other`.
+    fn add(&self, other: &Self) -> Self;
+    /// `self - other`.
+    fn sub(&self, other: &Self) -> Self;
+    /// `self * other`.
+    fn mul(&self, other: &Self) -> Self;
+    /// `-self`.
+    fn neg(&self) -> Self;
+    /// `s * self`.
+    fn scale(&self, s: &Rational) -> Self;
+    /// `self^e`.
+    fn pow(&self, e: u32) -> Self;
+    /// The value, when the polynomial is a constant.
+    fn constant_value(&self) -> Option<Rational>;
+    /// The total degree.
+    fn total_degree(&self) -> u32;
+    /// The number of terms.
+    fn num_terms(&self) -> usize;
+    /// The largest coefficient size in bits.
+    fn max_bits(&self) -> u64;
+    /// An upper bound on the number of terms of `self^m`, of total degree
+    /// `degree`, known before it is formed.
+    fn power_terms_bound(&self, m: u32, degree: u32) -> usize;
+}
+
+impl PolynomialArithmetic for Poly {
+    fn constant(nvars: usize, c: Rational) -> Self {
+        Poly::constant(nvars, c)
+    }
+    fn var(nvars: usize, i: usize) -> Self {
+        Poly::var(nvars, i)
+    }
+    fn add(&self, other: &Self) -> Self {
+        Poly::add(self, other)
+    }
+    fn sub(&self, other: &Self) -> Self {
+        Poly::sub(self, other)
+    }
+    fn mul(&self, other: &Self) -> Self {
+        Poly::mul(self, other)
+    }
+    fn neg(&self) -> Self {
+        Poly::neg(self)
+    }
+    fn scale(&self, s: &Rational) -> Self {
+        Poly::scale(self, s)
+    }
+    fn pow(&self, e: u32) -> Self {
+        Poly::pow(self, e)
+    }
+    fn constant_value(&self) -> Option<Rational> {
+        Poly::constant_value(self)
+    }
+    fn total_degree(&self) -> u32 {
+        Poly::total_degree(self)
+    }
+    fn num_terms(&self) -> usize {
+        Poly::num_terms(self)
+    }
+    fn max_bits(&self) -> u64 {
+        self.terms().map(|(_, c)| c.size_bits()).max().unwrap_or(1)
+    }
+    /// At most the monomials of degree `<= degree` in the variables the
+    /// base uses, and at most `terms^m`.
+    fn power_terms_bound(&self, m: u32, degree: u32) -> usize {
+        let vars = (0..self.nvars()).filter(|&i| self.terms().any(|(mono, _)| mono[i] > 0)).count();
+        let at_most = crate::poly::monomial_count(vars + 1, degree).min(usize::MAX as u128) as usize;
+        at_most.min(saturating_pow(self.num_terms(), m))
+    }
+}
+
+/// The names an expression may use, as the parser looks them up: the
+/// coordinates (variables), the parameters (exact constants) and the size
+/// limits.
+pub trait SymbolTable {
+    /// The number of coordinates.
+    fn nvars(&self) -> usize;
+    /// The index of the coordinate `name`.
+    fn coordinate(&self, name: &str) -> Option<usize>;
+    /// The value of the parameter `name`.
+    fn parameter(&self, name: &str) -> Option<&Rational>;
+    /// The names an unknown symbol's error lists.
+    fn known_names(&self) -> Vec<String>;
+    /// The size limits.
+    fn limits(&self) -> &Limits;
+}
+
+impl SymbolTable for Symbols {
+    fn nvars(&self) -> usize {
+        self.coordinates.len()
+    }
+    fn coordinate(&self, name: &str) -> Option<usize> {
+        self.coordinates.iter().position(|c| c == name)
+    }
+    fn parameter(&self, name: &str) -> Option<&Rational> {
+        self.parameters.get(name)
+    }
+    fn known_names(&self) -> Vec<String> {
+        self.coordinates.iter().cloned().chain(self.parameters.keys().cloned()).collect()
+    }
+    fn limits(&self) -> &Limits {
+        &self.limits
+    }
+}
+
 /// The polynomial language: numbers are exact, symbols are coordinates or
 /// parameters, no function calls, division only by nonzero constants,
 /// constant integer exponents; every step is checked against the size
 /// limits before the polynomial it would make is formed.
-struct Polynomials<'a> {
-    symbols: &'a Symbols,
+struct Polynomials<'a, S, P> {
+    symbols: &'a S,
+    value: std::marker::PhantomData<P>,
 }
 
 /// Parse an expression into an exact polynomial in the coordinates, with
@@ -186,13 +297,14 @@ struct Polynomials<'a> {
 /// assert_eq!(e.kind, ParseErrorKind::DivisionByPolynomial);
 /// ```
 pub fn parse_expression(text: &str, symbols: &Symbols) -> Result<Poly, ParseError> {
-    let l = &symbols.limits;
-    crate::syntax::parse(text, &mut Polynomials { symbols }, l.max_depth, l.max_length)
+    parse_polynomial(text, symbols)
 }
 
-/// The largest coefficient size in bits.
-fn max_bits(p: &Poly) -> u64 {
-    p.terms().map(|(_, c)| c.size_bits()).max().unwrap_or(1)
+/// [`parse_expression`] into any polynomial type, with any symbol table:
+/// the one parser of the polynomial language at every size.
+pub fn parse_polynomial<S: SymbolTable, P: PolynomialArithmetic>(text: &str, symbols: &S) -> Result<P, ParseError> {
+    let l = symbols.limits();
+    crate::syntax::parse(text, &mut Polynomials { symbols, value: std::marker::PhantomData }, l.max_depth, l.max_length)
 }
 
 fn saturating_pow(b: usize, e: u32) -> usize {
@@ -203,14 +315,14 @@ fn fail<T>(kind: ParseErrorKind, position: usize) -> Result<T, ParseError> {
     Err(ParseError { kind, position })
 }
 
-impl Polynomials<'_> {
+impl<S: SymbolTable, P: PolynomialArithmetic> Polynomials<'_, S, P> {
     fn nvars(&self) -> usize {
-        self.symbols.coordinates.len()
+        self.symbols.nvars()
     }
 
-    fn check_size(&self, p: Poly, position: usize) -> Result<Poly, ParseError> {
-        let l = &self.symbols.limits;
-        let bits = max_bits(&p);
+    fn check_size(&self, p: P, position: usize) -> Result<P, ParseError> {
+        let l = self.symbols.limits();
+        let bits = p.max_bits();
         if bits > l.max_coefficient_bits {
             return fail(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, position);
         }
@@ -232,9 +344,9 @@ impl Polynomials<'_> {
     /// Refuse `base^m` before computing it when its coefficients would
     /// exceed the size limit: each is a sum of products of `m` coefficients
     /// (with multinomial weights below `terms^m`).
-    fn bound_power_bits(&self, base: &Poly, m: u32, at: usize) -> Result<(), ParseError> {
-        let l = &self.symbols.limits;
-        let per_factor = max_bits(base) + (usize::BITS - base.num_terms().leading_zeros()) as u64;
+    fn bound_power_bits(&self, base: &P, m: u32, at: usize) -> Result<(), ParseError> {
+        let l = self.symbols.limits();
+        let per_factor = base.max_bits() + (usize::BITS - base.num_terms().leading_zeros()) as u64;
         let bits = per_factor.saturating_mul(m as u64);
         if bits > 2 * l.max_coefficient_bits {
             return fail(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
@@ -243,8 +355,8 @@ impl Polynomials<'_> {
     }
 }
 
-impl Semantics for Polynomials<'_> {
-    type Value = Poly;
+impl<S: SymbolTable, P: PolynomialArithmetic> Semantics for Polynomials<'_, S, P> {
+    type Value = P;
     type Function = std::convert::Infallible;
     type Error = ParseError;
 
@@ -252,19 +364,19 @@ impl Semantics for Polynomials<'_> {
         ParseError { kind: ParseErrorKind::Syntax(e.kind), position: e.position }
     }
 
-    fn number(&mut self, text: &str, at: usize) -> Result<Poly, ParseError> {
+    fn number(&mut self, text: &str, at: usize) -> Result<P, ParseError> {
         match parse_number(text) {
-            Ok(v) => Ok(Poly::constant(self.nvars(), v)),
+            Ok(v) => Ok(P::constant(self.nvars(), v)),
             Err(e) => fail(ParseErrorKind::BadNumber(e.to_string()), at),
         }
     }
 
-    fn symbol(&mut self, name: &str, at: usize) -> Result<Poly, ParseError> {
-        if let Some(i) = self.symbols.coordinates.iter().position(|c| c == name) {
-            return Ok(Poly::var(self.nvars(), i));
+    fn symbol(&mut self, name: &str, at: usize) -> Result<P, ParseError> {
+        if let Some(i) = self.symbols.coordinate(name) {
+            return Ok(P::var(self.nvars(), i));
         }
-        if let Some(v) = self.symbols.parameters.get(name) {
-            return Ok(Poly::constant(self.nvars(), v.clone()));
+        if let Some(v) = self.symbols.parameter(name) {
+            return Ok(P::constant(self.nvars(), v.clone()));
         }
         fail(ParseErrorKind::UnknownSymbol { name: name.to_string(), known: self.symbols.known_names() }, at)
     }
@@ -273,17 +385,17 @@ impl Semantics for Polynomials<'_> {
         fail(ParseErrorKind::FunctionCall(name.to_string()), at)
     }
 
-    fn call(&mut self, f: Self::Function, _: Poly, _: usize) -> Result<Poly, ParseError> {
+    fn call(&mut self, f: Self::Function, _: P, _: usize) -> Result<P, ParseError> {
         match f {}
     }
 
-    fn binary(&mut self, op: Op, acc: Poly, rhs: Poly, at: usize, rhs_at: usize) -> Result<Poly, ParseError> {
+    fn binary(&mut self, op: Op, acc: P, rhs: P, at: usize, rhs_at: usize) -> Result<P, ParseError> {
         match op {
             Op::Add => self.check_size(acc.add(&rhs), at),
             Op::Sub => self.check_size(acc.sub(&rhs), at),
             Op::Mul => {
                 // Bound the product before forming it.
-                let l = &self.symbols.limits;
+                let l = self.symbols.limits();
                 let degree = acc.total_degree() + rhs.total_degree();
                 let terms = acc.num_terms().saturating_mul(rhs.num_terms());
                 if degree > l.max_degree || terms > l.max_terms.saturating_mul(4) {
@@ -294,7 +406,7 @@ impl Semantics for Polynomials<'_> {
                 }
                 // Each coefficient of the product is a sum of at most
                 // `terms` products: its size is bounded before it is formed.
-                let bits = 2 * (max_bits(&acc) + max_bits(&rhs)) + 64;
+                let bits = 2 * (acc.max_bits() + rhs.max_bits()) + 64;
                 if bits > 4 * l.max_coefficient_bits {
                     return fail(ParseErrorKind::CoefficientTooLarge { bits, limit: l.max_coefficient_bits }, at);
                 }
@@ -312,18 +424,18 @@ impl Semantics for Polynomials<'_> {
         }
     }
 
-    fn negate(&mut self, a: Poly, _: usize) -> Result<Poly, ParseError> {
+    fn negate(&mut self, a: P, _: usize) -> Result<P, ParseError> {
         Ok(a.neg())
     }
 
-    fn power(&mut self, base: Poly, exponent: Poly, at: usize, exp_at: usize) -> Result<Poly, ParseError> {
+    fn power(&mut self, base: P, exponent: P, at: usize, exp_at: usize) -> Result<P, ParseError> {
         let Some(e) = exponent.constant_value() else {
             return fail(ParseErrorKind::NonIntegerExponent, exp_at);
         };
         if !e.is_integer() {
             return fail(ParseErrorKind::NonIntegerExponent, exp_at);
         }
-        let max = self.symbols.limits.max_exponent;
+        let max = self.symbols.limits().max_exponent;
         let magnitude = e.abs().to_integer().to_u32().filter(|&m| m <= max);
         let Some(m) = magnitude else {
             return fail(ParseErrorKind::ExponentTooLarge(e.to_string(), max), exp_at);
@@ -336,9 +448,9 @@ impl Semantics for Polynomials<'_> {
                 return fail(ParseErrorKind::ZeroToNegativePower, at);
             }
             self.bound_power_bits(&base, m, at)?;
-            return self.check_size(Poly::constant(self.nvars(), b.recip().pow(m)), at);
+            return self.check_size(P::constant(self.nvars(), b.recip().pow(m)), at);
         }
-        let l = &self.symbols.limits;
+        let l = self.symbols.limits();
         let degree = base.total_degree().saturating_mul(m);
         if degree > l.max_degree {
             return fail(
@@ -353,13 +465,10 @@ impl Semantics for Polynomials<'_> {
         }
         self.bound_power_bits(&base, m, at)?;
         if let Some(b) = base.constant_value() {
-            return self.check_size(Poly::constant(self.nvars(), b.pow(m)), at);
+            return self.check_size(P::constant(self.nvars(), b.pow(m)), at);
         }
-        // Terms of base^m: at most the monomials of degree <= m deg(base)
-        // in the variables base uses, refused before they are formed.
-        let vars = (0..self.nvars()).filter(|&i| base.terms().any(|(mono, _)| mono[i] > 0)).count();
-        let at_most = crate::poly::monomial_count(vars + 1, degree).min(usize::MAX as u128) as usize;
-        let terms = at_most.min(saturating_pow(base.num_terms(), m));
+        // Terms of base^m, refused before they are formed.
+        let terms = base.power_terms_bound(m, degree);
         if terms > l.max_terms.saturating_mul(4) {
             return fail(
                 ParseErrorKind::TooLarge { degree, max_degree: l.max_degree, terms, max_terms: l.max_terms },

@@ -87,7 +87,11 @@ fn max_real_part(a: &DMatrix<C>) -> f64 {
         }
     });
     // (faer: nalgebra's Schur iteration never returned on the N = 8 drift.)
-    numerics::dense::real_eigenvalues(&real).expect("eigenvalues").iter().map(|z| z.re).fold(f64::NEG_INFINITY, f64::max)
+    numerics::dense::real_eigenvalues(&real)
+        .expect("eigenvalues")
+        .iter()
+        .map(|z| z.re)
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 fn jet(z: f64) -> f64 {
