@@ -22,10 +22,8 @@ pub const ENGINE_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// A certificate and the analysis it was made from.
 #[derive(Clone, Debug)]
 pub struct Certificate {
-    /// The certificate JSON.
+    /// The certificate JSON (typed: [`Certificate::document`]).
     pub json: Value,
-    /// The same certificate, typed.
-    pub document: CertificateDocument,
     /// The analysis behind it.
     pub analysis: Analysis,
 }
@@ -148,7 +146,7 @@ pub fn certify_lie(spec: &Spec) -> Certificate {
     let analysis = analyse(&spec.system, &spec.settings.pipeline);
     let document = certificate_document(spec, &analysis);
     let json = serde_json::to_value(&document).unwrap_or_default();
-    Certificate { json, document, analysis }
+    Certificate { json, analysis }
 }
 
 /// Build the certificate JSON from a spec and its analysis.

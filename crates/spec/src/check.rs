@@ -85,7 +85,7 @@ pub fn check_certificate(text: &str) -> Result<CheckReport, CheckError> {
 ///
 /// ```
 /// let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/rigid-body-major-axis.json")).unwrap();
-/// let mut doc = spec::certify_lie(&spec::parse_spec(&text).unwrap()).document;
+/// let mut doc = spec::certify_lie(&spec::parse_spec(&text).unwrap()).document().unwrap();
 /// assert_eq!(spec::check_document(&doc).unwrap().verdict, spec::Verdict::Stable);
 /// doc.sigma2_exact = Some("1/4".into()); // below the true 27/100
 /// assert!(spec::check_document(&doc).is_err());

@@ -116,6 +116,12 @@ pub fn certify_system(
 }
 
 impl Certificate {
+    /// The certificate, typed (the JSON is written from this type, so it
+    /// reads back; `None` would mean a bug, not bad input).
+    pub fn document(&self) -> Option<crate::record::CertificateDocument> {
+        crate::document::from_value(&self.json).ok()
+    }
+
     /// The verdict.
     pub fn verdict(&self) -> Verdict {
         self.analysis.verdict
