@@ -122,14 +122,24 @@ fn certify_text(
     if matches!(spec, spec::AnySpec::Lie(_)) && progress.is_none() {
         // Finite-dimensional systems certify in micro- to milliseconds:
         // on this thread, without the cost of another.
-        return Ok(py.detach(|| spec::to_pretty_json(&spec.certify())));
+        let cert = py.detach(|| spec::certify(&spec, &spec::Options::default()));
+        return cert.map(|c| c.to_pretty_json()).map_err(certify_error);
     }
     let out = interruptible(py, progress.as_ref(), &state, || {
         spec::certify(&spec, &spec::Options::default().with_progress(&state)).map(|c| c.to_pretty_json())
     })?;
     // `Err(Cancelled)` only follows an interrupt, which `interruptible`
     // has raised already.
-    out.map_err(|e| pyo3::exceptions::PyKeyboardInterrupt::new_err(e.to_string()))
+    out.map_err(certify_error)
+}
+
+/// A certificate that was not made: cancelled (an interrupt), or the
+/// engine's own bug (an internal error, never a certificate).
+fn certify_error(e: spec::CertifyError) -> PyErr {
+    match e {
+        spec::CertifyError::Cancelled => pyo3::exceptions::PyKeyboardInterrupt::new_err(e.to_string()),
+        _ => pyo3::exceptions::PyRuntimeError::new_err(e.to_string()),
+    }
 }
 
 /// Check a certificate given as JSON text (files its spec names are relative

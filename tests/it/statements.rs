@@ -323,7 +323,9 @@ fn the_bickley_jet_instability_is_found_or_its_search_reported() {
             "y_interval": [-8, 8], "boundary": "walls", "shear_flow": "4/(exp(y) + exp(-y))^2",
             "noise": [], "ny": 512, "x_modes": 1}})
     };
-    let cert = spec::parse_any_spec(&spec("2*pi/1.9").to_string()).unwrap().certify();
+    let cert = spec::parse_any_spec(&spec("2*pi/1.9").to_string())
+        .map(|s| spec::certify(&s, &spec::Options::default()).unwrap().into_json())
+        .unwrap();
     assert_eq!(cert["verdict"], "linearly_unstable", "{}", cert["reason"]);
     let rate = cert["instability"]["growth_rate"].as_f64().unwrap();
     assert!((rate / 0.0220919428 - 1.0).abs() < 1e-4, "{rate}");
@@ -333,7 +335,9 @@ fn the_bickley_jet_instability_is_found_or_its_search_reported() {
     assert_eq!(cert["instability_search"][0]["outcome"], "converged");
 
     // k = 2: the sinuous mode is neutral there
-    let cert = spec::parse_any_spec(&spec("pi").to_string()).unwrap().certify();
+    let cert = spec::parse_any_spec(&spec("pi").to_string())
+        .map(|s| spec::certify(&s, &spec::Options::default()).unwrap().into_json())
+        .unwrap();
     assert_eq!(cert["verdict"], "inconclusive", "{}", cert["reason"]);
     let reason = cert["reason"].as_str().unwrap();
     assert!(reason.contains("no growing mode was confirmed") && reason.contains("instability_search"), "{reason}");

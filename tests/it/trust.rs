@@ -21,7 +21,9 @@ fn channel(shear_flow: &str, noise: &[&str]) -> Value {
 }
 
 fn certify_value(v: &Value) -> Value {
-    parse_any_spec(&v.to_string()).unwrap_or_else(|e| panic!("{e}")).certify()
+    spec::certify(&parse_any_spec(&v.to_string()).unwrap_or_else(|e| panic!("{e}")), &spec::Options::default())
+        .unwrap()
+        .into_json()
 }
 
 fn rigid_body(sigma: &str, extra: Value) -> Value {

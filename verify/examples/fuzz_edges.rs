@@ -390,7 +390,7 @@ fn run_spec(text: &str, counts: &Counts) {
     let outcome = catch_unwind(AssertUnwindSafe(|| match spec::parse_any_spec(text) {
         Err(_) => None,
         Ok(s) => {
-            let cert = s.certify();
+            let cert = spec::certify(&s, &spec::Options::default()).unwrap().into_json();
             let checked = spec::check_certificate(&spec::to_pretty_json(&cert));
             if let (Ok(report), true) = (&checked, cert.get("kind").is_some_and(|k| k == "box")) {
                 box_point_agrees(text, &cert, report, counts);
@@ -959,7 +959,7 @@ fn main() {
         if let Ok(v) = serde_json::from_str::<Value>(&std::fs::read_to_string(p).unwrap_or_default()) {
             if v.get("kind").is_some_and(|k| k == "fluid") {
                 if let Ok(s) = spec::parse_any_spec(&shrink(v["spec"].clone()).to_string()) {
-                    pool.push(s.certify());
+                    pool.push(spec::certify(&s, &spec::Options::default()).unwrap().into_json());
                 }
             } else {
                 pool.push(v);
@@ -974,7 +974,7 @@ fn main() {
             _ => random_fluid(&mut rng),
         };
         if let Ok(s) = spec::parse_any_spec(&v.to_string()) {
-            pool.push(s.certify());
+            pool.push(spec::certify(&s, &spec::Options::default()).unwrap().into_json());
         }
     }
 

@@ -252,21 +252,8 @@ impl AnySpec {
         }
     }
 
-    /// Run the matching pipeline and return the certificate JSON.
-    pub fn certify(&self) -> serde_json::Value {
-        match self {
-            AnySpec::Lie(s) if s.parameter_box.is_some() => box_cert::certify_box_spec(s),
-            AnySpec::Lie(s) => certify_lie(s).json,
-            #[cfg(feature = "fluid")]
-            AnySpec::Fluid(s) => certify_fluid(s),
-            #[cfg(feature = "fluid")]
-            AnySpec::Zeitlin(s) => certify_zeitlin(s),
-            #[cfg(feature = "fluid")]
-            AnySpec::Large(s) => certify_large(s),
-        }
-    }
-
-    /// [`AnySpec::certify`], reporting progress and stopping soon after
+    /// Run the matching pipeline and return the certificate JSON,
+    /// reporting progress and stopping soon after
     /// [`outcome::Progress::cancel`] (then `Err`, and no certificate): the
     /// body of [`crate::certify`].
     pub(crate) fn certify_with(
