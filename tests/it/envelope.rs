@@ -123,3 +123,28 @@ fn the_envelope_checks_every_claim() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A certificate of another format (here the format before this one, as
+/// every certificate written before the `route` record was) is refused at
+/// `$.certificate_version`, with the way out: certify again.
+#[test]
+fn another_format_is_told_to_certify_again() {
+    for name in
+        ["rigid-body-major-axis.cert.json", "boxes/rigid-body-inertia-box.cert.json", "large/chain-30.cert.json"]
+    {
+        let mut c: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(fixture_path(name)).unwrap()).unwrap();
+        let now = c["certificate_version"].as_u64().unwrap();
+        c["certificate_version"] = json!(now - 1);
+        match spec::check_json(&c.to_string(), &Options::default()) {
+            Err(CheckError::Failed { path, message }) => {
+                assert_eq!(path, "$.certificate_version", "{name}");
+                assert!(
+                    message.contains(&format!("format {}", now - 1)) && message.contains("certify the spec again"),
+                    "{message}"
+                );
+            }
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+}

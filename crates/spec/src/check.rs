@@ -109,6 +109,17 @@ pub(crate) fn check_value_with(
     #[cfg(not(feature = "fluid"))]
     let _ = base;
     let map = as_object(cert, "$").map_err(CheckError::BadInput)?;
+    // Another format is said first: its fields are not this engine's, and
+    // the way out is to certify again, not to edit the file.
+    if let Some(v) = map.get("certificate_version").and_then(Value::as_u64) {
+        let current = crate::certificate::CERTIFICATE_VERSION;
+        if v != current {
+            return Err(fail(
+                "$.certificate_version",
+                format!("the certificate is in format {v}, this checker reads format {current}: certify the spec again with this engine (`verify certify SPEC -o CERT`)"),
+            ));
+        }
+    }
     if crate::box_cert::is_box_certificate(cert) {
         return crate::box_cert::check_box_certificate(cert);
     }
