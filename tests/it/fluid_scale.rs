@@ -153,7 +153,7 @@ fn a_periodic_certificate_at_ny_4096_is_verified_and_agrees_with_the_fixture() {
     // walls_margins shows modes 1 to 3 proving even 3e-7 here)
     let mode1 = &fine["modes"][0];
     assert!(mode1["sigma2_upper"].as_f64().unwrap() <= mode1["sigma2"].as_f64().unwrap() * (1.0 + 1e-5));
-    spec::check_fluid_certificate(&fine).expect("the ny = 4096 certificate re-checks");
+    spec::check_certificate_value(&fine).expect("the ny = 4096 certificate re-checks");
 }
 
 #[test]
@@ -176,7 +176,7 @@ fn a_walls_certificate_at_ny_4096_is_verified_and_converged() {
     let s1024 = coarse["sigma2"].as_f64().unwrap();
     assert!((s - s1024).abs() <= 1e-8 * s, "{s} vs {s1024}");
     // and the certificate re-checks (verify check re-derives every mode)
-    spec::check_fluid_certificate(&fine).expect("the ny = 4096 certificate re-checks");
+    spec::check_certificate_value(&fine).expect("the ny = 4096 certificate re-checks");
 }
 
 /// `U = sin y` between walls at 0 and pi with the fixture's two noise
@@ -238,12 +238,12 @@ fn an_arnold_second_theorem_channel_at_ny_4096_is_verified_through_wider_bounds(
     }
     // the certificate re-checks, and a loose bound lowered below the mode's
     // own Sigma^2_k is not proved
-    spec::check_fluid_certificate(&cert).expect("the ny = 2048 certificate re-checks");
+    spec::check_certificate_value(&cert).expect("the ny = 2048 certificate re-checks");
     let mut forged = cert.clone();
     let i = loose[0] as usize - 1;
     let sk = forged["modes"][i]["sigma2"].as_f64().unwrap();
     forged["modes"][i]["sigma2_upper"] = serde_json::json!(sk * 0.99);
-    match spec::check_fluid_certificate(&forged) {
+    match spec::check_certificate_value(&forged) {
         Err(spec::CheckError::Failed { path, message }) => {
             assert_eq!(path, format!("$.modes[{i}].sigma2_upper"), "{message}")
         }

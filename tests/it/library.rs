@@ -93,5 +93,5 @@ fn fluid_certificates_from_rust_record_their_constants() {
     assert_eq!(cert.json["constants"]["verify_margin_growth"], 30.0);
     let mut edited = cert.json.clone();
     edited["constants"]["verify_margin_growth"] = 10.0.into();
-    assert!(spec::check_fluid_certificate(&edited).is_err());
+    assert!(spec::check_certificate_value(&edited).is_err());
 }

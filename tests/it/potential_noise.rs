@@ -21,7 +21,7 @@ fn certify(v: &Value) -> Value {
     let s = spec::fluid_spec_from_value(v.clone()).unwrap();
     let cert = spec::certify_fluid(&s);
     // Every certificate, whatever its verdict, re-checks.
-    spec::check_fluid_certificate(&cert).unwrap();
+    spec::check_certificate_value(&cert).unwrap();
     cert
 }
 
@@ -159,7 +159,7 @@ fn a_generator_bound_edited_down_by_1e_7_is_refused() {
     let mut edited = cert.clone();
     let upper = cert["modes"][0]["sigma2_upper"].as_f64().unwrap();
     edited["modes"][0]["sigma2_upper"] = json!(upper * (1.0 - 1e-7));
-    let err = spec::check_fluid_certificate(&edited).unwrap_err();
+    let err = spec::check_certificate_value(&edited).unwrap_err();
     assert!(format!("{err:?}").contains("modes[0].sigma2_upper"), "{err:?}");
 }
 

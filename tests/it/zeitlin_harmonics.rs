@@ -38,7 +38,7 @@ fn every_verdict_path_of_the_general_pipeline() {
         if !frame.is_empty() {
             assert_eq!(cert["frame"]["kind"], frame, "{name}");
         }
-        assert_eq!(spec::check_zeitlin_certificate(&cert).unwrap().verdict.as_str(), verdict, "{name}");
+        assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict.as_str(), verdict, "{name}");
     }
     // The tilted state is the zonal fixture's state rotated: the same
     // Sigma^2 and proved bound (the model is rotation invariant).
@@ -254,7 +254,7 @@ fn a_state_above_dense_max_n_is_analysed_matrix_free() {
     let (a, b) = (free["growth_rate"].as_f64().unwrap(), dense["growth_rate"].as_f64().unwrap());
     assert!((a - b).abs() <= 1e-8 * b, "matrix-free {a}, dense {b}");
     assert_eq!(free["matrix_free"]["indefinite"], true);
-    assert_eq!(spec::check_zeitlin_certificate(&free).unwrap().verdict.as_str(), "linearly_unstable");
+    assert_eq!(spec::check_certificate_value(&free).unwrap().verdict.as_str(), "linearly_unstable");
     let capped = certify(&spec(json!({"dense_max_n": 16, "matrix_free_max_n": 18})));
     assert_eq!(capped["verdict"], "inconclusive");
     assert!(capped["reason"].as_str().unwrap().contains("settings.matrix_free_max_n"), "{}", capped["reason"]);

@@ -436,7 +436,7 @@ fn rationals(v: &[ExactRational]) -> Vec<Rational> {
 /// (the verdict, the reason, the sup, the fractions, the samples, the
 /// limit). Nothing stored is trusted; the choices are only the proofs'
 /// inputs. Every field and how it is verified: docs/ci.md.
-pub fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+pub(crate) fn check_box_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
     let (doc, spec) = read_box_certificate(cert)?;
     let Some(section) = &spec.parameter_box else {
         return Err(fail("$.spec.box", "a box certificate's spec must have a box section".into()));

@@ -141,8 +141,11 @@ pub(crate) fn check_value_with(
             "Zeitlin certificates need the `fluid` feature of the spec crate (on by default)",
         )));
     }
+    // A large certificate says so (`kind`): the sparse route certifies any
+    // size when called directly (`certify_large`), and its certificate is
+    // re-derived on that route; without the field, the spec's size decides.
     #[cfg(feature = "fluid")]
-    if map.get("spec").is_some_and(crate::is_large_spec) {
+    if map.get("kind").and_then(Value::as_str) == Some("large") || map.get("spec").is_some_and(crate::is_large_spec) {
         return crate::large::check_large_certificate_with(cert, progress);
     }
     // A finite-dimensional certificate is checked in micro- to

@@ -11,7 +11,7 @@
 //! let spec = spec::parse_fluid_spec(text).unwrap();
 //! let cert = spec::certify_fluid(&spec);
 //! assert_eq!(cert["verdict"], "stable");
-//! spec::check_fluid_certificate(&cert).unwrap();
+//! spec::check_certificate_value(&cert).unwrap();
 //! let bad = text.replace("\"ny\": 64", "\"ny\": 60");
 //! assert_eq!(spec::parse_fluid_spec(&bad).unwrap_err().path, "$.fluid.ny");
 //! ```
@@ -918,7 +918,7 @@ fn compressible_record(spec: &FluidSpec, cr: &fluid::analysis::CompressibleRepor
 
 /// Re-check a fluid certificate: independent claims, then re-derivation and
 /// comparison (floating-point fields to [`FLUID_TOLERANCE`]).
-pub fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
+pub(crate) fn check_fluid_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
     check_fluid_certificate_with(cert, &Progress::new())
 }
 

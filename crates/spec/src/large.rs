@@ -19,7 +19,7 @@
 //! assert_eq!(cert["verdict"], "stable");
 //! // The first body's rigid-body constant 0.27; the second has no noise.
 //! assert!((cert["sigma2"].as_f64().unwrap() - 0.27).abs() < 1e-7);
-//! assert_eq!(spec::check_large_certificate(&cert).unwrap().verdict, spec::Verdict::Stable);
+//! assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Stable);
 //! ```
 
 use crate::certificate::{spec_digest, stopping_record, CERTIFICATE_VERSION, ENGINE_VERSION};
@@ -435,12 +435,8 @@ pub(crate) fn certify_large_with(spec: &LargeSpec, progress: &Progress) -> std::
 }
 
 /// Re-check a large certificate: the embedded spec and its digest, then
-/// re-derivation and comparison (numbers to [`LARGE_TOLERANCE`]).
-pub fn check_large_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
-    check_large_certificate_with(cert, &Progress::new())
-}
-
-/// [`check_large_certificate`] with progress and cancellation.
+/// re-derivation and comparison (numbers to [`LARGE_TOLERANCE`]), with
+/// progress and cancellation.
 pub(crate) fn check_large_certificate_with(
     cert: &Value,
     progress: &Progress,

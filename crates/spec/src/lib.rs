@@ -89,8 +89,8 @@ pub use claims::{verify_claims, ClaimFailure};
 pub use envelope::{certify, check, check_json, parse, AnyCertificate, AnyVerdict, CertifyError, Header, Options};
 #[cfg(feature = "fluid")]
 pub use fluid::{
-    certify_fluid, certify_fluid_spec, check_fluid_certificate, fluid_certificate_json, fluid_spec_from_value,
-    parse_fluid_spec, FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
+    certify_fluid, certify_fluid_spec, fluid_certificate_json, fluid_spec_from_value, parse_fluid_spec,
+    FluidCertificate, FluidSpec, FLUID_TOLERANCE, MAX_X_MODES, NY_RANGE,
 };
 pub use outcome::{BoxVerdict, CertificateKind};
 
@@ -104,9 +104,8 @@ pub use fluid_simulation::{
 
 #[cfg(feature = "fluid")]
 pub use zeitlin::{
-    analyse_zeitlin, certify_zeitlin, check_zeitlin_certificate, parse_zeitlin_spec, zeitlin_certificate_document,
-    zeitlin_spec_from_value, zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N,
-    N_RANGE, ZEITLIN_TOLERANCE,
+    analyse_zeitlin, certify_zeitlin, parse_zeitlin_spec, zeitlin_certificate_document, zeitlin_spec_from_value,
+    zeitlin_spec_from_value_in, ZeitlinInput, ZeitlinOutcome, ZeitlinSpec, HARMONICS_MAX_N, N_RANGE, ZEITLIN_TOLERANCE,
 };
 
 #[cfg(feature = "fluid")]
@@ -122,8 +121,8 @@ pub use zeitlin_simulation::{
 
 #[cfg(feature = "fluid")]
 pub use large::{
-    certify_large, check_large_certificate, is_large_spec, large_certificate_document, large_spec_from_value,
-    LargeSpec, LARGE_MAX_DIMENSION, LARGE_TOLERANCE,
+    certify_large, is_large_spec, large_certificate_document, large_spec_from_value, LargeSpec, LARGE_MAX_DIMENSION,
+    LARGE_TOLERANCE,
 };
 
 /// Whether a spec value is a Zeitlin spec (has a `zeitlin` object at the top).

@@ -11,7 +11,7 @@
 //! assert_eq!(cert["sigma2"], 0.0); // the Casimir–momentum form is conserved pathwise
 //! assert_eq!(cert["level"], "exact_structure");
 //! assert_eq!(cert["stopping"]["T"], "infinity");
-//! assert_eq!(spec::check_zeitlin_certificate(&cert).unwrap().verdict, spec::Verdict::Stable);
+//! assert_eq!(spec::check_certificate_value(&cert).unwrap().verdict, spec::Verdict::Stable);
 //! ```
 
 use crate::certificate::{spec_digest, stopping_record, CERTIFICATE_VERSION, ENGINE_VERSION};
@@ -899,21 +899,8 @@ fn fill_zonal(
 
 /// Re-check a Zeitlin certificate: its shape, the embedded spec and
 /// settings, the digest, then re-derivation and comparison (floating-point
-/// fields to [`ZEITLIN_TOLERANCE`]).
-pub fn check_zeitlin_certificate(cert: &Value) -> std::result::Result<CheckReport, CheckError> {
-    check_zeitlin_certificate_in(cert, None)
-}
-
-/// [`check_zeitlin_certificate`] with `.npy` paths relative to `base` (the
-/// certificate's folder).
-pub(crate) fn check_zeitlin_certificate_in(
-    cert: &Value,
-    base: Option<&Path>,
-) -> std::result::Result<CheckReport, CheckError> {
-    check_zeitlin_certificate_with(cert, base, &Progress::new())
-}
-
-/// [`check_zeitlin_certificate_in`] with progress and cancellation.
+/// fields to [`ZEITLIN_TOLERANCE`]), with `.npy` paths relative to `base`
+/// (the certificate's folder), progress and cancellation.
 pub(crate) fn check_zeitlin_certificate_with(
     cert: &Value,
     base: Option<&Path>,
